@@ -1,0 +1,495 @@
+//! Case files: the TOML schema (engineering units in key names), conversion to SI, validation,
+//! and the embedded default case.
+//!
+//! Conversion happens here, once: `*_mm` → m, `*_um` → m, `*_deg` → rad, `*_gpa` → Pa,
+//! `*_rpm` → rad/s. Unknown keys are errors that name the key and its line (serde
+//! `deny_unknown_fields`). After parsing, [`Case`] checks the numbers and builds the checked
+//! [`GearPair`] and every relief variant, so a case that loads is a case the numerics can use.
+
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+use std::path::Path;
+use thiserror::Error;
+
+use crate::geometry::{
+    BasicRack, FlankModification, FlankReliefSpec, GearPair, GearSpec, GeometryError, PairSpec,
+    ReliefShape, ReliefSpec, ReliefStart,
+};
+
+/// The seed paper's pair, embedded in the binary and used when no case file is given.
+pub const EMBEDDED_DEFAULT: &str = include_str!("../data/cases/paper36.toml");
+/// How the embedded case is named in messages and outputs.
+pub const EMBEDDED_SOURCE: &str = "<embedded paper36>";
+
+#[derive(Debug, Error)]
+pub enum CaseError {
+    #[error("cannot read case file {path}: {source}")]
+    Io {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("case file {path}: {message}")]
+    Parse { path: String, message: String },
+    #[error("case file {path}: {parameter} = {value} is invalid: {limit}")]
+    Invalid {
+        path: String,
+        parameter: String,
+        value: String,
+        limit: String,
+    },
+    #[error("case file {path}: {source}")]
+    Geometry {
+        path: String,
+        #[source]
+        source: GeometryError,
+    },
+    #[error("case file {path}: relief_variant \"{variant}\": {source}")]
+    Relief {
+        path: String,
+        variant: String,
+        #[source]
+        source: GeometryError,
+    },
+}
+
+// ---------------------------------------------------------------------------------------------
+// The file schema (engineering units).
+// ---------------------------------------------------------------------------------------------
+
+/// A case file as written (engineering units).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CaseFile {
+    /// Short name used in output folder names.
+    pub name: String,
+    #[serde(default)]
+    pub description: String,
+    pub tool: ToolSection,
+    pub gear1: GearSection,
+    pub gear2: GearSection,
+    #[serde(default)]
+    pub pair: PairSection,
+    #[serde(default)]
+    pub material: MaterialSection,
+    #[serde(default, rename = "operating_point")]
+    pub operating_points: Vec<OperatingPointSection>,
+    #[serde(default = "default_relief_variants", rename = "relief_variant")]
+    pub relief_variants: Vec<ReliefVariantSection>,
+    #[serde(default)]
+    pub contact: ContactSection,
+}
+
+/// The basic rack of the generating cutter.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ToolSection {
+    pub module_mm: f64,
+    #[serde(default = "default_pressure_angle")]
+    pub pressure_angle_deg: f64,
+    #[serde(default = "default_dedendum")]
+    pub dedendum_coeff: f64,
+    #[serde(default = "default_tip_radius")]
+    pub tip_radius_coeff: f64,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GearSection {
+    pub teeth: u32,
+    #[serde(default)]
+    pub profile_shift: f64,
+    #[serde(default = "default_addendum")]
+    pub addendum_coeff: f64,
+    pub face_width_mm: f64,
+    pub bore_radius_mm: f64,
+    #[serde(default)]
+    pub thickness_reduction_um: f64,
+}
+
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PairSection {
+    /// Operating centre distance; default: zero backlash for the nominal teeth.
+    pub center_distance_mm: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSection {
+    #[serde(default = "default_youngs")]
+    pub youngs_modulus_gpa: f64,
+    #[serde(default = "default_poisson")]
+    pub poisson_ratio: f64,
+    #[serde(default = "default_density")]
+    pub density_kg_per_m3: f64,
+}
+
+impl Default for MaterialSection {
+    fn default() -> Self {
+        Self {
+            youngs_modulus_gpa: default_youngs(),
+            poisson_ratio: default_poisson(),
+            density_kg_per_m3: default_density(),
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OperatingPointSection {
+    pub name: String,
+    /// Driver (gear 1) speed.
+    pub speed_rpm: f64,
+    /// Load torque on the driven gear (gear 2).
+    pub torque_nm: f64,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReliefVariantSection {
+    pub name: String,
+    #[serde(default)]
+    pub gear1: GearReliefSection,
+    #[serde(default)]
+    pub gear2: GearReliefSection,
+}
+
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GearReliefSection {
+    pub tip: Option<ReliefSection>,
+    pub root: Option<ReliefSection>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReliefSection {
+    pub amount_um: f64,
+    #[serde(default = "default_shape")]
+    pub shape: ReliefShape,
+    /// "hpstc", "lpstc" or "short"; at most one of `start`, `start_roll_deg`, `start_diameter_mm`.
+    /// None of them: long relief ("hpstc" for tip, "lpstc" for root).
+    pub start: Option<String>,
+    pub start_roll_deg: Option<f64>,
+    pub start_diameter_mm: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSection {
+    #[serde(default = "default_friction")]
+    pub friction_coefficients: Vec<f64>,
+}
+
+impl Default for ContactSection {
+    fn default() -> Self {
+        Self { friction_coefficients: default_friction() }
+    }
+}
+
+fn default_pressure_angle() -> f64 {
+    20.0
+}
+fn default_dedendum() -> f64 {
+    1.25
+}
+fn default_tip_radius() -> f64 {
+    0.38
+}
+fn default_addendum() -> f64 {
+    1.0
+}
+fn default_youngs() -> f64 {
+    206.0
+}
+fn default_poisson() -> f64 {
+    0.3
+}
+fn default_density() -> f64 {
+    7850.0
+}
+fn default_shape() -> ReliefShape {
+    ReliefShape::Linear
+}
+fn default_friction() -> Vec<f64> {
+    vec![0.0]
+}
+fn default_relief_variants() -> Vec<ReliefVariantSection> {
+    vec![ReliefVariantSection {
+        name: "none".into(),
+        gear1: GearReliefSection::default(),
+        gear2: GearReliefSection::default(),
+    }]
+}
+
+// ---------------------------------------------------------------------------------------------
+// The validated case (SI).
+// ---------------------------------------------------------------------------------------------
+
+/// Isotropic linear-elastic material, SI.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Material {
+    /// Young's modulus E [Pa].
+    pub youngs_modulus: f64,
+    /// Poisson's ratio ν.
+    pub poisson_ratio: f64,
+    /// Density ρ [kg/m³].
+    pub density: f64,
+}
+
+/// An operating point, SI.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OperatingPoint {
+    pub name: String,
+    /// Driver angular speed Ω1 [rad/s].
+    pub driver_speed: f64,
+    /// Load torque on the driven gear [N·m].
+    pub torque: f64,
+}
+
+/// A relief variant: what was asked per gear, and its resolved zones.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReliefVariant {
+    pub name: String,
+    pub requests: [FlankReliefSpec; 2],
+    pub modifications: [FlankModification; 2],
+}
+
+/// A loaded, checked case.
+#[derive(Debug, Clone)]
+pub struct Case {
+    /// Where the case came from (a path, or [`EMBEDDED_SOURCE`]).
+    pub source: String,
+    /// The case file's text, echoed into every output folder.
+    pub text: String,
+    pub file: CaseFile,
+    pub pair_spec: PairSpec,
+    pub pair: GearPair,
+    pub material: Material,
+    pub operating_points: Vec<OperatingPoint>,
+    pub relief_variants: Vec<ReliefVariant>,
+    pub friction_coefficients: Vec<f64>,
+}
+
+impl Case {
+    /// The embedded default case (the seed paper's pair).
+    pub fn embedded_default() -> Result<Self, CaseError> {
+        Self::from_toml_str(EMBEDDED_DEFAULT, EMBEDDED_SOURCE)
+    }
+
+    /// Reads and checks a case file.
+    pub fn load(path: &Path) -> Result<Self, CaseError> {
+        let shown = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| CaseError::Io { path: shown.clone(), source })?;
+        Self::from_toml_str(&text, &shown)
+    }
+
+    /// Parses and checks case text; `source` names it in messages.
+    pub fn from_toml_str(text: &str, source: &str) -> Result<Self, CaseError> {
+        let file: CaseFile = toml::from_str(text).map_err(|e| CaseError::Parse {
+            path: source.into(),
+            message: e.to_string().trim_end().to_string(),
+        })?;
+        Self::from_file(file, text, source)
+    }
+
+    fn from_file(file: CaseFile, text: &str, source: &str) -> Result<Self, CaseError> {
+        let invalid = |parameter: &str, value: String, limit: &str| CaseError::Invalid {
+            path: source.into(),
+            parameter: parameter.into(),
+            value,
+            limit: limit.into(),
+        };
+        if file.name.trim().is_empty() || file.name.contains(['/', '\\']) {
+            return Err(invalid("name", format!("{:?}", file.name), "a non-empty name without slashes"));
+        }
+        let rack = BasicRack {
+            module: file.tool.module_mm * 1e-3,
+            pressure_angle: file.tool.pressure_angle_deg.to_radians(),
+            dedendum_coeff: file.tool.dedendum_coeff,
+            tip_radius_coeff: file.tool.tip_radius_coeff,
+        };
+        let gear_spec = |g: &GearSection| GearSpec {
+            teeth: g.teeth,
+            profile_shift: g.profile_shift,
+            addendum_coeff: g.addendum_coeff,
+            face_width: g.face_width_mm * 1e-3,
+            bore_radius: g.bore_radius_mm * 1e-3,
+            thickness_reduction: g.thickness_reduction_um * 1e-6,
+        };
+        let pair_spec = PairSpec {
+            rack,
+            gears: [gear_spec(&file.gear1), gear_spec(&file.gear2)],
+            center_distance: file.pair.center_distance_mm.map(|a| a * 1e-3),
+        };
+        let pair = GearPair::new(&pair_spec).map_err(|e| CaseError::Geometry { path: source.into(), source: e })?;
+
+        let mat = &file.material;
+        if !(mat.youngs_modulus_gpa > 0.0 && mat.youngs_modulus_gpa.is_finite()) {
+            return Err(invalid("material.youngs_modulus_gpa", mat.youngs_modulus_gpa.to_string(), "must be a finite number > 0"));
+        }
+        if !(mat.poisson_ratio >= 0.0 && mat.poisson_ratio < 0.5) {
+            return Err(invalid("material.poisson_ratio", mat.poisson_ratio.to_string(), "must be in [0, 0.5)"));
+        }
+        if !(mat.density_kg_per_m3 > 0.0 && mat.density_kg_per_m3.is_finite()) {
+            return Err(invalid("material.density_kg_per_m3", mat.density_kg_per_m3.to_string(), "must be a finite number > 0"));
+        }
+        let material = Material {
+            youngs_modulus: mat.youngs_modulus_gpa * 1e9,
+            poisson_ratio: mat.poisson_ratio,
+            density: mat.density_kg_per_m3,
+        };
+
+        let mut operating_points = Vec::new();
+        for (i, op) in file.operating_points.iter().enumerate() {
+            let key = |field: &str| format!("operating_point[{i}] (\"{}\").{field}", op.name);
+            if !(op.speed_rpm > 0.0 && op.speed_rpm.is_finite()) {
+                return Err(invalid(&key("speed_rpm"), op.speed_rpm.to_string(), "must be a finite number > 0"));
+            }
+            if !(op.torque_nm > 0.0 && op.torque_nm.is_finite()) {
+                return Err(invalid(
+                    &key("torque_nm"),
+                    op.torque_nm.to_string(),
+                    "must be a finite number > 0 (the load torque on the driven gear)",
+                ));
+            }
+            if file.operating_points[..i].iter().any(|o| o.name == op.name) {
+                return Err(invalid(&key("name"), format!("{:?}", op.name), "names must be unique"));
+            }
+            operating_points.push(OperatingPoint {
+                name: op.name.clone(),
+                driver_speed: op.speed_rpm * 2.0 * PI / 60.0,
+                torque: op.torque_nm,
+            });
+        }
+
+        let mut relief_variants = Vec::new();
+        for (i, variant) in file.relief_variants.iter().enumerate() {
+            if file.relief_variants[..i].iter().any(|v| v.name == variant.name) {
+                return Err(invalid(&format!("relief_variant[{i}].name"), format!("{:?}", variant.name), "names must be unique"));
+            }
+            let relief_err = |e: GeometryError| CaseError::Relief {
+                path: source.into(),
+                variant: variant.name.clone(),
+                source: e,
+            };
+            let requests = [
+                gear_relief_request(1, &variant.gear1).map_err(relief_err)?,
+                gear_relief_request(2, &variant.gear2).map_err(relief_err)?,
+            ];
+            let modifications = [
+                pair.flank_modification(1, &requests[0]).map_err(relief_err)?,
+                pair.flank_modification(2, &requests[1]).map_err(relief_err)?,
+            ];
+            relief_variants.push(ReliefVariant { name: variant.name.clone(), requests, modifications });
+        }
+
+        for (i, mu) in file.contact.friction_coefficients.iter().enumerate() {
+            if !(*mu >= 0.0 && *mu < 1.0) {
+                return Err(invalid(&format!("contact.friction_coefficients[{i}]"), mu.to_string(), "must be in [0, 1)"));
+            }
+        }
+
+        Ok(Case {
+            source: source.into(),
+            text: text.into(),
+            friction_coefficients: file.contact.friction_coefficients.clone(),
+            file,
+            pair_spec,
+            pair,
+            material,
+            operating_points,
+            relief_variants,
+        })
+    }
+
+    pub fn name(&self) -> &str {
+        &self.file.name
+    }
+
+    /// A relief variant by name.
+    pub fn relief_variant(&self, name: &str) -> Option<&ReliefVariant> {
+        self.relief_variants.iter().find(|v| v.name == name)
+    }
+}
+
+/// Converts one gear's relief section to SI requests.
+fn gear_relief_request(gear: usize, section: &GearReliefSection) -> Result<FlankReliefSpec, GeometryError> {
+    let convert = |end: &str, r: &ReliefSection| -> Result<ReliefSpec, GeometryError> {
+        let parameter = format!("gear{gear}.{end}");
+        let given = [r.start.is_some(), r.start_roll_deg.is_some(), r.start_diameter_mm.is_some()];
+        if given.iter().filter(|g| **g).count() > 1 {
+            return Err(GeometryError::Relief {
+                parameter,
+                reason: "give at most one of start, start_roll_deg, start_diameter_mm".into(),
+            });
+        }
+        let start = if let Some(name) = &r.start {
+            match name.as_str() {
+                "hpstc" => ReliefStart::Hpstc,
+                "lpstc" => ReliefStart::Lpstc,
+                "short" => ReliefStart::Short,
+                other => {
+                    return Err(GeometryError::Relief {
+                        parameter: format!("{parameter}.start"),
+                        reason: format!("unknown start {other:?}: use \"hpstc\", \"lpstc\" or \"short\", or give start_roll_deg or start_diameter_mm"),
+                    })
+                }
+            }
+        } else if let Some(deg) = r.start_roll_deg {
+            ReliefStart::RollAngle(deg.to_radians())
+        } else if let Some(d) = r.start_diameter_mm {
+            ReliefStart::Diameter(d * 1e-3)
+        } else if end == "tip" {
+            ReliefStart::Hpstc
+        } else {
+            ReliefStart::Lpstc
+        };
+        Ok(ReliefSpec { amount: r.amount_um * 1e-6, shape: r.shape, start })
+    };
+    Ok(FlankReliefSpec {
+        tip: section.tip.as_ref().map(|r| convert("tip", r)).transpose()?,
+        root: section.root.as_ref().map(|r| convert("root", r)).transpose()?,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn embedded_default_is_the_paper_pair() {
+        let case = Case::embedded_default().unwrap();
+        assert_eq!(case.name(), "paper36");
+        assert_eq!(case.pair.gears[0].teeth(), 36);
+        assert_eq!(case.operating_points.len(), 2);
+        assert!((case.operating_points[0].driver_speed - 6.283_185).abs() < 1e-6);
+        assert_eq!(case.friction_coefficients, vec![0.0, 0.15]);
+        assert!(case.relief_variant("none").unwrap().modifications[0].is_none());
+        let paper = case.relief_variant("tip20-root10").unwrap();
+        assert!((paper.modifications[1].tip.unwrap().amount - 20e-6).abs() < 1e-18);
+    }
+
+    #[test]
+    fn unknown_key_names_key_and_line() {
+        let text = EMBEDDED_DEFAULT.replace("profile_shift = 0.0\naddendum", "profile_shift = 0.0\nprofile_shfit = 0.1\naddendum");
+        let err = Case::from_toml_str(&text, "t.toml").unwrap_err().to_string();
+        assert!(err.contains("profile_shfit"), "{err}");
+        assert!(err.contains("line"), "{err}");
+    }
+
+    #[test]
+    fn negative_module_is_named() {
+        let text = EMBEDDED_DEFAULT.replace("module_mm = 3.18", "module_mm = -3.18");
+        let err = Case::from_toml_str(&text, "t.toml").unwrap_err().to_string();
+        assert!(err.contains("tool.module_mm") && err.contains("-3.18"), "{err}");
+    }
+
+    #[test]
+    fn five_teeth_is_an_undercut_error() {
+        let text = EMBEDDED_DEFAULT.replacen("teeth = 36", "teeth = 5", 1);
+        let err = Case::from_toml_str(&text, "t.toml").unwrap_err().to_string();
+        assert!(err.contains("gear1 is undercut") && err.contains("teeth = 5"), "{err}");
+    }
+}

@@ -1,0 +1,211 @@
+//! Drawings with plotters, to SVG and PNG, with an embedded font (DejaVu Sans, licence in
+//! `data/fonts/`) so no system font library is needed.
+
+use std::path::Path;
+use std::sync::Once;
+
+use nalgebra::Point2;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use crate::geometry::{FlankModification, GearPair, OutlineResolution};
+
+static FONT: &[u8] = include_bytes!("../../data/fonts/DejaVuSans.ttf");
+static REGISTER: Once = Once::new();
+
+/// Registers the embedded font as "sans-serif" (once per process).
+pub fn register_font() {
+    REGISTER.call_once(|| {
+        plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
+            .unwrap_or_else(|_| panic!("the embedded DejaVu Sans font is a valid TTF"));
+    });
+}
+
+/// A drawing failed (backend or file error), with what was being drawn.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot draw {what}: {message}")]
+pub struct PlotError {
+    pub what: String,
+    pub message: String,
+}
+
+fn plot_err<E: std::fmt::Display>(what: &str) -> impl Fn(E) -> PlotError + '_ {
+    move |e| PlotError { what: what.into(), message: e.to_string() }
+}
+
+/// Draws the same picture to an SVG and a PNG file (each written atomically).
+pub fn draw_svg_and_png<F>(svg: &Path, png: &Path, size: (u32, u32), draw: F) -> Result<(), PlotError>
+where
+    F: Fn(&DrawingArea<SVGBackend, Shift>) -> Result<(), PlotError>
+        + Fn(&DrawingArea<BitMapBackend, Shift>) -> Result<(), PlotError>,
+{
+    register_font();
+    let what = svg.display().to_string();
+    let mut text = String::new();
+    {
+        let area = SVGBackend::with_string(&mut text, size).into_drawing_area();
+        draw(&area)?;
+        area.present().map_err(plot_err(&what))?;
+    }
+    super::write_atomic(svg, text.as_bytes()).map_err(plot_err(&what))?;
+    let what = png.display().to_string();
+    let tmp = super::temporary_sibling(png);
+    {
+        let area = BitMapBackend::new(&tmp, size).into_drawing_area();
+        draw(&area)?;
+        area.present().map_err(plot_err(&what))?;
+    }
+    std::fs::rename(&tmp, png).map_err(plot_err(&what))
+}
+
+/// Everything the pair drawing shows, in mm, in the placement frame (gear 1 at the origin).
+pub struct PairDrawing {
+    pub outlines: [Vec<(f64, f64)>; 2],
+    pub centres: [(f64, f64); 2],
+    pub base_radii: [f64; 2],
+    pub pitch_radii: [f64; 2],
+    pub tip_radii: [f64; 2],
+    pub bore_radii: [f64; 2],
+    pub line_of_action: [(f64, f64); 2],
+    pub contact_points: Vec<(&'static str, (f64, f64))>,
+    pub title: String,
+}
+
+impl PairDrawing {
+    pub fn new(pair: &GearPair, modifications: &[FlankModification; 2], title: String) -> Self {
+        let placement = pair.mesh_placement();
+        let mm = |p: Point2<f64>| (p.x * 1e3, p.y * 1e3);
+        let outline = |i: usize| {
+            let mut points: Vec<(f64, f64)> = pair.gears[i]
+                .gear_outline(&modifications[i], OutlineResolution::default())
+                .iter()
+                .map(|p| mm(placement[i].to_global(p)))
+                .collect();
+            points.push(points[0]);
+            points
+        };
+        let c = pair.contact_points;
+        PairDrawing {
+            outlines: [outline(0), outline(1)],
+            centres: [mm(placement[0].centre), mm(placement[1].centre)],
+            base_radii: [pair.gears[0].base_radius * 1e3, pair.gears[1].base_radius * 1e3],
+            pitch_radii: [pair.working_pitch_radii[0] * 1e3, pair.working_pitch_radii[1] * 1e3],
+            tip_radii: [pair.gears[0].tip_radius * 1e3, pair.gears[1].tip_radius * 1e3],
+            bore_radii: [pair.gears[0].spec.bore_radius * 1e3, pair.gears[1].spec.bore_radius * 1e3],
+            line_of_action: [mm(pair.loa_point(0.0)), mm(pair.loa_point(pair.line_of_action_length))],
+            contact_points: c.named().iter().map(|(n, s)| (*n, mm(pair.loa_point(*s)))).collect(),
+            title,
+        }
+    }
+
+    /// Two panels: the whole pair, and the mesh zone around the path of contact.
+    pub fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError> {
+        let err = plot_err::<DrawingAreaErrorKind<DB::ErrorType>>("the meshing pair");
+        root.fill(&WHITE).map_err(&err)?;
+        let (width, _) = root.dim_in_pixel();
+        let titled = root.titled(&self.title, ("sans-serif", 22)).map_err(&err)?;
+        let (left, right) = titled.split_horizontally(width / 2);
+
+        // Whole pair: equal scales, both tip circles inside.
+        let (c1, c2) = (self.centres[0], self.centres[1]);
+        let x0 = c1.0 - self.tip_radii[0] * 1.08;
+        let x1 = c2.0 + self.tip_radii[1] * 1.08;
+        let half_height = 0.5 * (x1 - x0) * aspect(&left);
+        self.panel(&left, (x0, x1), (-half_height, half_height), "meshing pair [mm]", 2)?;
+
+        // Mesh zone: the path of contact with a margin, centred on the pitch point.
+        let a = self.contact_points[0].1;
+        let e = self.contact_points[4].1;
+        let pitch = self.contact_points[2].1;
+        let span = ((e.0 - a.0).hypot(e.1 - a.1)) * 0.85;
+        let half_height = span * aspect(&right);
+        self.panel(
+            &right,
+            (pitch.0 - span, pitch.0 + span),
+            (pitch.1 - half_height, pitch.1 + half_height),
+            "mesh zone: line of action and contact points [mm]",
+            3,
+        )
+    }
+
+    fn panel<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        xr: (f64, f64),
+        yr: (f64, f64),
+        caption: &str,
+        line_width: u32,
+    ) -> Result<(), PlotError> {
+        let err = plot_err::<DrawingAreaErrorKind<DB::ErrorType>>("the meshing pair");
+        let mut chart = ChartBuilder::on(area)
+            .caption(caption, ("sans-serif", 16))
+            .margin(12)
+            .x_label_area_size(30)
+            .y_label_area_size(45)
+            .build_cartesian_2d(xr.0..xr.1, yr.0..yr.1)
+            .map_err(&err)?;
+        chart.configure_mesh().light_line_style(WHITE.mix(0.0)).draw().map_err(&err)?;
+        let grey = RGBColor(150, 150, 150);
+        let colours = [RGBColor(31, 90, 180), RGBColor(200, 50, 40)];
+        for i in 0..2 {
+            let centre = self.centres[i];
+            for (radius, style) in [
+                (self.base_radii[i], ShapeStyle::from(&grey).stroke_width(1)),
+                (self.pitch_radii[i], ShapeStyle::from(&grey.mix(0.6)).stroke_width(1)),
+                (self.bore_radii[i], ShapeStyle::from(&colours[i]).stroke_width(1)),
+            ] {
+                chart.draw_series(DashedLineSeries::new(circle(centre, radius), 6, 4, style)).map_err(&err)?;
+            }
+            let style = ShapeStyle::from(&colours[i]).stroke_width(line_width);
+            chart
+                .draw_series(LineSeries::new(self.outlines[i].iter().copied(), style))
+                .map_err(&err)?
+                .label(if i == 0 { "gear 1 (driver)" } else { "gear 2 (driven)" })
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colours[i]));
+            chart
+                .draw_series(std::iter::once(Cross::new(centre, 5, ShapeStyle::from(&BLACK))))
+                .map_err(&err)?;
+        }
+        let green = RGBColor(20, 140, 60);
+        chart
+            .draw_series(LineSeries::new(self.line_of_action.iter().copied(), green.stroke_width(2)))
+            .map_err(&err)?
+            .label("line of action T1-T2")
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], green));
+        for (k, (name, p)) in self.contact_points.iter().enumerate() {
+            chart
+                .draw_series(std::iter::once(Circle::new(*p, 5, ShapeStyle::from(&BLACK).filled())))
+                .map_err(&err)?;
+            // Labels alternate sides of the line of action so neighbours do not overlap.
+            let offset = if k % 2 == 0 { (10, -6) } else { (-62, -6) };
+            chart
+                .draw_series(std::iter::once(
+                    EmptyElement::at(*p) + Text::new(name.to_string(), offset, ("sans-serif", 15).into_font()),
+                ))
+                .map_err(&err)?;
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperLeft)
+            .draw()
+            .map_err(&err)?;
+        Ok(())
+    }
+}
+
+/// Height/width of the plotting region of an area (approximately, before margins).
+fn aspect<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>) -> f64 {
+    let (w, h) = area.dim_in_pixel();
+    (h as f64 - 70.0) / (w as f64 - 60.0)
+}
+
+fn circle(centre: (f64, f64), radius: f64) -> Vec<(f64, f64)> {
+    (0..=360)
+        .map(|k| {
+            let t = (k as f64).to_radians();
+            (centre.0 + radius * t.cos(), centre.1 + radius * t.sin())
+        })
+        .collect()
+}

@@ -184,7 +184,9 @@ pub struct ContactSection {
 
 impl Default for ContactSection {
     fn default() -> Self {
-        Self { friction_coefficients: default_friction() }
+        Self {
+            friction_coefficients: default_friction(),
+        }
     }
 }
 
@@ -281,7 +283,10 @@ impl Case {
     /// Reads and checks a case file.
     pub fn load(path: &Path) -> Result<Self, CaseError> {
         let shown = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| CaseError::Io { path: shown.clone(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| CaseError::Io {
+            path: shown.clone(),
+            source,
+        })?;
         Self::from_toml_str(&text, &shown)
     }
 
@@ -302,7 +307,11 @@ impl Case {
             limit: limit.into(),
         };
         if file.name.trim().is_empty() || file.name.contains(['/', '\\']) {
-            return Err(invalid("name", format!("{:?}", file.name), "a non-empty name without slashes"));
+            return Err(invalid(
+                "name",
+                format!("{:?}", file.name),
+                "a non-empty name without slashes",
+            ));
         }
         let rack = BasicRack {
             module: file.tool.module_mm * 1e-3,
@@ -323,17 +332,32 @@ impl Case {
             gears: [gear_spec(&file.gear1), gear_spec(&file.gear2)],
             center_distance: file.pair.center_distance_mm.map(|a| a * 1e-3),
         };
-        let pair = GearPair::new(&pair_spec).map_err(|e| CaseError::Geometry { path: source.into(), source: e })?;
+        let pair = GearPair::new(&pair_spec).map_err(|e| CaseError::Geometry {
+            path: source.into(),
+            source: e,
+        })?;
 
         let mat = &file.material;
         if !(mat.youngs_modulus_gpa > 0.0 && mat.youngs_modulus_gpa.is_finite()) {
-            return Err(invalid("material.youngs_modulus_gpa", mat.youngs_modulus_gpa.to_string(), "must be a finite number > 0"));
+            return Err(invalid(
+                "material.youngs_modulus_gpa",
+                mat.youngs_modulus_gpa.to_string(),
+                "must be a finite number > 0",
+            ));
         }
         if !(mat.poisson_ratio >= 0.0 && mat.poisson_ratio < 0.5) {
-            return Err(invalid("material.poisson_ratio", mat.poisson_ratio.to_string(), "must be in [0, 0.5)"));
+            return Err(invalid(
+                "material.poisson_ratio",
+                mat.poisson_ratio.to_string(),
+                "must be in [0, 0.5)",
+            ));
         }
         if !(mat.density_kg_per_m3 > 0.0 && mat.density_kg_per_m3.is_finite()) {
-            return Err(invalid("material.density_kg_per_m3", mat.density_kg_per_m3.to_string(), "must be a finite number > 0"));
+            return Err(invalid(
+                "material.density_kg_per_m3",
+                mat.density_kg_per_m3.to_string(),
+                "must be a finite number > 0",
+            ));
         }
         let material = Material {
             youngs_modulus: mat.youngs_modulus_gpa * 1e9,
@@ -345,7 +369,11 @@ impl Case {
         for (i, op) in file.operating_points.iter().enumerate() {
             let key = |field: &str| format!("operating_point[{i}] (\"{}\").{field}", op.name);
             if !(op.speed_rpm > 0.0 && op.speed_rpm.is_finite()) {
-                return Err(invalid(&key("speed_rpm"), op.speed_rpm.to_string(), "must be a finite number > 0"));
+                return Err(invalid(
+                    &key("speed_rpm"),
+                    op.speed_rpm.to_string(),
+                    "must be a finite number > 0",
+                ));
             }
             if !(op.torque_nm > 0.0 && op.torque_nm.is_finite()) {
                 return Err(invalid(
@@ -355,7 +383,11 @@ impl Case {
                 ));
             }
             if file.operating_points[..i].iter().any(|o| o.name == op.name) {
-                return Err(invalid(&key("name"), format!("{:?}", op.name), "names must be unique"));
+                return Err(invalid(
+                    &key("name"),
+                    format!("{:?}", op.name),
+                    "names must be unique",
+                ));
             }
             operating_points.push(OperatingPoint {
                 name: op.name.clone(),
@@ -366,8 +398,15 @@ impl Case {
 
         let mut relief_variants = Vec::new();
         for (i, variant) in file.relief_variants.iter().enumerate() {
-            if file.relief_variants[..i].iter().any(|v| v.name == variant.name) {
-                return Err(invalid(&format!("relief_variant[{i}].name"), format!("{:?}", variant.name), "names must be unique"));
+            if file.relief_variants[..i]
+                .iter()
+                .any(|v| v.name == variant.name)
+            {
+                return Err(invalid(
+                    &format!("relief_variant[{i}].name"),
+                    format!("{:?}", variant.name),
+                    "names must be unique",
+                ));
             }
             let relief_err = |e: GeometryError| CaseError::Relief {
                 path: source.into(),
@@ -379,15 +418,25 @@ impl Case {
                 gear_relief_request(2, &variant.gear2).map_err(relief_err)?,
             ];
             let modifications = [
-                pair.flank_modification(1, &requests[0]).map_err(relief_err)?,
-                pair.flank_modification(2, &requests[1]).map_err(relief_err)?,
+                pair.flank_modification(1, &requests[0])
+                    .map_err(relief_err)?,
+                pair.flank_modification(2, &requests[1])
+                    .map_err(relief_err)?,
             ];
-            relief_variants.push(ReliefVariant { name: variant.name.clone(), requests, modifications });
+            relief_variants.push(ReliefVariant {
+                name: variant.name.clone(),
+                requests,
+                modifications,
+            });
         }
 
         for (i, mu) in file.contact.friction_coefficients.iter().enumerate() {
             if !(*mu >= 0.0 && *mu < 1.0) {
-                return Err(invalid(&format!("contact.friction_coefficients[{i}]"), mu.to_string(), "must be in [0, 1)"));
+                return Err(invalid(
+                    &format!("contact.friction_coefficients[{i}]"),
+                    mu.to_string(),
+                    "must be in [0, 1)",
+                ));
             }
         }
 
@@ -415,10 +464,17 @@ impl Case {
 }
 
 /// Converts one gear's relief section to SI requests.
-fn gear_relief_request(gear: usize, section: &GearReliefSection) -> Result<FlankReliefSpec, GeometryError> {
+fn gear_relief_request(
+    gear: usize,
+    section: &GearReliefSection,
+) -> Result<FlankReliefSpec, GeometryError> {
     let convert = |end: &str, r: &ReliefSection| -> Result<ReliefSpec, GeometryError> {
         let parameter = format!("gear{gear}.{end}");
-        let given = [r.start.is_some(), r.start_roll_deg.is_some(), r.start_diameter_mm.is_some()];
+        let given = [
+            r.start.is_some(),
+            r.start_roll_deg.is_some(),
+            r.start_diameter_mm.is_some(),
+        ];
         if given.iter().filter(|g| **g).count() > 1 {
             return Err(GeometryError::Relief {
                 parameter,
@@ -446,11 +502,23 @@ fn gear_relief_request(gear: usize, section: &GearReliefSection) -> Result<Flank
         } else {
             ReliefStart::Lpstc
         };
-        Ok(ReliefSpec { amount: r.amount_um * 1e-6, shape: r.shape, start })
+        Ok(ReliefSpec {
+            amount: r.amount_um * 1e-6,
+            shape: r.shape,
+            start,
+        })
     };
     Ok(FlankReliefSpec {
-        tip: section.tip.as_ref().map(|r| convert("tip", r)).transpose()?,
-        root: section.root.as_ref().map(|r| convert("root", r)).transpose()?,
+        tip: section
+            .tip
+            .as_ref()
+            .map(|r| convert("tip", r))
+            .transpose()?,
+        root: section
+            .root
+            .as_ref()
+            .map(|r| convert("root", r))
+            .transpose()?,
     })
 }
 
@@ -464,7 +532,7 @@ mod tests {
         assert_eq!(case.name(), "paper36");
         assert_eq!(case.pair.gears[0].teeth(), 36);
         assert_eq!(case.operating_points.len(), 2);
-        assert!((case.operating_points[0].driver_speed - 6.283_185).abs() < 1e-6);
+        assert!((case.operating_points[0].driver_speed - 60.0 * std::f64::consts::TAU / 60.0).abs() < 1e-12);
         assert_eq!(case.friction_coefficients, vec![0.0, 0.15]);
         assert!(case.relief_variant("none").unwrap().modifications[0].is_none());
         let paper = case.relief_variant("tip20-root10").unwrap();
@@ -473,8 +541,13 @@ mod tests {
 
     #[test]
     fn unknown_key_names_key_and_line() {
-        let text = EMBEDDED_DEFAULT.replace("profile_shift = 0.0\naddendum", "profile_shift = 0.0\nprofile_shfit = 0.1\naddendum");
-        let err = Case::from_toml_str(&text, "t.toml").unwrap_err().to_string();
+        let text = EMBEDDED_DEFAULT.replace(
+            "profile_shift = 0.0\naddendum",
+            "profile_shift = 0.0\nprofile_shfit = 0.1\naddendum",
+        );
+        let err = Case::from_toml_str(&text, "t.toml")
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("profile_shfit"), "{err}");
         assert!(err.contains("line"), "{err}");
     }
@@ -482,14 +555,24 @@ mod tests {
     #[test]
     fn negative_module_is_named() {
         let text = EMBEDDED_DEFAULT.replace("module_mm = 3.18", "module_mm = -3.18");
-        let err = Case::from_toml_str(&text, "t.toml").unwrap_err().to_string();
-        assert!(err.contains("tool.module_mm") && err.contains("-3.18"), "{err}");
+        let err = Case::from_toml_str(&text, "t.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("tool.module_mm") && err.contains("-3.18"),
+            "{err}"
+        );
     }
 
     #[test]
     fn five_teeth_is_an_undercut_error() {
         let text = EMBEDDED_DEFAULT.replacen("teeth = 36", "teeth = 5", 1);
-        let err = Case::from_toml_str(&text, "t.toml").unwrap_err().to_string();
-        assert!(err.contains("gear1 is undercut") && err.contains("teeth = 5"), "{err}");
+        let err = Case::from_toml_str(&text, "t.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("gear1 is undercut") && err.contains("teeth = 5"),
+            "{err}"
+        );
     }
 }

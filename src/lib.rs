@@ -10,6 +10,9 @@
 //! * [`report`] — atomic file output, JSON summaries, tables and drawings.
 //! * [`samples`] — canonical cases reused by tests, benches and docs.
 
+// Input checks are written `!(x > limit)` on purpose: a NaN must fail them.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod case;
 pub mod geometry;
 pub mod report;

@@ -1,1 +1,167 @@
-fn main() {}
+//! The `geardyn` command line: each subcommand loads a case, calls the library and writes its
+//! outputs through `geardyn::report`.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Context, Result};
+use clap::{Args, Parser, Subcommand};
+
+use geardyn::case::{Case, EMBEDDED_DEFAULT};
+use geardyn::report::{self, geometry::GeometrySummary, plot::PairDrawing};
+
+/// Spur-gear mesh dynamics: exact geometry, loaded contact, explicit dynamics, lumped sweeps.
+///
+/// Every command takes an optional case file (TOML); without one it runs the embedded default
+/// case, the seed paper's pair (Z1 = Z2 = 36, m = 3.18 mm, alpha = 20 deg, B = 25.4 mm).
+/// Outputs go to a fresh folder under out/ unless --out is given.
+#[derive(Parser)]
+#[command(name = "geardyn", version, about, long_about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Derived geometry of the pair: radii, contact ratio, line of action, contact points,
+    /// backlash, resolved reliefs; writes summary.json, a drawing (SVG, PNG) and profile CSVs.
+    Geometry(CommonArgs),
+    /// Prints a case file: the given one, or the embedded default (start your own from it:
+    /// `geardyn case > my.toml`).
+    Case {
+        /// Case file to check and print; default: the embedded paper36 case.
+        case: Option<PathBuf>,
+    },
+}
+
+#[derive(Args)]
+struct CommonArgs {
+    /// Case file (TOML). Default: the embedded paper36 case.
+    case: Option<PathBuf>,
+    /// Output folder. Default: a fresh folder out/<command>-<case>-NNN.
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Geometry(args) => geometry(&args),
+        Command::Case { case } => print_case(case.as_deref()),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn load_case(path: Option<&Path>) -> Result<Case> {
+    Ok(match path {
+        Some(p) => Case::load(p)?,
+        None => Case::embedded_default()?,
+    })
+}
+
+/// The output folder: the one asked for (created), or a fresh one under out/.
+fn output_dir(out: Option<&Path>, command: &str, case: &Case) -> Result<PathBuf> {
+    match out {
+        Some(dir) => {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("cannot create output folder {}", dir.display()))?;
+            Ok(dir.to_path_buf())
+        }
+        None => report::fresh_output_dir(Path::new("out"), command, case.name())
+            .context("cannot create an output folder under out/"),
+    }
+}
+
+fn geometry(args: &CommonArgs) -> Result<()> {
+    let case = load_case(args.case.as_deref())?;
+    let dir = output_dir(args.out.as_deref(), "geometry", &case)?;
+    let summary = GeometrySummary::new(&case);
+    print!("{}", summary.table());
+
+    let write = |name: &str, bytes: &[u8]| {
+        report::write_atomic(&dir.join(name), bytes)
+            .with_context(|| format!("cannot write {}", dir.join(name).display()))
+    };
+    write("case.toml", case.text.as_bytes())?;
+    write("geometry.txt", summary.table().as_bytes())?;
+    report::write_json(&dir.join("summary.json"), &summary).context("cannot write summary.json")?;
+
+    let c = case.pair.contact_points;
+    let rows = c.named().into_iter().map(|(name, s)| {
+        let p = case.pair.loa_point(s);
+        vec![
+            name.to_string(),
+            format!("{:.9}", s * 1e3),
+            format!("{:.9}", case.pair.roll_angle_at(1, s).to_degrees()),
+            format!("{:.9}", case.pair.roll_angle_at(2, s).to_degrees()),
+            format!("{:.9}", p.x * 1e3),
+            format!("{:.9}", p.y * 1e3),
+        ]
+    });
+    let header = [
+        "point",
+        "distance_from_t1_mm",
+        "roll_angle_gear1_deg",
+        "roll_angle_gear2_deg",
+        "x_mm",
+        "y_mm",
+    ];
+    report::write_csv(&dir.join("contact_points.csv"), &header, rows)
+        .context("cannot write contact_points.csv")?;
+
+    for variant in &case.relief_variants {
+        for gear in 1..=2 {
+            let name = format!("profile_{}_gear{gear}.csv", variant.name);
+            let rows =
+                report::geometry::profile_rows(&case, gear, &variant.modifications[gear - 1]);
+            report::write_csv(&dir.join(&name), &report::geometry::PROFILE_HEADER, rows)
+                .with_context(|| format!("cannot write {name}"))?;
+        }
+    }
+
+    // The drawing shows the first variant with relief, if any (relief is µm-scale: the CSVs carry it).
+    let variant = case
+        .relief_variants
+        .iter()
+        .find(|v| !v.modifications.iter().all(|m| m.is_none()))
+        .or(case.relief_variants.first());
+    let modifications = variant.map(|v| v.modifications).unwrap_or_default();
+    let title = format!(
+        "{}: z = {}/{}, m = {} mm, contact ratio {:.4}{}",
+        case.name(),
+        case.pair.gears[0].teeth(),
+        case.pair.gears[1].teeth(),
+        case.file.tool.module_mm,
+        case.pair.contact_ratio,
+        variant
+            .map(|v| format!(", relief \"{}\"", v.name))
+            .unwrap_or_default()
+    );
+    let drawing = PairDrawing::new(&case.pair, &modifications, title);
+    report::plot::draw_svg_and_png(
+        &dir.join("pair.svg"),
+        &dir.join("pair.png"),
+        (1800, 900),
+        &drawing,
+    )?;
+    println!("\nwrote {}", dir.display());
+    Ok(())
+}
+
+fn print_case(path: Option<&Path>) -> Result<()> {
+    match path {
+        Some(p) => {
+            let case = Case::load(p)?;
+            print!("{}", case.text);
+        }
+        None => print!("{EMBEDDED_DEFAULT}"),
+    }
+    Ok(())
+}

@@ -26,6 +26,8 @@ pub fn paper36_pair() -> GearPair {
 /// (variant `tip20-root10` of the default case).
 pub fn paper_relief() -> FlankReliefSpec {
     let case = paper36_case();
-    let variant = case.relief_variant("tip20-root10").expect("the default case has the paper's relief");
+    let variant = case
+        .relief_variant("tip20-root10")
+        .expect("the default case has the paper's relief");
     variant.requests[0]
 }

@@ -113,14 +113,19 @@ impl Gear {
     /// Generates gear `index` (1 or 2) from its spec and the cutter, checking that the tooth exists:
     /// no undercut, a fillet this rack can generate, an involute above the form circle, and a tip
     /// that is not pointed.
-    pub fn generate(index: GearIndex, spec: GearSpec, rack: BasicRack) -> Result<Self, GeometryError> {
+    pub fn generate(
+        index: GearIndex,
+        spec: GearSpec,
+        rack: BasicRack,
+    ) -> Result<Self, GeometryError> {
         validate_rack(&rack)?;
         validate_spec(index, &spec, &rack)?;
         let m = rack.module;
         let alpha = rack.pressure_angle;
         let z = spec.teeth as f64;
         let r = m * z / 2.0;
-        let generating_shift = spec.profile_shift - spec.thickness_reduction / (2.0 * m * alpha.tan());
+        let generating_shift =
+            spec.profile_shift - spec.thickness_reduction / (2.0 * m * alpha.tan());
         let xg_m = generating_shift * m;
         let h_fp = rack.dedendum_coeff * m;
         let rho = rack.tip_radius_coeff * m;
@@ -217,7 +222,8 @@ impl Gear {
     /// Half tooth angle ψ(R) = s/(2r) + inv α − inv α_R of the unmodified involute [rad].
     pub fn half_thickness_angle(&self, radius: f64) -> f64 {
         let alpha_r = (self.base_radius / radius).clamp(-1.0, 1.0).acos();
-        self.reference_thickness / (2.0 * self.reference_radius) + involute(self.rack.pressure_angle)
+        self.reference_thickness / (2.0 * self.reference_radius)
+            + involute(self.rack.pressure_angle)
             - involute(alpha_r)
     }
 
@@ -292,7 +298,10 @@ impl Gear {
 
     /// Fillet point (see [`Gear::generated_fillet_point`]) and the unit normal pointing into the
     /// gear material there (the round's outward normal, rotated with the gear).
-    pub fn generated_fillet_point_and_inward_normal(&self, beta: f64) -> (Point2<f64>, Vector2<f64>) {
+    pub fn generated_fillet_point_and_inward_normal(
+        &self,
+        beta: f64,
+    ) -> (Point2<f64>, Vector2<f64>) {
         let rho = self.rack.tip_radius_coeff * self.rack.module;
         let h_c = self.reference_radius - self.round_centre.y;
         let (sin_b, cos_b) = beta.sin_cos();
@@ -317,17 +326,33 @@ impl Gear {
 
 fn validate_rack(rack: &BasicRack) -> Result<(), GeometryError> {
     let out = |parameter: &str, value: f64, limit: String| {
-        Err(GeometryError::OutOfRange { parameter: parameter.into(), value, limit })
+        Err(GeometryError::OutOfRange {
+            parameter: parameter.into(),
+            value,
+            limit,
+        })
     };
     if !(rack.module > 0.0) || !rack.module.is_finite() {
-        return out("tool.module_mm", rack.module * 1e3, "a finite number > 0".into());
+        return out(
+            "tool.module_mm",
+            rack.module * 1e3,
+            "a finite number > 0".into(),
+        );
     }
     let alpha_deg = rack.pressure_angle.to_degrees();
     if !(10.0..=35.0).contains(&alpha_deg) {
-        return out("tool.pressure_angle_deg", alpha_deg, "between 10 and 35 degrees".into());
+        return out(
+            "tool.pressure_angle_deg",
+            alpha_deg,
+            "between 10 and 35 degrees".into(),
+        );
     }
     if !(rack.dedendum_coeff > 0.5 && rack.dedendum_coeff <= 2.0) {
-        return out("tool.dedendum_coeff", rack.dedendum_coeff, "in (0.5, 2.0]".into());
+        return out(
+            "tool.dedendum_coeff",
+            rack.dedendum_coeff,
+            "in (0.5, 2.0]".into(),
+        );
     }
     let max_rho = rack.max_tip_radius_coeff();
     if !(rack.tip_radius_coeff >= 0.0 && rack.tip_radius_coeff <= max_rho) {
@@ -358,10 +383,18 @@ fn validate_spec(index: GearIndex, spec: &GearSpec, rack: &BasicRack) -> Result<
         return out("addendum_coeff", spec.addendum_coeff, "in (0, 2]");
     }
     if !(spec.face_width > 0.0) || !spec.face_width.is_finite() {
-        return out("face_width_mm", spec.face_width * 1e3, "a finite number > 0");
+        return out(
+            "face_width_mm",
+            spec.face_width * 1e3,
+            "a finite number > 0",
+        );
     }
     if !(spec.bore_radius > 0.0) || !spec.bore_radius.is_finite() {
-        return out("bore_radius_mm", spec.bore_radius * 1e3, "a finite number > 0");
+        return out(
+            "bore_radius_mm",
+            spec.bore_radius * 1e3,
+            "a finite number > 0",
+        );
     }
     let max_reduction = 0.2 * rack.module;
     if !(spec.thickness_reduction >= 0.0 && spec.thickness_reduction <= max_reduction) {

@@ -20,4 +20,6 @@ pub use error::{GearIndex, GeometryError};
 pub use gear::{BasicRack, Gear, GearSpec};
 pub use outline::{OutlinePoint, OutlineResolution, Segment, Side};
 pub use pair::{ContactPoints, FlankRollAngles, GearPair, PairSpec, Placement};
-pub use relief::{FlankModification, FlankReliefSpec, ReliefShape, ReliefSpec, ReliefStart, ReliefZone};
+pub use relief::{
+    FlankModification, FlankReliefSpec, ReliefShape, ReliefSpec, ReliefStart, ReliefZone,
+};

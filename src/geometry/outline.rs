@@ -3,9 +3,10 @@
 //! One tooth runs counter-clockwise from the centre of the space on its right (θ = π/z) to the
 //! centre of the space on its left (θ = −π/z): root arc, fillet, flank, tip arc, then the mirror
 //! image. Relief moves the flank by δ(ξ) along its inward normal. Below the form point the root
-//! relief is blended into the fillet, linearly in the generating normal angle from δ(ξ_F) at the
-//! form point to 0 at the root circle, so the outline stays continuous; the deviation there is a
-//! few µm against a fillet of millimetres.
+//! relief is blended into the fillet as δ(ξ_F)·t³, t going from 0 at the root circle to 1 at the
+//! form point (uniform in the generating normal angle), so the outline stays continuous and the
+//! fillet bottom, where the fillet rises above the root circle only quadratically, is untouched;
+//! the deviation there is µm against a fillet of millimetres.
 
 use nalgebra::{Point2, Rotation2, Vector2};
 
@@ -48,14 +49,23 @@ pub struct OutlineResolution {
 
 impl Default for OutlineResolution {
     fn default() -> Self {
-        Self { root: 4, fillet: 24, flank: 64, tip: 6 }
+        Self {
+            root: 4,
+            fillet: 24,
+            flank: 64,
+            tip: 6,
+        }
     }
 }
 
 impl Gear {
     /// Point of the modified right flank at roll angle ξ: P(ξ) + δ(ξ)·n_in, with n_in the inward
     /// normal of the involute (−n of the generating rack flank, rotated with the gear).
-    pub fn modified_flank_point(&self, roll_angle: f64, modification: &FlankModification) -> Point2<f64> {
+    pub fn modified_flank_point(
+        &self,
+        roll_angle: f64,
+        modification: &FlankModification,
+    ) -> Point2<f64> {
         let p = self.generated_flank_point(roll_angle);
         let alpha = self.rack.pressure_angle;
         let roll = self.generating_roll_of_flank(roll_angle);
@@ -70,7 +80,8 @@ impl Gear {
         if modification.deviation(xi_a) == 0.0 {
             return xi_a;
         }
-        let radius = |xi| self.modified_flank_point(xi, modification).coords.norm() - self.tip_radius;
+        let radius =
+            |xi| self.modified_flank_point(xi, modification).coords.norm() - self.tip_radius;
         let (mut lo, mut hi) = (xi_a, xi_a);
         let mut step = 1e-3;
         while radius(hi) < 0.0 && step < 1.0 {
@@ -90,19 +101,36 @@ impl Gear {
     }
 
     /// The right half of one tooth from the space centre to the tooth centre line.
-    fn right_half_outline(&self, modification: &FlankModification, res: OutlineResolution) -> Vec<OutlinePoint> {
+    fn right_half_outline(
+        &self,
+        modification: &FlankModification,
+        res: OutlineResolution,
+    ) -> Vec<OutlinePoint> {
         let mut points = Vec::with_capacity(res.root + res.fillet + res.flank + res.tip + 4);
         let mut push = |position: Point2<f64>, segment, roll_angle| {
-            points.push(OutlinePoint { position, segment, side: Side::Right, roll_angle })
+            points.push(OutlinePoint {
+                position,
+                segment,
+                side: Side::Right,
+                roll_angle,
+            })
         };
-        let on_circle = |radius: f64, theta: f64| Point2::new(radius * theta.sin(), radius * theta.cos());
+        let on_circle =
+            |radius: f64, theta: f64| Point2::new(radius * theta.sin(), radius * theta.cos());
 
         // Root arc: from the space centre π/z to where the fillet reaches the root circle.
         let space_centre = 0.5 * self.angular_pitch();
         let root_end = self.fillet_root_angle();
         for i in 0..res.root {
             let t = i as f64 / res.root as f64;
-            push(on_circle(self.root_radius, space_centre + (root_end - space_centre) * t), Segment::Root, None);
+            push(
+                on_circle(
+                    self.root_radius,
+                    space_centre + (root_end - space_centre) * t,
+                ),
+                Segment::Root,
+                None,
+            );
         }
 
         // Fillet, from the root circle (β = 3π/2) to the form point (β = π + α).
@@ -112,14 +140,25 @@ impl Gear {
             let t = i as f64 / res.fillet as f64;
             let beta = beta_root + (beta_form - beta_root) * t;
             let (p, inward) = self.generated_fillet_point_and_inward_normal(beta);
-            push(p + form_deviation * t * inward, Segment::Fillet, None);
+            push(
+                p + form_deviation * t.powi(3) * inward,
+                Segment::Fillet,
+                None,
+            );
         }
 
         // Flank, from the form point to the tip circle.
-        let (xi_f, xi_end) = (self.form_roll_angle(), self.modified_tip_roll_angle(modification));
+        let (xi_f, xi_end) = (
+            self.form_roll_angle(),
+            self.modified_tip_roll_angle(modification),
+        );
         for i in 0..=res.flank {
             let xi = xi_f + (xi_end - xi_f) * i as f64 / res.flank as f64;
-            push(self.modified_flank_point(xi, modification), Segment::Flank, Some(xi));
+            push(
+                self.modified_flank_point(xi, modification),
+                Segment::Flank,
+                Some(xi),
+            );
         }
 
         // Tip arc, from the flank's end to the centre line.
@@ -129,14 +168,22 @@ impl Gear {
         };
         for i in 1..=res.tip {
             let t = i as f64 / res.tip as f64;
-            push(on_circle(self.tip_radius, tip_start * (1.0 - t)), Segment::Tip, None);
+            push(
+                on_circle(self.tip_radius, tip_start * (1.0 - t)),
+                Segment::Tip,
+                None,
+            );
         }
         points
     }
 
     /// One tooth, counter-clockwise from the right space centre (θ = π/z) to the left one
     /// (θ = −π/z), tooth-local frame; the two halves are exact mirror images.
-    pub fn tooth_outline(&self, modification: &FlankModification, res: OutlineResolution) -> Vec<OutlinePoint> {
+    pub fn tooth_outline(
+        &self,
+        modification: &FlankModification,
+        res: OutlineResolution,
+    ) -> Vec<OutlinePoint> {
         let right = self.right_half_outline(modification, res);
         let mut outline = right.clone();
         // The centre-line tip point is shared; mirror the rest in reverse order.
@@ -150,13 +197,21 @@ impl Gear {
 
     /// The whole gear as a closed counter-clockwise polygon (last point not repeated), tooth-local
     /// frame of tooth 0.
-    pub fn gear_outline(&self, modification: &FlankModification, res: OutlineResolution) -> Vec<Point2<f64>> {
+    pub fn gear_outline(
+        &self,
+        modification: &FlankModification,
+        res: OutlineResolution,
+    ) -> Vec<Point2<f64>> {
         let tooth = self.tooth_outline(modification, res);
         let z = self.teeth() as usize;
         let mut polygon = Vec::with_capacity(z * tooth.len());
         for k in 0..z {
             let rotation = Rotation2::new(k as f64 * self.angular_pitch());
-            polygon.extend(tooth[..tooth.len() - 1].iter().map(|p| Point2::from(rotation * p.position.coords)));
+            polygon.extend(
+                tooth[..tooth.len() - 1]
+                    .iter()
+                    .map(|p| Point2::from(rotation * p.position.coords)),
+            );
         }
         polygon
     }
@@ -177,7 +232,9 @@ mod tests {
     fn tooth_is_mirror_symmetric_and_closed_between_space_centres() {
         let pair = samples::paper36_pair();
         let gear = &pair.gears[0];
-        let modification = pair.flank_modification(1, &samples::paper_relief()).unwrap();
+        let modification = pair
+            .flank_modification(1, &samples::paper_relief())
+            .unwrap();
         let tooth = gear.tooth_outline(&modification, OutlineResolution::default());
         let n = tooth.len();
         for i in 0..n {
@@ -194,11 +251,18 @@ mod tests {
     fn outline_has_no_jumps() {
         let pair = samples::paper36_pair();
         let gear = &pair.gears[0];
-        let modification = pair.flank_modification(1, &samples::paper_relief()).unwrap();
+        let modification = pair
+            .flank_modification(1, &samples::paper_relief())
+            .unwrap();
         let polygon = gear.gear_outline(&modification, OutlineResolution::default());
         let m = gear.module();
         for w in polygon.windows(2) {
-            assert!((w[1] - w[0]).norm() < 0.2 * m, "gap between {:?} and {:?}", w[0], w[1]);
+            assert!(
+                (w[1] - w[0]).norm() < 0.2 * m,
+                "gap between {:?} and {:?}",
+                w[0],
+                w[1]
+            );
         }
     }
 
@@ -232,7 +296,8 @@ mod tests {
         let p = gear.generated_flank_point(alpha.tan());
         assert!((p.coords.norm() - r).abs() < 1e-12);
         let half_angle = p.x.atan2(p.y);
-        let expected = m * (std::f64::consts::FRAC_PI_2 + 2.0 * gear.spec.profile_shift * alpha.tan());
+        let expected =
+            m * (std::f64::consts::FRAC_PI_2 + 2.0 * gear.spec.profile_shift * alpha.tan());
         assert!((2.0 * r * half_angle - expected).abs() < 1e-12 * expected.max(1.0));
         assert!(involute(alpha) > 0.0);
     }
@@ -241,20 +306,28 @@ mod tests {
     fn relief_deviation_is_the_amount_at_the_tip_and_zero_before_its_start() {
         let pair = samples::paper36_pair();
         let gear = &pair.gears[0];
-        let modification = pair.flank_modification(1, &samples::paper_relief()).unwrap();
+        let modification = pair
+            .flank_modification(1, &samples::paper_relief())
+            .unwrap();
         let tip = modification.tip.unwrap();
         let root = modification.root.unwrap();
         let xi_a = gear.tip_roll_angle();
         // Normal distance between modified and unmodified flank at the tip roll angle.
-        let shift = gear.modified_flank_point(xi_a, &modification) - gear.generated_flank_point(xi_a);
+        let shift =
+            gear.modified_flank_point(xi_a, &modification) - gear.generated_flank_point(xi_a);
         assert!((shift.norm() - 20e-6).abs() < 1e-15);
         let sap = pair.flank_roll_angles(1).start_of_active_profile;
-        let shift_root = gear.modified_flank_point(sap, &modification) - gear.generated_flank_point(sap);
+        let shift_root =
+            gear.modified_flank_point(sap, &modification) - gear.generated_flank_point(sap);
         assert!((shift_root.norm() - 10e-6).abs() < 1e-15);
         // Between the two starts the flank is the involute itself.
         for k in 0..=20 {
-            let xi = root.start_roll_angle + (tip.start_roll_angle - root.start_roll_angle) * k as f64 / 20.0;
-            assert_eq!(gear.modified_flank_point(xi, &modification), gear.generated_flank_point(xi));
+            let xi = root.start_roll_angle
+                + (tip.start_roll_angle - root.start_roll_angle) * k as f64 / 20.0;
+            assert_eq!(
+                gear.modified_flank_point(xi, &modification),
+                gear.generated_flank_point(xi)
+            );
         }
         // The shift is along the involute normal: perpendicular to the flank tangent.
         let xi = 0.5 * (tip.start_roll_angle + xi_a);

@@ -21,7 +21,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 
 use super::error::{GearIndex, GeometryError};
 use super::gear::{BasicRack, Gear, GearSpec};
-use super::involute::{involute, inverse_involute};
+use super::involute::{inverse_involute, involute};
 use super::relief::{FlankModification, FlankReliefSpec, ReliefSpec, ReliefStart, ReliefZone};
 
 /// What defines a pair, in SI units.
@@ -133,7 +133,10 @@ impl GearPair {
             let alpha_w = inverse_involute(inv_w).ok_or_else(|| GeometryError::OutOfRange {
                 parameter: "gear1.profile_shift + gear2.profile_shift".into(),
                 value: x_sum,
-                limit: format!("above {:.4} (no meshing centre distance below it)", -involute(alpha) * z_sum / (2.0 * alpha.tan())),
+                limit: format!(
+                    "above {:.4} (no meshing centre distance below it)",
+                    -involute(alpha) * z_sum / (2.0 * alpha.tan())
+                ),
             })?;
             Ok(reference_sum * alpha.cos() / alpha_w.cos())
         };
@@ -155,7 +158,9 @@ impl GearPair {
                 }
                 a
             }
-            None => zero_backlash_distance(spec.gears[0].profile_shift + spec.gears[1].profile_shift)?,
+            None => {
+                zero_backlash_distance(spec.gears[0].profile_shift + spec.gears[1].profile_shift)?
+            }
         };
         let (rb1, rb2) = (g1.base_radius, g2.base_radius);
         let alpha_w = ((rb1 + rb2) / center_distance).clamp(-1.0, 1.0).acos();
@@ -186,7 +191,11 @@ impl GearPair {
             let sap = sap_lengths[i];
             let mate = 2 - i;
             if sap < 0.0 {
-                return Err(GeometryError::InvoluteInterference { gear: i + 1, mate, sap_mm: sap * 1e3 });
+                return Err(GeometryError::InvoluteInterference {
+                    gear: i + 1,
+                    mate,
+                    sap_mm: sap * 1e3,
+                });
             }
             let form_length = gear.base_radius * gear.form_roll_angle();
             if sap < form_length {
@@ -309,7 +318,11 @@ impl GearPair {
                         "{:.3} µm is out of range: it must be in [0, {:.3}] µm (0.05·m{})",
                         spec.amount * 1e6,
                         max_amount * 1e6,
-                        if end == "tip" { ", and at most ¼ of the tip thickness" } else { "" }
+                        if end == "tip" {
+                            ", and at most ¼ of the tip thickness"
+                        } else {
+                            ""
+                        }
                     ),
                 ));
             }
@@ -377,8 +390,18 @@ impl GearPair {
                 shape: spec.shape,
             }))
         };
-        let tip = request.tip.as_ref().map(|s| resolve(s, "tip")).transpose()?.flatten();
-        let root = request.root.as_ref().map(|s| resolve(s, "root")).transpose()?.flatten();
+        let tip = request
+            .tip
+            .as_ref()
+            .map(|s| resolve(s, "tip"))
+            .transpose()?
+            .flatten();
+        let root = request
+            .root
+            .as_ref()
+            .map(|s| resolve(s, "root"))
+            .transpose()?
+            .flatten();
         if let (Some(t), Some(r)) = (tip, root) {
             if t.start_roll_angle <= r.start_roll_angle {
                 return Err(GeometryError::Relief {
@@ -402,8 +425,14 @@ impl GearPair {
         let psi1 = self.gears[0].half_thickness_angle(rw1);
         let psi2 = self.gears[1].half_thickness_angle(rw2);
         [
-            Placement { centre: Point2::origin(), rotation: -psi1 - FRAC_PI_2 },
-            Placement { centre: Point2::new(self.center_distance, 0.0), rotation: FRAC_PI_2 - psi2 },
+            Placement {
+                centre: Point2::origin(),
+                rotation: -psi1 - FRAC_PI_2,
+            },
+            Placement {
+                centre: Point2::new(self.center_distance, 0.0),
+                rotation: FRAC_PI_2 - psi2,
+            },
         ]
     }
 
@@ -423,7 +452,11 @@ mod tests {
     #[test]
     fn paper_pair_contact_ratio_and_points() {
         let pair = samples::paper36_pair();
-        assert!((pair.contact_ratio - 1.6924).abs() < 5e-4, "ε = {}", pair.contact_ratio);
+        assert!(
+            (pair.contact_ratio - 1.6924).abs() < 5e-4,
+            "ε = {}",
+            pair.contact_ratio
+        );
         let c = pair.contact_points;
         assert!(c.icp < c.lpstc && c.lpstc < c.pitch && c.pitch < c.hpstc && c.hpstc < c.fcp);
         // Equal gears: the path is symmetric about the pitch point.
@@ -439,7 +472,12 @@ mod tests {
     fn gear2_flank_points_mirror_gear1_for_equal_gears() {
         let pair = samples::paper36_pair();
         let (a, b) = (pair.flank_roll_angles(1), pair.flank_roll_angles(2));
-        for (x, y) in [(a.start_of_active_profile, b.start_of_active_profile), (a.lpstc, b.lpstc), (a.hpstc, b.hpstc), (a.tip, b.tip)] {
+        for (x, y) in [
+            (a.start_of_active_profile, b.start_of_active_profile),
+            (a.lpstc, b.lpstc),
+            (a.hpstc, b.hpstc),
+            (a.tip, b.tip),
+        ] {
             assert!((x - y).abs() < 1e-12);
         }
         assert!((a.tip - pair.gears[0].tip_roll_angle()).abs() < 1e-12);
@@ -452,7 +490,12 @@ mod tests {
         let (rack, mut g1, mut g2) = samples::paper36_specs();
         g1.thickness_reduction = 50e-6;
         g2.thickness_reduction = 50e-6;
-        let pair = GearPair::new(&PairSpec { rack, gears: [g1, g2], center_distance: None }).unwrap();
+        let pair = GearPair::new(&PairSpec {
+            rack,
+            gears: [g1, g2],
+            center_distance: None,
+        })
+        .unwrap();
         assert!((pair.backlash_circumferential - 100e-6).abs() < 1e-10);
         assert!(pair.zero_backlash_center_distance < pair.center_distance);
     }

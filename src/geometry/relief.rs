@@ -132,7 +132,10 @@ mod tests {
         assert_eq!(zone.deviation(0.39), 0.0);
         assert!((zone.deviation(0.45) - 10e-6).abs() < 1e-18);
         assert!((zone.deviation(0.5) - 20e-6).abs() < 1e-18);
-        let parabolic = ReliefZone { shape: ReliefShape::Parabolic, ..zone };
+        let parabolic = ReliefZone {
+            shape: ReliefShape::Parabolic,
+            ..zone
+        };
         assert!((parabolic.deviation(0.45) - 5e-6).abs() < 1e-18);
         // Root relief: the relieved side is below the start.
         let root = ReliefZone {

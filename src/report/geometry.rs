@@ -4,7 +4,9 @@
 use serde::Serialize;
 
 use crate::case::Case;
-use crate::geometry::{FlankModification, GearIndex, GearPair, OutlineResolution, ReliefZone, Segment, Side};
+use crate::geometry::{
+    FlankModification, GearIndex, GearPair, OutlineResolution, ReliefZone, Segment, Side,
+};
 
 /// Per-gear derived quantities.
 #[derive(Debug, Clone, Serialize)]
@@ -111,7 +113,8 @@ fn gear_summary(pair: &GearPair, index: GearIndex) -> GearSummary {
         tip_radius_mm: gear.tip_radius * 1e3,
         root_radius_mm: gear.root_radius * 1e3,
         form_radius_mm: gear.form_radius * 1e3,
-        start_of_active_profile_radius_mm: gear.radius_at_roll_angle(roll.start_of_active_profile) * 1e3,
+        start_of_active_profile_radius_mm: gear.radius_at_roll_angle(roll.start_of_active_profile)
+            * 1e3,
         bore_radius_mm: gear.spec.bore_radius * 1e3,
         face_width_mm: gear.spec.face_width * 1e3,
         tooth_thickness_reference_mm: gear.reference_thickness * 1e3,
@@ -136,14 +139,26 @@ fn zone_summary(pair: &GearPair, index: GearIndex, zone: &ReliefZone) -> ReliefZ
         start_diameter_mm: 2e3 * gear.radius_at_roll_angle(zone.start_roll_angle),
         full_roll_deg: zone.full_roll_angle.to_degrees(),
         full_diameter_mm: 2e3 * gear.radius_at_roll_angle(zone.full_roll_angle),
-        length_along_loa_mm: 1e3 * gear.base_radius * (zone.full_roll_angle - zone.start_roll_angle).abs(),
+        length_along_loa_mm: 1e3
+            * gear.base_radius
+            * (zone.full_roll_angle - zone.start_roll_angle).abs(),
     }
 }
 
-fn relief_summary(pair: &GearPair, index: GearIndex, modification: &FlankModification) -> GearReliefSummary {
+fn relief_summary(
+    pair: &GearPair,
+    index: GearIndex,
+    modification: &FlankModification,
+) -> GearReliefSummary {
     GearReliefSummary {
-        tip: modification.tip.as_ref().map(|z| zone_summary(pair, index, z)),
-        root: modification.root.as_ref().map(|z| zone_summary(pair, index, z)),
+        tip: modification
+            .tip
+            .as_ref()
+            .map(|z| zone_summary(pair, index, z)),
+        root: modification
+            .root
+            .as_ref()
+            .map(|z| zone_summary(pair, index, z)),
     }
 }
 
@@ -162,9 +177,21 @@ fn warnings(pair: &GearPair) -> Vec<String> {
         }
     }
     if pair.contact_ratio < 1.2 {
-        notes.push(format!("contact ratio {:.4} is below 1.2: little margin against loss of contact under load", pair.contact_ratio));
+        notes.push(format!(
+            "contact ratio {:.4} is below 1.2: little margin against loss of contact under load",
+            pair.contact_ratio
+        ));
     }
     notes
+}
+
+/// Backlash of a zero-backlash pair comes out as ±1e-12 µm of roundoff; show it as 0.
+fn without_roundoff(micrometres: f64) -> f64 {
+    if micrometres.abs() < 1e-9 {
+        0.0
+    } else {
+        micrometres
+    }
 }
 
 impl GeometrySummary {
@@ -188,8 +215,8 @@ impl GeometrySummary {
             zero_backlash_center_distance_mm: pair.zero_backlash_center_distance * 1e3,
             operating_pressure_angle_deg: pair.operating_pressure_angle.to_degrees(),
             line_of_action_length_mm: pair.line_of_action_length * 1e3,
-            backlash_circumferential_um: pair.backlash_circumferential * 1e6,
-            backlash_normal_um: pair.backlash_normal * 1e6,
+            backlash_circumferential_um: without_roundoff(pair.backlash_circumferential * 1e6),
+            backlash_normal_um: without_roundoff(pair.backlash_normal * 1e6),
             contact_points_from_t1_mm: ContactPointsMm {
                 icp: c.icp * 1e3,
                 lpstc: c.lpstc * 1e3,
@@ -220,42 +247,120 @@ impl GeometrySummary {
         let _ = writeln!(t, "{:<44} {:>14} {:>14}", "", "gear1 (drive)", "gear2");
         let g = [&self.gear1, &self.gear2];
         let row = |t: &mut String, name: &str, f: &dyn Fn(&GearSummary) -> f64, digits: usize| {
-            let _ = writeln!(t, "{:<44} {:>14.*} {:>14.*}", name, digits, f(g[0]), digits, f(g[1]));
+            let _ = writeln!(
+                t,
+                "{:<44} {:>14.*} {:>14.*}",
+                name,
+                digits,
+                f(g[0]),
+                digits,
+                f(g[1])
+            );
         };
         row(&mut t, "teeth", &|s| s.teeth as f64, 0);
         row(&mut t, "profile shift x", &|s| s.profile_shift, 4);
-        row(&mut t, "reference radius r [mm]", &|s| s.reference_radius_mm, 4);
+        row(
+            &mut t,
+            "reference radius r [mm]",
+            &|s| s.reference_radius_mm,
+            4,
+        );
         row(&mut t, "base radius r_b [mm]", &|s| s.base_radius_mm, 4);
-        row(&mut t, "working pitch radius r_w [mm]", &|s| s.working_pitch_radius_mm, 4);
+        row(
+            &mut t,
+            "working pitch radius r_w [mm]",
+            &|s| s.working_pitch_radius_mm,
+            4,
+        );
         row(&mut t, "tip radius r_a [mm]", &|s| s.tip_radius_mm, 4);
         row(&mut t, "root radius r_f [mm]", &|s| s.root_radius_mm, 4);
-        row(&mut t, "form radius r_F (fillet/involute) [mm]", &|s| s.form_radius_mm, 4);
-        row(&mut t, "start of active profile radius [mm]", &|s| s.start_of_active_profile_radius_mm, 4);
-        row(&mut t, "tooth thickness at r [mm]", &|s| s.tooth_thickness_reference_mm, 4);
+        row(
+            &mut t,
+            "form radius r_F (fillet/involute) [mm]",
+            &|s| s.form_radius_mm,
+            4,
+        );
+        row(
+            &mut t,
+            "start of active profile radius [mm]",
+            &|s| s.start_of_active_profile_radius_mm,
+            4,
+        );
+        row(
+            &mut t,
+            "tooth thickness at r [mm]",
+            &|s| s.tooth_thickness_reference_mm,
+            4,
+        );
         row(&mut t, "tip thickness [mm]", &|s| s.tip_thickness_mm, 4);
         row(&mut t, "tip clearance [mm]", &|s| s.tip_clearance_mm, 4);
-        row(&mut t, "roll angle: form point [deg]", &|s| s.roll_angle_form_deg, 4);
-        row(&mut t, "roll angle: start of active profile [deg]", &|s| s.roll_angle_sap_deg, 4);
-        row(&mut t, "roll angle: LPSTC [deg]", &|s| s.roll_angle_lpstc_deg, 4);
-        row(&mut t, "roll angle: pitch point [deg]", &|s| s.roll_angle_pitch_deg, 4);
-        row(&mut t, "roll angle: HPSTC [deg]", &|s| s.roll_angle_hpstc_deg, 4);
-        row(&mut t, "roll angle: tip [deg]", &|s| s.roll_angle_tip_deg, 4);
+        row(
+            &mut t,
+            "roll angle: form point [deg]",
+            &|s| s.roll_angle_form_deg,
+            4,
+        );
+        row(
+            &mut t,
+            "roll angle: start of active profile [deg]",
+            &|s| s.roll_angle_sap_deg,
+            4,
+        );
+        row(
+            &mut t,
+            "roll angle: LPSTC [deg]",
+            &|s| s.roll_angle_lpstc_deg,
+            4,
+        );
+        row(
+            &mut t,
+            "roll angle: pitch point [deg]",
+            &|s| s.roll_angle_pitch_deg,
+            4,
+        );
+        row(
+            &mut t,
+            "roll angle: HPSTC [deg]",
+            &|s| s.roll_angle_hpstc_deg,
+            4,
+        );
+        row(
+            &mut t,
+            "roll angle: tip [deg]",
+            &|s| s.roll_angle_tip_deg,
+            4,
+        );
         let _ = writeln!(t);
         let pair_rows: [(&str, f64, usize); 9] = [
             ("centre distance [mm]", self.center_distance_mm, 4),
-            ("operating pressure angle [deg]", self.operating_pressure_angle_deg, 4),
+            (
+                "operating pressure angle [deg]",
+                self.operating_pressure_angle_deg,
+                4,
+            ),
             ("base pitch p_b [mm]", self.base_pitch_mm, 4),
             ("line of action T1T2 [mm]", self.line_of_action_length_mm, 4),
             ("path of contact g_a [mm]", self.path_of_contact_mm, 4),
             ("contact ratio e_a", self.contact_ratio, 4),
-            ("backlash, circumferential [um]", self.backlash_circumferential_um, 3),
+            (
+                "backlash, circumferential [um]",
+                self.backlash_circumferential_um,
+                3,
+            ),
             ("backlash, normal [um]", self.backlash_normal_um, 3),
-            ("zero-backlash centre distance [mm]", self.zero_backlash_center_distance_mm, 4),
+            (
+                "zero-backlash centre distance [mm]",
+                self.zero_backlash_center_distance_mm,
+                4,
+            ),
         ];
         for (name, value, digits) in pair_rows {
             let _ = writeln!(t, "{name:<44} {value:>14.digits$}");
         }
-        let _ = writeln!(t, "\ncontact points (distance from T1 [mm], driver roll angle [deg]):");
+        let _ = writeln!(
+            t,
+            "\ncontact points (distance from T1 [mm], driver roll angle [deg]):"
+        );
         let c = &self.contact_points_from_t1_mm;
         for (name, s, xi) in [
             ("ICP", c.icp, self.roll_angle_icp_deg),
@@ -294,7 +399,11 @@ impl GeometrySummary {
 
 /// Rows of the tooth-profile CSV of one gear and relief variant: x, y [mm] in the tooth-local
 /// frame, segment, side, roll angle [deg], relief deviation [µm].
-pub fn profile_rows(case: &Case, index: GearIndex, modification: &FlankModification) -> Vec<Vec<String>> {
+pub fn profile_rows(
+    case: &Case,
+    index: GearIndex,
+    modification: &FlankModification,
+) -> Vec<Vec<String>> {
     let gear = case.pair.gear(index);
     gear.tooth_outline(modification, OutlineResolution::default())
         .iter()
@@ -314,11 +423,21 @@ pub fn profile_rows(case: &Case, index: GearIndex, modification: &FlankModificat
                 format!("{:.9}", p.position.y * 1e3),
                 segment.into(),
                 side.into(),
-                p.roll_angle.map_or(String::new(), |xi| format!("{:.6}", xi.to_degrees())),
-                p.roll_angle.map_or(String::new(), |xi| format!("{:.4}", modification.deviation(xi) * 1e6)),
+                p.roll_angle
+                    .map_or(String::new(), |xi| format!("{:.6}", xi.to_degrees())),
+                p.roll_angle.map_or(String::new(), |xi| {
+                    format!("{:.4}", modification.deviation(xi) * 1e6)
+                }),
             ]
         })
         .collect()
 }
 
-pub const PROFILE_HEADER: [&str; 6] = ["x_mm", "y_mm", "segment", "side", "roll_angle_deg", "relief_um"];
+pub const PROFILE_HEADER: [&str; 6] = [
+    "x_mm",
+    "y_mm",
+    "segment",
+    "side",
+    "roll_angle_deg",
+    "relief_um",
+];

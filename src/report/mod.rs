@@ -26,7 +26,10 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 /// A temporary name next to `path` that keeps its extension (plot backends pick the format
 /// from it): `dir/.name.tmp.ext`.
 pub fn temporary_sibling(path: &Path) -> PathBuf {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let (stem, ext) = match name.rsplit_once('.') {
         Some((s, e)) => (s.to_string(), format!(".{e}")),
         None => (name.clone(), String::new()),
@@ -42,13 +45,19 @@ pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> std::io::Resul
 }
 
 /// Writes a CSV file atomically from a header and rows of already formatted fields.
-pub fn write_csv(path: &Path, header: &[&str], rows: impl IntoIterator<Item = Vec<String>>) -> std::io::Result<()> {
+pub fn write_csv(
+    path: &Path,
+    header: &[&str],
+    rows: impl IntoIterator<Item = Vec<String>>,
+) -> std::io::Result<()> {
     let mut writer = csv::Writer::from_writer(Vec::new());
     writer.write_record(header).map_err(std::io::Error::other)?;
     for row in rows {
         writer.write_record(&row).map_err(std::io::Error::other)?;
     }
-    let bytes = writer.into_inner().map_err(|e| std::io::Error::other(e.to_string()))?;
+    let bytes = writer
+        .into_inner()
+        .map_err(|e| std::io::Error::other(e.to_string()))?;
     write_atomic(path, &bytes)
 }
 
@@ -63,7 +72,10 @@ pub fn fresh_output_dir(base: &Path, command: &str, case_name: &str) -> std::io:
             Err(e) => return Err(e),
         }
     }
-    Err(std::io::Error::other(format!("no free output folder name under {}", base.display())))
+    Err(std::io::Error::other(format!(
+        "no free output folder name under {}",
+        base.display()
+    )))
 }
 
 #[cfg(test)]
@@ -79,7 +91,10 @@ mod tests {
         write_atomic(&path, b"two").unwrap();
         assert_eq!(std::fs::read(&path).unwrap(), b"two");
         assert!(!temporary_sibling(&path).exists());
-        assert_eq!(temporary_sibling(&path).file_name().unwrap(), ".summary.tmp.json");
+        assert_eq!(
+            temporary_sibling(&path).file_name().unwrap(),
+            ".summary.tmp.json"
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -30,21 +30,30 @@ pub struct PlotError {
 }
 
 fn plot_err<E: std::fmt::Display>(what: &str) -> impl Fn(E) -> PlotError + '_ {
-    move |e| PlotError { what: what.into(), message: e.to_string() }
+    move |e| PlotError {
+        what: what.into(),
+        message: e.to_string(),
+    }
+}
+
+/// A picture that can be drawn on any plotters backend.
+pub trait Drawing {
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<(), PlotError>;
 }
 
 /// Draws the same picture to an SVG and a PNG file (each written atomically).
-pub fn draw_svg_and_png<F>(svg: &Path, png: &Path, size: (u32, u32), draw: F) -> Result<(), PlotError>
-where
-    F: Fn(&DrawingArea<SVGBackend, Shift>) -> Result<(), PlotError>
-        + Fn(&DrawingArea<BitMapBackend, Shift>) -> Result<(), PlotError>,
-{
+pub fn draw_svg_and_png(
+    svg: &Path,
+    png: &Path,
+    size: (u32, u32),
+    picture: &impl Drawing,
+) -> Result<(), PlotError> {
     register_font();
     let what = svg.display().to_string();
     let mut text = String::new();
     {
         let area = SVGBackend::with_string(&mut text, size).into_drawing_area();
-        draw(&area)?;
+        picture.draw(&area)?;
         area.present().map_err(plot_err(&what))?;
     }
     super::write_atomic(svg, text.as_bytes()).map_err(plot_err(&what))?;
@@ -52,7 +61,7 @@ where
     let tmp = super::temporary_sibling(png);
     {
         let area = BitMapBackend::new(&tmp, size).into_drawing_area();
-        draw(&area)?;
+        picture.draw(&area)?;
         area.present().map_err(plot_err(&what))?;
     }
     std::fs::rename(&tmp, png).map_err(plot_err(&what))
@@ -88,44 +97,33 @@ impl PairDrawing {
         PairDrawing {
             outlines: [outline(0), outline(1)],
             centres: [mm(placement[0].centre), mm(placement[1].centre)],
-            base_radii: [pair.gears[0].base_radius * 1e3, pair.gears[1].base_radius * 1e3],
-            pitch_radii: [pair.working_pitch_radii[0] * 1e3, pair.working_pitch_radii[1] * 1e3],
-            tip_radii: [pair.gears[0].tip_radius * 1e3, pair.gears[1].tip_radius * 1e3],
-            bore_radii: [pair.gears[0].spec.bore_radius * 1e3, pair.gears[1].spec.bore_radius * 1e3],
-            line_of_action: [mm(pair.loa_point(0.0)), mm(pair.loa_point(pair.line_of_action_length))],
-            contact_points: c.named().iter().map(|(n, s)| (*n, mm(pair.loa_point(*s)))).collect(),
+            base_radii: [
+                pair.gears[0].base_radius * 1e3,
+                pair.gears[1].base_radius * 1e3,
+            ],
+            pitch_radii: [
+                pair.working_pitch_radii[0] * 1e3,
+                pair.working_pitch_radii[1] * 1e3,
+            ],
+            tip_radii: [
+                pair.gears[0].tip_radius * 1e3,
+                pair.gears[1].tip_radius * 1e3,
+            ],
+            bore_radii: [
+                pair.gears[0].spec.bore_radius * 1e3,
+                pair.gears[1].spec.bore_radius * 1e3,
+            ],
+            line_of_action: [
+                mm(pair.loa_point(0.0)),
+                mm(pair.loa_point(pair.line_of_action_length)),
+            ],
+            contact_points: c
+                .named()
+                .iter()
+                .map(|(n, s)| (*n, mm(pair.loa_point(*s))))
+                .collect(),
             title,
         }
-    }
-
-    /// Two panels: the whole pair, and the mesh zone around the path of contact.
-    pub fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError> {
-        let err = plot_err::<DrawingAreaErrorKind<DB::ErrorType>>("the meshing pair");
-        root.fill(&WHITE).map_err(&err)?;
-        let (width, _) = root.dim_in_pixel();
-        let titled = root.titled(&self.title, ("sans-serif", 22)).map_err(&err)?;
-        let (left, right) = titled.split_horizontally(width / 2);
-
-        // Whole pair: equal scales, both tip circles inside.
-        let (c1, c2) = (self.centres[0], self.centres[1]);
-        let x0 = c1.0 - self.tip_radii[0] * 1.08;
-        let x1 = c2.0 + self.tip_radii[1] * 1.08;
-        let half_height = 0.5 * (x1 - x0) * aspect(&left);
-        self.panel(&left, (x0, x1), (-half_height, half_height), "meshing pair [mm]", 2)?;
-
-        // Mesh zone: the path of contact with a margin, centred on the pitch point.
-        let a = self.contact_points[0].1;
-        let e = self.contact_points[4].1;
-        let pitch = self.contact_points[2].1;
-        let span = ((e.0 - a.0).hypot(e.1 - a.1)) * 0.85;
-        let half_height = span * aspect(&right);
-        self.panel(
-            &right,
-            (pitch.0 - span, pitch.0 + span),
-            (pitch.1 - half_height, pitch.1 + half_height),
-            "mesh zone: line of action and contact points [mm]",
-            3,
-        )
     }
 
     fn panel<DB: DrawingBackend>(
@@ -144,43 +142,72 @@ impl PairDrawing {
             .y_label_area_size(45)
             .build_cartesian_2d(xr.0..xr.1, yr.0..yr.1)
             .map_err(&err)?;
-        chart.configure_mesh().light_line_style(WHITE.mix(0.0)).draw().map_err(&err)?;
+        chart
+            .configure_mesh()
+            .light_line_style(WHITE.mix(0.0))
+            .draw()
+            .map_err(&err)?;
         let grey = RGBColor(150, 150, 150);
         let colours = [RGBColor(31, 90, 180), RGBColor(200, 50, 40)];
+        #[allow(clippy::needless_range_loop)] // i indexes five parallel per-gear arrays
         for i in 0..2 {
             let centre = self.centres[i];
             for (radius, style) in [
                 (self.base_radii[i], ShapeStyle::from(&grey).stroke_width(1)),
-                (self.pitch_radii[i], ShapeStyle::from(&grey.mix(0.6)).stroke_width(1)),
-                (self.bore_radii[i], ShapeStyle::from(&colours[i]).stroke_width(1)),
+                (
+                    self.pitch_radii[i],
+                    ShapeStyle::from(&grey.mix(0.6)).stroke_width(1),
+                ),
+                (
+                    self.bore_radii[i],
+                    ShapeStyle::from(&colours[i]).stroke_width(1),
+                ),
             ] {
-                chart.draw_series(DashedLineSeries::new(circle(centre, radius), 6, 4, style)).map_err(&err)?;
+                chart
+                    .draw_series(DashedLineSeries::new(circle(centre, radius), 6, 4, style))
+                    .map_err(&err)?;
             }
             let style = ShapeStyle::from(&colours[i]).stroke_width(line_width);
             chart
                 .draw_series(LineSeries::new(self.outlines[i].iter().copied(), style))
                 .map_err(&err)?
-                .label(if i == 0 { "gear 1 (driver)" } else { "gear 2 (driven)" })
+                .label(if i == 0 {
+                    "gear 1 (driver)"
+                } else {
+                    "gear 2 (driven)"
+                })
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colours[i]));
             chart
-                .draw_series(std::iter::once(Cross::new(centre, 5, ShapeStyle::from(&BLACK))))
+                .draw_series(std::iter::once(Cross::new(
+                    centre,
+                    5,
+                    ShapeStyle::from(&BLACK),
+                )))
                 .map_err(&err)?;
         }
         let green = RGBColor(20, 140, 60);
         chart
-            .draw_series(LineSeries::new(self.line_of_action.iter().copied(), green.stroke_width(2)))
+            .draw_series(LineSeries::new(
+                self.line_of_action.iter().copied(),
+                green.stroke_width(2),
+            ))
             .map_err(&err)?
             .label("line of action T1-T2")
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], green));
         for (k, (name, p)) in self.contact_points.iter().enumerate() {
             chart
-                .draw_series(std::iter::once(Circle::new(*p, 5, ShapeStyle::from(&BLACK).filled())))
+                .draw_series(std::iter::once(Circle::new(
+                    *p,
+                    5,
+                    ShapeStyle::from(&BLACK).filled(),
+                )))
                 .map_err(&err)?;
             // Labels alternate sides of the line of action so neighbours do not overlap.
             let offset = if k % 2 == 0 { (10, -6) } else { (-62, -6) };
             chart
                 .draw_series(std::iter::once(
-                    EmptyElement::at(*p) + Text::new(name.to_string(), offset, ("sans-serif", 15).into_font()),
+                    EmptyElement::at(*p)
+                        + Text::new(name.to_string(), offset, ("sans-serif", 15).into_font()),
                 ))
                 .map_err(&err)?;
         }
@@ -192,6 +219,44 @@ impl PairDrawing {
             .draw()
             .map_err(&err)?;
         Ok(())
+    }
+}
+
+impl Drawing for PairDrawing {
+    /// Two panels: the whole pair, and the mesh zone around the path of contact.
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError> {
+        let err = plot_err::<DrawingAreaErrorKind<DB::ErrorType>>("the meshing pair");
+        root.fill(&WHITE).map_err(&err)?;
+        let (width, _) = root.dim_in_pixel();
+        let titled = root.titled(&self.title, ("sans-serif", 22)).map_err(&err)?;
+        let (left, right) = titled.split_horizontally(width / 2);
+
+        // Whole pair: equal scales, both tip circles inside.
+        let (c1, c2) = (self.centres[0], self.centres[1]);
+        let x0 = c1.0 - self.tip_radii[0] * 1.08;
+        let x1 = c2.0 + self.tip_radii[1] * 1.08;
+        let half_height = 0.5 * (x1 - x0) * aspect(&left);
+        self.panel(
+            &left,
+            (x0, x1),
+            (-half_height, half_height),
+            "meshing pair [mm]",
+            1,
+        )?;
+
+        // Mesh zone: the path of contact with a margin, centred on the pitch point.
+        let a = self.contact_points[0].1;
+        let e = self.contact_points[4].1;
+        let pitch = self.contact_points[2].1;
+        let span = ((e.0 - a.0).hypot(e.1 - a.1)) * 0.85;
+        let half_height = span * aspect(&right);
+        self.panel(
+            &right,
+            (pitch.0 - span, pitch.0 + span),
+            (pitch.1 - half_height, pitch.1 + half_height),
+            "mesh zone: line of action and contact points [mm]",
+            2,
+        )
     }
 }
 

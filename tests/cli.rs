@@ -1,0 +1,193 @@
+//! The command line on small cases: outputs exist and parse, bad case files fail with a message
+//! that names the problem.
+
+use assert_cmd::Command;
+use std::path::Path;
+
+const DEFAULT: &str = include_str!("../data/cases/paper36.toml");
+
+fn geardyn() -> Command {
+    Command::cargo_bin("geardyn").unwrap()
+}
+
+fn write_case(dir: &Path, text: &str) -> std::path::PathBuf {
+    let path = dir.join("case.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn geometry_on_the_embedded_case_writes_summary_drawings_and_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("geo");
+    let output = geardyn()
+        .args(["geometry", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("contact ratio"), "{stdout}");
+
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    for key in [
+        "base_radius_mm",
+        "contact_ratio",
+        "base_pitch_mm",
+        "path_of_contact_mm",
+        "roll_angle_hpstc_deg",
+        "roll_angle_lpstc_deg",
+    ] {
+        assert!(summary[key].as_f64().unwrap().is_finite(), "{key}");
+    }
+    assert!((summary["base_radius_mm"].as_f64().unwrap() - 53.788).abs() < 1e-3);
+    assert!(
+        summary["roll_angle_lpstc_deg"].as_f64().unwrap()
+            < summary["roll_angle_hpstc_deg"].as_f64().unwrap()
+    );
+
+    let png = std::fs::read(out.join("pair.png")).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    let svg = std::fs::read_to_string(out.join("pair.svg")).unwrap();
+    assert!(svg.contains("<svg") && svg.contains("HPSTC") && svg.contains("LPSTC"));
+    assert_eq!(
+        std::fs::read_to_string(out.join("case.toml")).unwrap(),
+        DEFAULT
+    );
+
+    let mut reader = csv::Reader::from_path(out.join("profile_tip20-root10_gear1.csv")).unwrap();
+    let rows: Vec<csv::StringRecord> = reader.records().map(|r| r.unwrap()).collect();
+    assert!(rows.len() > 100);
+    let max_relief = rows
+        .iter()
+        .filter_map(|r| r[5].parse::<f64>().ok())
+        .fold(0.0, f64::max);
+    assert!(
+        max_relief >= 20.0 - 1e-9,
+        "tip relief reaches its amount: {max_relief}"
+    );
+    // No temporary files are left behind.
+    for entry in std::fs::read_dir(&out).unwrap() {
+        let name = entry.unwrap().file_name().to_string_lossy().into_owned();
+        assert!(!name.starts_with('.'), "left over: {name}");
+    }
+}
+
+#[test]
+fn default_output_folder_is_fresh_under_out() {
+    let dir = tempfile::tempdir().unwrap();
+    for expected in ["out/geometry-paper36-001", "out/geometry-paper36-002"] {
+        let output = geardyn()
+            .current_dir(dir.path())
+            .arg("geometry")
+            .output()
+            .unwrap();
+        assert!(output.status.success());
+        assert!(
+            dir.path().join(expected).join("summary.json").exists(),
+            "{expected}"
+        );
+    }
+}
+
+fn assert_fails_naming(case_text: &str, needles: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_case(dir.path(), case_text);
+    let output = geardyn()
+        .arg("geometry")
+        .arg(&path)
+        .arg("--out")
+        .arg(dir.path().join("o"))
+        .output()
+        .unwrap();
+    assert!(!output.status.success(), "should fail: {needles:?}");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    for needle in needles {
+        assert!(
+            stderr.contains(needle),
+            "stderr lacks {needle:?}:\n{stderr}"
+        );
+    }
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn unknown_key_is_named_with_its_line() {
+    let text = DEFAULT.replacen(
+        "face_width_mm = 25.4",
+        "face_width_mm = 25.4\nface_widht_mm = 25.4",
+        1,
+    );
+    let line = text
+        .lines()
+        .position(|l| l.starts_with("face_widht_mm"))
+        .unwrap()
+        + 1;
+    assert_fails_naming(&text, &["face_widht_mm", &format!("line {line}")]);
+}
+
+#[test]
+fn wrong_type_is_named() {
+    let text = DEFAULT.replacen("teeth = 36", "teeth = \"thirty-six\"", 1);
+    assert_fails_naming(&text, &["teeth", "line"]);
+}
+
+#[test]
+fn negative_module_is_named() {
+    let text = DEFAULT.replacen("module_mm = 3.18", "module_mm = -3.18", 1);
+    assert_fails_naming(&text, &["tool.module_mm", "-3.18", "> 0"]);
+}
+
+#[test]
+fn five_teeth_is_rejected_with_the_fix() {
+    let text = DEFAULT.replacen("teeth = 36", "teeth = 5", 1);
+    assert_fails_naming(&text, &["gear1 is undercut", "teeth = 5", "profile_shift"]);
+}
+
+#[test]
+fn oversized_relief_is_rejected() {
+    let text = DEFAULT.replacen(
+        "gear1.tip = { amount_um = 20.0",
+        "gear1.tip = { amount_um = 500.0",
+        1,
+    );
+    assert_fails_naming(&text, &["tip20-root10", "gear1.tip.amount_um", "500"]);
+}
+
+#[test]
+fn short_addendum_gives_contact_ratio_below_one() {
+    let text = DEFAULT.replace("addendum_coeff = 1.0", "addendum_coeff = 0.55");
+    assert_fails_naming(&text, &["contact ratio", "below 1"]);
+}
+
+#[test]
+fn missing_case_file_is_named() {
+    let output = geardyn()
+        .args(["geometry", "/no/such/case.toml"])
+        .output()
+        .unwrap();
+    assert!(!output.status.success());
+    assert!(String::from_utf8_lossy(&output.stderr).contains("/no/such/case.toml"));
+}
+
+#[test]
+fn help_lists_the_commands() {
+    let output = geardyn().arg("--help").output().unwrap();
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert!(text.contains("geometry") && text.contains("case"));
+    let output = geardyn().args(["geometry", "--help"]).output().unwrap();
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert!(text.contains("--out") && text.contains("CASE"));
+}
+
+#[test]
+fn case_command_prints_the_embedded_default() {
+    let output = geardyn().arg("case").output().unwrap();
+    assert!(output.status.success());
+    assert_eq!(String::from_utf8_lossy(&output.stdout), DEFAULT);
+}

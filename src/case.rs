@@ -532,7 +532,10 @@ mod tests {
         assert_eq!(case.name(), "paper36");
         assert_eq!(case.pair.gears[0].teeth(), 36);
         assert_eq!(case.operating_points.len(), 2);
-        assert!((case.operating_points[0].driver_speed - 60.0 * std::f64::consts::TAU / 60.0).abs() < 1e-12);
+        assert!(
+            (case.operating_points[0].driver_speed - 60.0 * std::f64::consts::TAU / 60.0).abs()
+                < 1e-12
+        );
         assert_eq!(case.friction_coefficients, vec![0.0, 0.15]);
         assert!(case.relief_variant("none").unwrap().modifications[0].is_none());
         let paper = case.relief_variant("tip20-root10").unwrap();

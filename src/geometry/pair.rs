@@ -500,3 +500,77 @@ mod tests {
         assert!(pair.zero_backlash_center_distance < pair.center_distance);
     }
 }
+
+#[cfg(test)]
+mod placement_tests {
+    use super::*;
+    use crate::geometry::OutlineResolution;
+    use crate::samples;
+
+    /// Even-odd point-in-polygon test.
+    fn inside(polygon: &[Point2<f64>], p: &Point2<f64>) -> bool {
+        let mut inside = false;
+        let n = polygon.len();
+        for i in 0..n {
+            let (a, b) = (polygon[i], polygon[(i + 1) % n]);
+            if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) * (b.x - a.x) / (b.y - a.y) {
+                inside = !inside;
+            }
+        }
+        inside
+    }
+
+    /// In the mesh placement the unmodified teeth touch at the pitch point and nowhere overlap
+    /// (beyond the chord error of the sampled outline).
+    #[test]
+    fn placed_pair_touches_at_the_pitch_point_without_overlap() {
+        let pair = samples::paper36_pair();
+        let placement = pair.mesh_placement();
+        let res = OutlineResolution {
+            root: 8,
+            fillet: 64,
+            flank: 400,
+            tip: 8,
+        };
+        let none = FlankModification::none();
+        let outlines: Vec<Vec<Point2<f64>>> = (0..2)
+            .map(|i| {
+                pair.gears[i]
+                    .gear_outline(&none, res)
+                    .iter()
+                    .map(|p| placement[i].to_global(p))
+                    .collect()
+            })
+            .collect();
+        let pitch = pair.loa_point(pair.contact_points.pitch);
+        for i in 0..2 {
+            let nearest = outlines[i]
+                .iter()
+                .map(|p| (p - pitch).norm())
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                nearest < 5e-6,
+                "gear{} is {nearest} m from the pitch point",
+                i + 1
+            );
+        }
+        for (i, j) in [(0, 1), (1, 0)] {
+            // Only the teeth near the mesh can touch.
+            let near_mesh = outlines[i].iter().filter(|p| (*p - pitch).norm() < 0.02);
+            for p in near_mesh {
+                if inside(&outlines[j], p) {
+                    let depth = outlines[j]
+                        .iter()
+                        .map(|q| (q - p).norm())
+                        .fold(f64::INFINITY, f64::min);
+                    assert!(
+                        depth < 2e-6,
+                        "gear{} point {p:?} is {depth} m inside gear{}",
+                        i + 1,
+                        j + 1
+                    );
+                }
+            }
+        }
+    }
+}

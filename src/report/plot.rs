@@ -133,7 +133,9 @@ impl PairDrawing {
         yr: (f64, f64),
         caption: &str,
         line_width: u32,
+        labels: bool,
     ) -> Result<(), PlotError> {
+        let inside = |p: &(f64, f64)| p.0 >= xr.0 && p.0 <= xr.1 && p.1 >= yr.0 && p.1 <= yr.1;
         let err = plot_err::<DrawingAreaErrorKind<DB::ErrorType>>("the meshing pair");
         let mut chart = ChartBuilder::on(area)
             .caption(caption, ("sans-serif", 16))
@@ -163,27 +165,34 @@ impl PairDrawing {
                     ShapeStyle::from(&colours[i]).stroke_width(1),
                 ),
             ] {
-                chart
-                    .draw_series(DashedLineSeries::new(circle(centre, radius), 6, 4, style))
-                    .map_err(&err)?;
+                for run in inside_runs(&circle(centre, radius), &inside) {
+                    chart
+                        .draw_series(DashedLineSeries::new(run, 6, 4, style))
+                        .map_err(&err)?;
+                }
             }
             let style = ShapeStyle::from(&colours[i]).stroke_width(line_width);
-            chart
-                .draw_series(LineSeries::new(self.outlines[i].iter().copied(), style))
-                .map_err(&err)?
-                .label(if i == 0 {
-                    "gear 1 (driver)"
-                } else {
-                    "gear 2 (driven)"
-                })
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colours[i]));
-            chart
-                .draw_series(std::iter::once(Cross::new(
-                    centre,
-                    5,
-                    ShapeStyle::from(&BLACK),
-                )))
-                .map_err(&err)?;
+            let runs = inside_runs(&self.outlines[i], &inside);
+            for (k, run) in runs.into_iter().enumerate() {
+                let series = chart
+                    .draw_series(LineSeries::new(run, style))
+                    .map_err(&err)?;
+                if k == 0 {
+                    let name = if i == 0 {
+                        "gear 1 (driver)"
+                    } else {
+                        "gear 2 (driven)"
+                    };
+                    let colour = colours[i];
+                    series
+                        .label(name)
+                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
+                }
+            }
+            if inside(&centre) {
+                let cross = Cross::new(centre, 5, ShapeStyle::from(&BLACK));
+                chart.draw_series(std::iter::once(cross)).map_err(&err)?;
+            }
         }
         let green = RGBColor(20, 140, 60);
         chart
@@ -202,6 +211,9 @@ impl PairDrawing {
                     ShapeStyle::from(&BLACK).filled(),
                 )))
                 .map_err(&err)?;
+            if !labels {
+                continue;
+            }
             // Labels alternate sides of the line of action so neighbours do not overlap.
             let offset = if k % 2 == 0 { (10, -6) } else { (-62, -6) };
             chart
@@ -242,6 +254,7 @@ impl Drawing for PairDrawing {
             (-half_height, half_height),
             "meshing pair [mm]",
             1,
+            false,
         )?;
 
         // Mesh zone: the path of contact with a margin, centred on the pitch point.
@@ -256,6 +269,7 @@ impl Drawing for PairDrawing {
             (pitch.1 - half_height, pitch.1 + half_height),
             "mesh zone: line of action and contact points [mm]",
             2,
+            true,
         )
     }
 }
@@ -264,6 +278,27 @@ impl Drawing for PairDrawing {
 fn aspect<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>) -> f64 {
     let (w, h) = area.dim_in_pixel();
     (h as f64 - 70.0) / (w as f64 - 60.0)
+}
+
+/// The maximal runs of consecutive points inside the plotted window (plotters would otherwise
+/// clamp outside points onto the frame and draw along it).
+fn inside_runs(
+    points: &[(f64, f64)],
+    inside: &dyn Fn(&(f64, f64)) -> bool,
+) -> Vec<Vec<(f64, f64)>> {
+    let mut runs: Vec<Vec<(f64, f64)>> = Vec::new();
+    let mut current = Vec::new();
+    for p in points {
+        if inside(p) {
+            current.push(*p);
+        } else if !current.is_empty() {
+            runs.push(std::mem::take(&mut current));
+        }
+    }
+    if !current.is_empty() {
+        runs.push(current);
+    }
+    runs
 }
 
 fn circle(centre: (f64, f64), radius: f64) -> Vec<(f64, f64)> {

@@ -543,8 +543,8 @@ mod placement_tests {
             })
             .collect();
         let pitch = pair.loa_point(pair.contact_points.pitch);
-        for i in 0..2 {
-            let nearest = outlines[i]
+        for (i, outline) in outlines.iter().enumerate() {
+            let nearest = outline
                 .iter()
                 .map(|p| (p - pitch).norm())
                 .fold(f64::INFINITY, f64::min);

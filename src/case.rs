@@ -11,6 +11,7 @@ use std::f64::consts::PI;
 use std::path::Path;
 use thiserror::Error;
 
+use crate::fe::PlaneState;
 use crate::geometry::{
     BasicRack, FlankModification, FlankReliefSpec, GearPair, GearSpec, GeometryError, PairSpec,
     ReliefShape, ReliefSpec, ReliefStart,
@@ -78,6 +79,49 @@ pub struct CaseFile {
     pub relief_variants: Vec<ReliefVariantSection>,
     #[serde(default)]
     pub contact: ContactSection,
+    #[serde(default)]
+    pub mesh: MeshSection,
+    #[serde(default)]
+    pub fe: FeSection,
+}
+
+/// Element sizes of the gear meshes.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshSection {
+    /// Element size along flanks and fillets of the teeth that engage in the analysis.
+    #[serde(default = "default_fine_element")]
+    pub fine_element_mm: f64,
+    /// Element size on the other teeth; the largest size in the body.
+    #[serde(default = "default_coarse_element")]
+    pub coarse_element_mm: f64,
+}
+
+impl Default for MeshSection {
+    fn default() -> Self {
+        Self {
+            fine_element_mm: default_fine_element(),
+            coarse_element_mm: default_coarse_element(),
+        }
+    }
+}
+
+/// Finite-element model options.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FeSection {
+    /// "strain" (default: B/m = 8 for the paper's pair, so the mid-plane is in plane strain) or
+    /// "stress".
+    #[serde(default = "default_plane")]
+    pub plane: PlaneState,
+}
+
+impl Default for FeSection {
+    fn default() -> Self {
+        Self {
+            plane: default_plane(),
+        }
+    }
 }
 
 /// The basic rack of the generating cutter.
@@ -190,6 +234,15 @@ impl Default for ContactSection {
     }
 }
 
+fn default_fine_element() -> f64 {
+    0.4
+}
+fn default_coarse_element() -> f64 {
+    1.5
+}
+fn default_plane() -> PlaneState {
+    PlaneState::Strain
+}
 fn default_pressure_angle() -> f64 {
     20.0
 }
@@ -440,6 +493,26 @@ impl Case {
             }
         }
 
+        let module_mm = file.tool.module_mm;
+        let (fine, coarse) = (file.mesh.fine_element_mm, file.mesh.coarse_element_mm);
+        if !(fine >= 0.005 * module_mm && fine <= coarse) {
+            return Err(invalid(
+                "mesh.fine_element_mm",
+                fine.to_string(),
+                &format!(
+                    "must be in [0.005·m, coarse_element_mm] = [{:.4}, {coarse}] mm",
+                    0.005 * module_mm
+                ),
+            ));
+        }
+        if !(coarse <= module_mm) {
+            return Err(invalid(
+                "mesh.coarse_element_mm",
+                coarse.to_string(),
+                &format!("must be at most one module ({module_mm} mm)"),
+            ));
+        }
+
         Ok(Case {
             source: source.into(),
             text: text.into(),
@@ -455,6 +528,15 @@ impl Case {
 
     pub fn name(&self) -> &str {
         &self.file.name
+    }
+
+    /// Mesh spec of gear `index` (1 or 2) with the given teeth fine.
+    pub fn mesh_spec(&self, fine_teeth: Vec<usize>) -> crate::mesh::MeshSpec {
+        crate::mesh::MeshSpec {
+            fine_size: self.file.mesh.fine_element_mm * 1e-3,
+            coarse_size: self.file.mesh.coarse_element_mm * 1e-3,
+            fine_teeth,
+        }
     }
 
     /// A relief variant by name.

@@ -14,6 +14,8 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod case;
+pub mod fe;
 pub mod geometry;
+pub mod mesh;
 pub mod report;
 pub mod samples;

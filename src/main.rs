@@ -27,6 +27,16 @@ enum Command {
     /// Derived geometry of the pair: radii, contact ratio, line of action, contact points,
     /// backlash, resolved reliefs; writes summary.json, a drawing (SVG, PNG) and profile CSVs.
     Geometry(CommonArgs),
+    /// FE meshes of both gears (8-node quadrilaterals, fine on the teeth that engage at the mesh
+    /// position): writes mesh_gear{1,2}.vtk (ParaView, meshio) and mesh_gear{1,2}.png, and
+    /// prints element and node counts.
+    Mesh {
+        #[command(flatten)]
+        common: CommonArgs,
+        /// Relief variant of the case to mesh; default: the first one.
+        #[arg(long, value_name = "NAME")]
+        relief: Option<String>,
+    },
     /// Prints a case file: the given one, or the embedded default (start your own from it:
     /// `geardyn case > my.toml`).
     Case {
@@ -48,6 +58,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Geometry(args) => geometry(&args),
+        Command::Mesh { common, relief } => mesh(&common, relief.as_deref()),
         Command::Case { case } => print_case(case.as_deref()),
     };
     match result {
@@ -152,6 +163,69 @@ fn geometry(args: &CommonArgs) -> Result<()> {
         &drawing,
     )?;
     println!("\nwrote {}", dir.display());
+    Ok(())
+}
+
+fn mesh(args: &CommonArgs, relief: Option<&str>) -> Result<()> {
+    use geardyn::geometry::Side;
+    let case = load_case(args.case.as_deref())?;
+    let variant = match relief {
+        Some(name) => case.relief_variant(name).with_context(|| {
+            let names: Vec<&str> = case
+                .relief_variants
+                .iter()
+                .map(|v| v.name.as_str())
+                .collect();
+            format!("no relief variant {name:?} in the case; it has {names:?}")
+        })?,
+        None => case
+            .relief_variants
+            .first()
+            .context("the case has no relief variant")?,
+    };
+    let dir = output_dir(args.out.as_deref(), "mesh", &case)?;
+    report::write_atomic(&dir.join("case.toml"), case.text.as_bytes())
+        .context("cannot write case.toml")?;
+    for index in 1..=2 {
+        let gear = case.pair.gear(index);
+        let z = gear.teeth() as usize;
+        // The teeth around the mesh position: the tooth at the pitch point and its neighbours.
+        let fine_teeth = vec![z - 1, 0, 1];
+        let started = std::time::Instant::now();
+        let mesh = geardyn::mesh::mesh_gear(
+            gear,
+            &variant.modifications[index - 1],
+            &case.mesh_spec(fine_teeth),
+        );
+        let wall = started.elapsed().as_secs_f64();
+        geardyn::fe::assembly::check_elements(&mesh.nodes, &mesh.elements)?;
+        println!(
+            "gear{index}: {} elements ({} on fine teeth), {} nodes, {} bore nodes, {} nodes on a fine flank; meshed in {:.3} s",
+            mesh.elements.len(),
+            mesh.element_fine.iter().filter(|f| **f).count(),
+            mesh.nodes.len(),
+            mesh.bore_nodes.len(),
+            mesh.flank(0, Side::Left).nodes.len(),
+            wall
+        );
+        let title = format!("{} gear{index}, relief \"{}\"", case.name(), variant.name);
+        let vtk = report::vtk::mesh_to_vtk(&title, &mesh.nodes, &mesh.elements, &mesh.element_fine);
+        report::write_atomic(&dir.join(format!("mesh_gear{index}.vtk")), vtk.as_bytes())
+            .context("cannot write the VTK file")?;
+        let centre = nalgebra::Point2::new(0.0, gear.reference_radius);
+        let drawing = report::plot::MeshDrawing::new(
+            &mesh,
+            centre,
+            2.2 * gear.module() * std::f64::consts::PI / 2.0 + gear.module(),
+            title,
+        );
+        report::plot::draw_png(
+            &dir.join(format!("mesh_gear{index}.png")),
+            (1800, 900),
+            &drawing,
+        )?;
+    }
+    println!("wrote {}", dir.display());
     Ok(())
 }
 

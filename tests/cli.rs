@@ -191,3 +191,48 @@ fn case_command_prints_the_embedded_default() {
     assert!(output.status.success());
     assert_eq!(String::from_utf8_lossy(&output.stdout), DEFAULT);
 }
+
+#[test]
+fn mesh_writes_vtk_and_png_for_both_gears() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("mesh");
+    let output = geardyn()
+        .args(["mesh", "--relief", "tip20-root10", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    for gear in [1, 2] {
+        let vtk = std::fs::read_to_string(out.join(format!("mesh_gear{gear}.vtk"))).unwrap();
+        assert!(vtk.starts_with("# vtk DataFile Version 3.0"));
+        let cells: usize = vtk
+            .lines()
+            .find(|l| l.starts_with("CELLS"))
+            .unwrap()
+            .split(' ')
+            .nth(1)
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(cells > 1000);
+        let png = std::fs::read(out.join(format!("mesh_gear{gear}.png"))).unwrap();
+        assert_eq!(&png[..4], b"\x89PNG");
+    }
+    let bad = geardyn()
+        .args(["mesh", "--relief", "nope", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("no relief variant \"nope\""));
+}
+
+#[test]
+fn mesh_sizes_out_of_range_are_named() {
+    let text = DEFAULT.replace("fine_element_mm = 0.4", "fine_element_mm = 3.0");
+    assert_fails_naming(&text, &["mesh.fine_element_mm", "3"]);
+}

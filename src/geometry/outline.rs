@@ -73,6 +73,20 @@ impl Gear {
         p + modification.deviation(roll_angle) * inward
     }
 
+    /// Point of the right fillet at generating normal angle β (see
+    /// [`Gear::generated_fillet_point`]) with the root relief blended in as δ(ξ_F)·t³,
+    /// t = (3π/2 − β)/(3π/2 − (π + α)) (0 at the root circle, 1 at the form point).
+    pub fn modified_fillet_point(
+        &self,
+        beta: f64,
+        modification: &FlankModification,
+    ) -> Point2<f64> {
+        let (beta_form, beta_root) = self.fillet_parameter_range();
+        let t = (beta_root - beta) / (beta_root - beta_form);
+        let (p, inward) = self.generated_fillet_point_and_inward_normal(beta);
+        p + modification.deviation(self.form_roll_angle()) * t.powi(3) * inward
+    }
+
     /// Roll angle at which the modified flank reaches the tip circle (≥ ξ_a when tip relief moves
     /// the flank inwards), by bisection on |P(ξ)| = r_a.
     pub fn modified_tip_roll_angle(&self, modification: &FlankModification) -> f64 {
@@ -135,13 +149,10 @@ impl Gear {
 
         // Fillet, from the root circle (β = 3π/2) to the form point (β = π + α).
         let (beta_form, beta_root) = self.fillet_parameter_range();
-        let form_deviation = modification.deviation(self.form_roll_angle());
         for i in 0..res.fillet {
-            let t = i as f64 / res.fillet as f64;
-            let beta = beta_root + (beta_form - beta_root) * t;
-            let (p, inward) = self.generated_fillet_point_and_inward_normal(beta);
+            let beta = beta_root + (beta_form - beta_root) * i as f64 / res.fillet as f64;
             push(
-                p + form_deviation * t.powi(3) * inward,
+                self.modified_fillet_point(beta, modification),
                 Segment::Fillet,
                 None,
             );

@@ -5,6 +5,7 @@
 
 pub mod geometry;
 pub mod plot;
+pub mod vtk;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};

@@ -41,6 +41,19 @@ pub trait Drawing {
     fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<(), PlotError>;
 }
 
+/// Draws a picture to a PNG file (written atomically).
+pub fn draw_png(png: &Path, size: (u32, u32), picture: &impl Drawing) -> Result<(), PlotError> {
+    register_font();
+    let what = png.display().to_string();
+    let tmp = super::temporary_sibling(png);
+    {
+        let area = BitMapBackend::new(&tmp, size).into_drawing_area();
+        picture.draw(&area)?;
+        area.present().map_err(plot_err(&what))?;
+    }
+    std::fs::rename(&tmp, png).map_err(plot_err(&what))
+}
+
 /// Draws the same picture to an SVG and a PNG file (each written atomically).
 pub fn draw_svg_and_png(
     svg: &Path,
@@ -57,14 +70,7 @@ pub fn draw_svg_and_png(
         area.present().map_err(plot_err(&what))?;
     }
     super::write_atomic(svg, text.as_bytes()).map_err(plot_err(&what))?;
-    let what = png.display().to_string();
-    let tmp = super::temporary_sibling(png);
-    {
-        let area = BitMapBackend::new(&tmp, size).into_drawing_area();
-        picture.draw(&area)?;
-        area.present().map_err(plot_err(&what))?;
-    }
-    std::fs::rename(&tmp, png).map_err(plot_err(&what))
+    draw_png(png, size, picture)
 }
 
 /// Everything the pair drawing shows, in mm, in the placement frame (gear 1 at the origin).
@@ -308,4 +314,105 @@ fn circle(centre: (f64, f64), radius: f64) -> Vec<(f64, f64)> {
             (centre.0 + radius * t.cos(), centre.1 + radius * t.sin())
         })
         .collect()
+}
+
+/// A gear mesh: the whole gear, and a zoom on the fine teeth (element edges follow the
+/// quadratic edges through their mid-side nodes).
+pub struct MeshDrawing {
+    /// Element edges as 3-point polylines (corner, mid-side, corner), mm.
+    pub edges: Vec<[(f64, f64); 3]>,
+    pub fine_edges: Vec<bool>,
+    pub zoom: ((f64, f64), (f64, f64)),
+    pub extent: f64,
+    pub title: String,
+}
+
+impl MeshDrawing {
+    pub fn new(
+        mesh: &crate::mesh::GearMesh,
+        zoom_centre: Point2<f64>,
+        zoom_half_width: f64,
+        title: String,
+    ) -> Self {
+        let mut edges = Vec::with_capacity(4 * mesh.elements.len());
+        let mut fine_edges = Vec::with_capacity(4 * mesh.elements.len());
+        let mm = |i: usize| (mesh.nodes[i].x * 1e3, mesh.nodes[i].y * 1e3);
+        for (e, fine) in mesh.elements.iter().zip(&mesh.element_fine) {
+            for (a, m, b) in [(0, 4, 1), (1, 5, 2), (2, 6, 3), (3, 7, 0)] {
+                edges.push([mm(e[a]), mm(e[m]), mm(e[b])]);
+                fine_edges.push(*fine);
+            }
+        }
+        let extent = mesh
+            .nodes
+            .iter()
+            .map(|p| p.coords.norm())
+            .fold(0.0, f64::max)
+            * 1e3
+            * 1.04;
+        let (cx, cy, h) = (
+            zoom_centre.x * 1e3,
+            zoom_centre.y * 1e3,
+            zoom_half_width * 1e3,
+        );
+        MeshDrawing {
+            edges,
+            fine_edges,
+            zoom: ((cx - h, cx + h), (cy - h, cy + h)),
+            extent,
+            title,
+        }
+    }
+
+    fn panel<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        xr: (f64, f64),
+        yr: (f64, f64),
+        caption: &str,
+    ) -> Result<(), PlotError> {
+        let err = plot_err::<DrawingAreaErrorKind<DB::ErrorType>>("the mesh");
+        let mut chart = ChartBuilder::on(area)
+            .caption(caption, ("sans-serif", 16))
+            .margin(12)
+            .x_label_area_size(30)
+            .y_label_area_size(45)
+            .build_cartesian_2d(xr.0..xr.1, yr.0..yr.1)
+            .map_err(&err)?;
+        chart.configure_mesh().disable_mesh().draw().map_err(&err)?;
+        let inside = |p: &(f64, f64)| p.0 >= xr.0 && p.0 <= xr.1 && p.1 >= yr.0 && p.1 <= yr.1;
+        let colours = [RGBColor(90, 90, 90), RGBColor(31, 90, 180)];
+        for (edge, fine) in self.edges.iter().zip(&self.fine_edges) {
+            if edge.iter().all(inside) {
+                let style = ShapeStyle::from(&colours[usize::from(*fine)]).stroke_width(1);
+                chart
+                    .draw_series(LineSeries::new(edge.iter().copied(), style))
+                    .map_err(&err)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Drawing for MeshDrawing {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError> {
+        let err = plot_err::<DrawingAreaErrorKind<DB::ErrorType>>("the mesh");
+        root.fill(&WHITE).map_err(&err)?;
+        let (width, _) = root.dim_in_pixel();
+        let titled = root.titled(&self.title, ("sans-serif", 22)).map_err(&err)?;
+        let (left, right) = titled.split_horizontally(width / 2);
+        let r = self.extent;
+        let h = r * aspect(&left);
+        self.panel(
+            &left,
+            (-r, r),
+            (-h, h),
+            "whole gear (blue: fine teeth) [mm]",
+        )?;
+        let (xr, yr) = self.zoom;
+        let half = 0.5 * (xr.1 - xr.0);
+        let cy = 0.5 * (yr.0 + yr.1);
+        let hh = half * aspect(&right);
+        self.panel(&right, xr, (cy - hh, cy + hh), "fine teeth [mm]")
+    }
 }

@@ -1,0 +1,157 @@
+//! Global assembly (faer sparse) and the constrained, factorized stiffness.
+//!
+//! DOF numbering: node i has u = 2i, v = 2i + 1. Fixed DOFs are removed (prescribed zero); the
+//! reduced K is factorized once by sparse Cholesky (K = L Lᵀ, faer) and the factor is reused
+//! for every right-hand side.
+
+use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::Llt;
+use faer::sparse::{SparseColMat, Triplet};
+use faer::{Mat, Side};
+use nalgebra::{Matrix3, Point2};
+use thiserror::Error;
+
+use super::q8;
+
+#[derive(Debug, Error, PartialEq)]
+pub enum FeError {
+    #[error("element {element} is inverted or degenerate (smallest det J = {det_j:.3e}); refine the mesh or check the geometry")]
+    BadElement { element: usize, det_j: f64 },
+    #[error("the stiffness matrix is not positive definite after constraints ({reason}): the body is under-constrained")]
+    NotPositiveDefinite { reason: String },
+    #[error("sparse matrix assembly failed: {0}")]
+    Assembly(String),
+}
+
+/// The element's node coordinates.
+pub fn element_nodes(nodes: &[Point2<f64>], element: &[usize; 8]) -> [Point2<f64>; 8] {
+    element.map(|i| nodes[i])
+}
+
+/// Checks every element's Jacobian at its Gauss points.
+pub fn check_elements(nodes: &[Point2<f64>], elements: &[[usize; 8]]) -> Result<(), FeError> {
+    for (i, e) in elements.iter().enumerate() {
+        let det_j = q8::min_jacobian(&element_nodes(nodes, e));
+        if !(det_j > 0.0) {
+            return Err(FeError::BadElement { element: i, det_j });
+        }
+    }
+    Ok(())
+}
+
+/// Triplets (lower triangle, row ≥ col) of the global stiffness K = Σ K_e.
+pub fn stiffness_triplets(
+    nodes: &[Point2<f64>],
+    elements: &[[usize; 8]],
+    d: &Matrix3<f64>,
+    thickness: f64,
+) -> Vec<(usize, usize, f64)> {
+    let mut triplets = Vec::with_capacity(elements.len() * 136);
+    for e in elements {
+        let k = q8::stiffness(&element_nodes(nodes, e), d, thickness);
+        let dofs: [usize; 16] = std::array::from_fn(|a| 2 * e[a / 2] + a % 2);
+        for a in 0..16 {
+            for b in 0..16 {
+                if dofs[a] >= dofs[b] {
+                    triplets.push((dofs[a], dofs[b], k[(a, b)]));
+                }
+            }
+        }
+    }
+    triplets
+}
+
+/// y = K x for a lower-triangle triplet list of a symmetric K.
+pub fn symmetric_product(triplets: &[(usize, usize, f64)], x: &[f64]) -> Vec<f64> {
+    let mut y = vec![0.0; x.len()];
+    for &(r, c, v) in triplets {
+        y[r] += v * x[c];
+        if r != c {
+            y[c] += v * x[r];
+        }
+    }
+    y
+}
+
+/// K with some DOFs fixed at zero, factorized.
+pub struct FactorizedStiffness {
+    dofs: usize,
+    /// Reduced index of each global DOF (None: fixed).
+    free_index: Vec<Option<usize>>,
+    llt: Llt<usize, f64>,
+}
+
+impl FactorizedStiffness {
+    /// Removes `fixed` DOFs from the lower-triangle triplets of K and factorizes the rest.
+    pub fn new(
+        dofs: usize,
+        triplets: &[(usize, usize, f64)],
+        fixed: &[usize],
+    ) -> Result<Self, FeError> {
+        let mut is_fixed = vec![false; dofs];
+        fixed.iter().for_each(|&d| is_fixed[d] = true);
+        let mut free_index = vec![None; dofs];
+        let mut n = 0;
+        for (d, index) in free_index.iter_mut().enumerate() {
+            if !is_fixed[d] {
+                *index = Some(n);
+                n += 1;
+            }
+        }
+        let reduced: Vec<Triplet<usize, usize, f64>> = triplets
+            .iter()
+            .filter_map(|&(r, c, v)| match (free_index[r], free_index[c]) {
+                (Some(r), Some(c)) => Some(Triplet::new(r, c, v)),
+                _ => None,
+            })
+            .collect();
+        let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &reduced)
+            .map_err(|e| FeError::Assembly(format!("{e:?}")))?;
+        let llt = matrix
+            .sp_cholesky(Side::Lower)
+            .map_err(|e| FeError::NotPositiveDefinite {
+                reason: format!("{e:?}"),
+            })?;
+        Ok(Self {
+            dofs,
+            free_index,
+            llt,
+        })
+    }
+
+    /// Number of unknowns after constraints.
+    pub fn free_dofs(&self) -> usize {
+        self.free_index.iter().filter(|i| i.is_some()).count()
+    }
+
+    /// Displacements for the given load columns (global DOF order; fixed DOFs come out 0).
+    pub fn solve_columns(&self, loads: &[Vec<f64>]) -> Vec<Vec<f64>> {
+        let n = self.free_dofs();
+        let mut rhs = Mat::<f64>::zeros(n, loads.len());
+        for (j, load) in loads.iter().enumerate() {
+            for (d, index) in self.free_index.iter().enumerate() {
+                if let Some(i) = index {
+                    rhs[(*i, j)] = load[d];
+                }
+            }
+        }
+        self.llt.solve_in_place(rhs.as_mut());
+        (0..loads.len())
+            .map(|j| {
+                let mut u = vec![0.0; self.dofs];
+                for (d, index) in self.free_index.iter().enumerate() {
+                    if let Some(i) = index {
+                        u[d] = rhs[(*i, j)];
+                    }
+                }
+                u
+            })
+            .collect()
+    }
+
+    pub fn solve(&self, load: &[f64]) -> Vec<f64> {
+        self.solve_columns(std::slice::from_ref(&load.to_vec()))
+            .pop()
+            .expect("one column")
+    }
+}

@@ -1,0 +1,10 @@
+//! Finite elements: the Q8 plane element, sparse assembly and the factorized stiffness.
+//!
+//! * [`q8`] — 8-node serendipity quadrilateral, plane stress / plane strain with thickness B.
+//! * [`assembly`] — global stiffness (faer sparse), constraints, Cholesky, solves.
+
+pub mod assembly;
+pub mod q8;
+
+pub use assembly::{FactorizedStiffness, FeError};
+pub use q8::{elasticity_matrix, PlaneState};

@@ -1,0 +1,266 @@
+//! The 8-node serendipity quadrilateral (Q8) in plane stress or plane strain.
+//!
+//! Natural coordinates (ξ, η) ∈ [−1, 1]², corners (ξᵢ, ηᵢ) = (−1,−1), (1,−1), (1,1), (−1,1), then
+//! the mid-side nodes of edges 0-1, 1-2, 2-3, 3-0 (Zienkiewicz & Taylor, *The Finite Element
+//! Method*, vol. 1, §6.4):
+//! ```text
+//! corners   Nᵢ = ¼ (1 + ξξᵢ)(1 + ηηᵢ)(ξξᵢ + ηηᵢ − 1)
+//! mid-sides N  = ½ (1 − ξ²)(1 + ηηᵢ)   (ξᵢ = 0),     N = ½ (1 + ξξᵢ)(1 − η²)   (ηᵢ = 0)
+//! K_e = ∫ Bᵀ D B t dA,   M_e = ∫ ρ t NᵀN dA        (3 × 3 Gauss points)
+//! ```
+//! Quadratic displacements represent linear bending stress exactly on straight-sided elements,
+//! so Q8 does not lock in tooth bending (plain bilinear Q4 does). 3 × 3 integration is full for
+//! undistorted elements and avoids the zero-energy mode of 2 × 2 reduced integration.
+
+use nalgebra::{Matrix3, Point2, SMatrix, SVector, Vector3};
+
+/// Element stiffness and mass matrices (16 × 16, DOF order u₀, v₀, u₁, v₁, …).
+pub type ElementMatrix = SMatrix<f64, 16, 16>;
+pub type ElementVector = SVector<f64, 16>;
+
+/// Plane stress (thin body, σ_zz = 0) or plane strain (ε_zz = 0).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PlaneState {
+    Stress,
+    Strain,
+}
+
+/// Elasticity matrix D (Voigt: σ_xx, σ_yy, τ_xy from ε_xx, ε_yy, γ_xy).
+/// ```text
+/// plane stress: E/(1−ν²)        [[1, ν, 0], [ν, 1, 0], [0, 0, (1−ν)/2]]
+/// plane strain: E/((1+ν)(1−2ν)) [[1−ν, ν, 0], [ν, 1−ν, 0], [0, 0, (1−2ν)/2]]
+/// ```
+pub fn elasticity_matrix(
+    youngs_modulus: f64,
+    poisson_ratio: f64,
+    plane: PlaneState,
+) -> Matrix3<f64> {
+    let (e, nu) = (youngs_modulus, poisson_ratio);
+    match plane {
+        PlaneState::Stress => {
+            let c = e / (1.0 - nu * nu);
+            Matrix3::new(
+                c,
+                c * nu,
+                0.0,
+                c * nu,
+                c,
+                0.0,
+                0.0,
+                0.0,
+                c * (1.0 - nu) / 2.0,
+            )
+        }
+        PlaneState::Strain => {
+            let c = e / ((1.0 + nu) * (1.0 - 2.0 * nu));
+            Matrix3::new(
+                c * (1.0 - nu),
+                c * nu,
+                0.0,
+                c * nu,
+                c * (1.0 - nu),
+                0.0,
+                0.0,
+                0.0,
+                c * (1.0 - 2.0 * nu) / 2.0,
+            )
+        }
+    }
+}
+
+const CORNERS: [(f64, f64); 4] = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+const GAUSS_3: [(f64, f64); 3] = [
+    (-0.774_596_669_241_483_4, 5.0 / 9.0),
+    (0.0, 8.0 / 9.0),
+    (0.774_596_669_241_483_4, 5.0 / 9.0),
+];
+
+/// Shape functions N(ξ, η).
+pub fn shape(xi: f64, eta: f64) -> [f64; 8] {
+    let mut n = [0.0; 8];
+    for (i, (xi_i, eta_i)) in CORNERS.iter().enumerate() {
+        n[i] = 0.25 * (1.0 + xi * xi_i) * (1.0 + eta * eta_i) * (xi * xi_i + eta * eta_i - 1.0);
+    }
+    n[4] = 0.5 * (1.0 - xi * xi) * (1.0 - eta);
+    n[5] = 0.5 * (1.0 + xi) * (1.0 - eta * eta);
+    n[6] = 0.5 * (1.0 - xi * xi) * (1.0 + eta);
+    n[7] = 0.5 * (1.0 - xi) * (1.0 - eta * eta);
+    n
+}
+
+/// Derivatives (∂N/∂ξ, ∂N/∂η).
+pub fn shape_derivatives(xi: f64, eta: f64) -> [(f64, f64); 8] {
+    let mut d = [(0.0, 0.0); 8];
+    for (i, (xi_i, eta_i)) in CORNERS.iter().enumerate() {
+        d[i] = (
+            0.25 * xi_i * (1.0 + eta * eta_i) * (2.0 * xi * xi_i + eta * eta_i),
+            0.25 * eta_i * (1.0 + xi * xi_i) * (xi * xi_i + 2.0 * eta * eta_i),
+        );
+    }
+    d[4] = (-xi * (1.0 - eta), -0.5 * (1.0 - xi * xi));
+    d[5] = (0.5 * (1.0 - eta * eta), -(1.0 + xi) * eta);
+    d[6] = (-xi * (1.0 + eta), 0.5 * (1.0 - xi * xi));
+    d[7] = (-0.5 * (1.0 - eta * eta), -(1.0 - xi) * eta);
+    d
+}
+
+/// Strain-displacement matrix B (3 × 16) and det J at (ξ, η).
+fn strain_matrix(nodes: &[Point2<f64>; 8], xi: f64, eta: f64) -> (SMatrix<f64, 3, 16>, f64) {
+    let d = shape_derivatives(xi, eta);
+    let (mut j11, mut j12, mut j21, mut j22) = (0.0, 0.0, 0.0, 0.0);
+    for (k, (dxi, deta)) in d.iter().enumerate() {
+        j11 += dxi * nodes[k].x;
+        j12 += dxi * nodes[k].y;
+        j21 += deta * nodes[k].x;
+        j22 += deta * nodes[k].y;
+    }
+    let det = j11 * j22 - j12 * j21;
+    let mut b = SMatrix::<f64, 3, 16>::zeros();
+    for (k, (dxi, deta)) in d.iter().enumerate() {
+        let dx = (j22 * dxi - j12 * deta) / det;
+        let dy = (-j21 * dxi + j11 * deta) / det;
+        b[(0, 2 * k)] = dx;
+        b[(1, 2 * k + 1)] = dy;
+        b[(2, 2 * k)] = dy;
+        b[(2, 2 * k + 1)] = dx;
+    }
+    (b, det)
+}
+
+/// Smallest det J over the 3 × 3 Gauss points (≤ 0: the element is inverted or degenerate).
+pub fn min_jacobian(nodes: &[Point2<f64>; 8]) -> f64 {
+    let mut min = f64::INFINITY;
+    for (xi, _) in GAUSS_3 {
+        for (eta, _) in GAUSS_3 {
+            min = min.min(strain_matrix(nodes, xi, eta).1);
+        }
+    }
+    min
+}
+
+/// Element stiffness K_e = Σ Bᵀ D B t det J w over 3 × 3 Gauss points.
+pub fn stiffness(nodes: &[Point2<f64>; 8], d: &Matrix3<f64>, thickness: f64) -> ElementMatrix {
+    let mut k = ElementMatrix::zeros();
+    for (xi, wx) in GAUSS_3 {
+        for (eta, wy) in GAUSS_3 {
+            let (b, det) = strain_matrix(nodes, xi, eta);
+            k += b.transpose() * d * b * (det * wx * wy * thickness);
+        }
+    }
+    k
+}
+
+/// Element area ∫ dA.
+pub fn area(nodes: &[Point2<f64>; 8]) -> f64 {
+    let mut a = 0.0;
+    for (xi, wx) in GAUSS_3 {
+        for (eta, wy) in GAUSS_3 {
+            a += strain_matrix(nodes, xi, eta).1 * wx * wy;
+        }
+    }
+    a
+}
+
+/// Lumped (diagonal) mass by HRZ scaling (Hinton, Rock & Zienkiewicz 1976): the diagonal of the
+/// consistent mass, scaled to the element mass ρ t A; positive at every node (row sums of the Q8
+/// consistent mass are negative at the corners, so row-sum lumping is not usable).
+/// Returns the mass per node (the same for both directions).
+pub fn lumped_mass(nodes: &[Point2<f64>; 8], density: f64, thickness: f64) -> [f64; 8] {
+    let mut diag = [0.0; 8];
+    let mut mass = 0.0;
+    for (xi, wx) in GAUSS_3 {
+        for (eta, wy) in GAUSS_3 {
+            let n = shape(xi, eta);
+            let dv = strain_matrix(nodes, xi, eta).1 * wx * wy * density * thickness;
+            mass += dv;
+            for k in 0..8 {
+                diag[k] += n[k] * n[k] * dv;
+            }
+        }
+    }
+    let sum: f64 = diag.iter().sum();
+    diag.map(|m| m * mass / sum)
+}
+
+/// Stress (σ_xx, σ_yy, τ_xy) at (ξ, η) from the element's nodal displacements.
+pub fn stress(
+    nodes: &[Point2<f64>; 8],
+    d: &Matrix3<f64>,
+    displacement: &ElementVector,
+    xi: f64,
+    eta: f64,
+) -> Vector3<f64> {
+    let (b, _) = strain_matrix(nodes, xi, eta);
+    d * (b * displacement)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square() -> [Point2<f64>; 8] {
+        [
+            Point2::new(0.0, 0.0),
+            Point2::new(2.0, 0.0),
+            Point2::new(2.0, 1.0),
+            Point2::new(0.0, 1.0),
+            Point2::new(1.0, 0.0),
+            Point2::new(2.0, 0.5),
+            Point2::new(1.0, 1.0),
+            Point2::new(0.0, 0.5),
+        ]
+    }
+
+    #[test]
+    fn shape_functions_partition_unity_and_interpolate_nodes() {
+        let nat = [
+            (-1.0, -1.0),
+            (1.0, -1.0),
+            (1.0, 1.0),
+            (-1.0, 1.0),
+            (0.0, -1.0),
+            (1.0, 0.0),
+            (0.0, 1.0),
+            (-1.0, 0.0),
+        ];
+        for (i, (xi, eta)) in nat.iter().enumerate() {
+            let n = shape(*xi, *eta);
+            for (j, v) in n.iter().enumerate() {
+                assert!((v - if i == j { 1.0 } else { 0.0 }).abs() < 1e-15);
+            }
+        }
+        let n = shape(0.3, -0.7);
+        assert!((n.iter().sum::<f64>() - 1.0).abs() < 1e-15);
+        let d = shape_derivatives(0.3, -0.7);
+        assert!(d.iter().map(|p| p.0).sum::<f64>().abs() < 1e-15);
+        assert!(d.iter().map(|p| p.1).sum::<f64>().abs() < 1e-15);
+    }
+
+    #[test]
+    fn stiffness_is_symmetric_with_three_rigid_modes() {
+        let d = elasticity_matrix(206e9, 0.3, PlaneState::Strain);
+        let k = stiffness(&square(), &d, 0.01);
+        assert!((k - k.transpose()).norm() < 1e-6 * k.norm());
+        let eig = k.symmetric_eigen().eigenvalues;
+        let mut sorted: Vec<f64> = eig.iter().copied().collect();
+        sorted.sort_by(f64::total_cmp);
+        let scale = sorted[15];
+        assert!(
+            sorted[..3].iter().all(|v| v.abs() < 1e-10 * scale),
+            "{sorted:?}"
+        );
+        assert!(
+            sorted[3] > 1e-6 * scale,
+            "a spurious zero-energy mode: {sorted:?}"
+        );
+    }
+
+    #[test]
+    fn lumped_mass_is_positive_and_sums_to_the_element_mass() {
+        let m = lumped_mass(&square(), 7850.0, 0.01);
+        assert!(m.iter().all(|v| *v > 0.0));
+        assert!((m.iter().sum::<f64>() - 7850.0 * 0.01 * 2.0).abs() < 1e-9);
+        assert!((area(&square()) - 2.0).abs() < 1e-14);
+    }
+}

@@ -1,0 +1,454 @@
+//! 2D finite-element mesh of a gear: 8-node quadratic (serendipity) quadrilaterals, graded —
+//! fine along the flanks and fillets of the teeth that engage in the analysis, coarse elsewhere —
+//! from the (modified) rack-generated profile down to the bore.
+//!
+//! # Layout of one tooth sector (tooth-local frame, the sector spans θ ∈ [−π/z, π/z])
+//! * **Tooth block**: a transfinite (Coons) patch between the two side curves — the upper
+//!   fillet from F* (where the fillet tangent is 45° from radial) to the form point, then the
+//!   flank to the tip — with the tip arc on top and the chord F*_R F*_L at the bottom. Rows join
+//!   mirror points of the two sides, so the elements follow the tooth; across the tooth the
+//!   intervals grow geometrically from the flanks inwards.
+//! * **Base block**: from the bore up to the curve root arc → lower fillet → chord → lower fillet
+//!   → root arc, meshed along radial rays through the nodes of that curve, with layers that thin
+//!   geometrically towards the root (one layer distribution for all sectors, so neighbouring
+//!   sectors share the nodes of their common radial edge).
+//!
+//! Splitting the fillet at F* keeps the corners of both blocks well away from 180° (the fillet
+//! meets the root circle tangentially). Coincident nodes of neighbouring blocks are merged.
+//! Element node order: corners counter-clockwise, then the mid-side nodes of edges 0-1, 1-2, 2-3,
+//! 3-0 (the VTK_QUADRATIC_QUAD order).
+
+pub mod grading;
+pub mod merge;
+
+use nalgebra::{Point2, Rotation2, Vector2};
+use std::f64::consts::PI;
+
+use crate::geometry::{FlankModification, Gear, Side};
+use grading::{symmetric_graded_fractions, uniform_fractions, with_midpoints};
+use merge::NodeMerger;
+
+/// How fine to mesh a gear.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeshSpec {
+    /// Element size along the flanks and fillets of the fine teeth [m].
+    pub fine_size: f64,
+    /// Element size on the other teeth and the largest in the body [m].
+    pub coarse_size: f64,
+    /// Teeth meshed fine (tooth k is the reference tooth turned counter-clockwise by k·2π/z).
+    pub fine_teeth: Vec<usize>,
+}
+
+/// The nodes of one flank (form point to tip corner, root to tip) with their roll angles.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FlankNodes {
+    pub tooth: usize,
+    pub side: Side,
+    pub nodes: Vec<usize>,
+    /// Roll angle ξ of the profile point each node was placed on [rad].
+    pub roll_angles: Vec<f64>,
+}
+
+/// A meshed gear in its tooth-local frame (tooth 0 along +y).
+#[derive(Debug, Clone)]
+pub struct GearMesh {
+    pub nodes: Vec<Point2<f64>>,
+    pub elements: Vec<[usize; 8]>,
+    /// Whether each element belongs to a fine tooth sector.
+    pub element_fine: Vec<bool>,
+    /// Nodes on the bore circle.
+    pub bore_nodes: Vec<usize>,
+    /// Every flank of every tooth.
+    pub flanks: Vec<FlankNodes>,
+    pub fine_teeth: Vec<usize>,
+}
+
+impl GearMesh {
+    pub fn flank(&self, tooth: usize, side: Side) -> &FlankNodes {
+        self.flanks
+            .iter()
+            .find(|f| f.tooth == tooth && f.side == side)
+            .expect("every tooth has both flanks")
+    }
+}
+
+/// Growth ratio of graded intervals (across the tooth, and of the base layers).
+const GROWTH: f64 = 1.5;
+
+/// Meshes `gear` with profile `modification`.
+///
+/// # Panics
+/// If a fine tooth index is not below the number of teeth or a size is not positive (the case
+/// layer checks both).
+#[track_caller]
+pub fn mesh_gear(gear: &Gear, modification: &FlankModification, spec: &MeshSpec) -> GearMesh {
+    let z = gear.teeth() as usize;
+    assert!(
+        spec.fine_size > 0.0 && spec.coarse_size >= spec.fine_size,
+        "mesh sizes"
+    );
+    assert!(
+        spec.fine_teeth.iter().all(|&t| t < z),
+        "fine tooth index out of range"
+    );
+    let fine = SectorLayout::new(gear, modification, spec.fine_size, spec.coarse_size);
+    let coarse = SectorLayout::new(gear, modification, spec.coarse_size, spec.coarse_size);
+    let top_layer = if spec.fine_teeth.is_empty() {
+        spec.coarse_size
+    } else {
+        spec.fine_size
+    };
+    let layers = base_layers(gear, top_layer, &coarse);
+
+    let mut merger = NodeMerger::new(1e-9 * gear.tip_radius.max(1e-3) * 10.0);
+    let mut elements = Vec::new();
+    let mut element_fine = Vec::new();
+    let mut flanks = Vec::new();
+    for tooth in 0..z {
+        let is_fine = spec.fine_teeth.contains(&tooth);
+        let layout = if is_fine { &fine } else { &coarse };
+        let rotation = Rotation2::new(tooth as f64 * gear.angular_pitch());
+        let mut ids = |grid: &[Point2<f64>]| -> Vec<usize> {
+            grid.iter()
+                .map(|p| merger.insert(Point2::from(rotation * p.coords)))
+                .collect()
+        };
+        let tooth_ids = ids(&layout.tooth_grid);
+        let base_grid = layout.base_grid(&layers);
+        let base_ids = ids(&base_grid);
+        for e in grid_elements(&tooth_ids, layout.tooth_rows(), layout.tooth_cols()) {
+            elements.push(e);
+            element_fine.push(is_fine);
+        }
+        for e in grid_elements(&base_ids, layers.len(), layout.base_top.len()) {
+            elements.push(e);
+            element_fine.push(is_fine);
+        }
+        let cols = layout.tooth_cols();
+        for (side, col) in [(Side::Right, 0), (Side::Left, cols - 1)] {
+            let rows = layout.flank_first_row..layout.tooth_rows();
+            flanks.push(FlankNodes {
+                tooth,
+                side,
+                nodes: rows.clone().map(|k| tooth_ids[k * cols + col]).collect(),
+                roll_angles: layout.flank_roll_angles.clone(),
+            });
+        }
+    }
+    let nodes = merger.nodes;
+    // Orientation: counter-clockwise corners (positive area).
+    for e in elements.iter_mut() {
+        let [a, b, _, d] = [nodes[e[0]], nodes[e[1]], nodes[e[2]], nodes[e[3]]];
+        if (b - a).perp(&(d - a)) < 0.0 {
+            *e = [e[0], e[3], e[2], e[1], e[7], e[6], e[5], e[4]];
+        }
+    }
+    let bore = gear.spec.bore_radius;
+    let bore_nodes = (0..nodes.len())
+        .filter(|&i| (nodes[i].coords.norm() - bore).abs() < 1e-9 * bore.max(1e-3) * 10.0)
+        .collect();
+    GearMesh {
+        nodes,
+        elements,
+        element_fine,
+        bore_nodes,
+        flanks,
+        fine_teeth: spec.fine_teeth.clone(),
+    }
+}
+
+/// Q8 elements of a (2n+1) × (2m+1) quadratic grid of node ids (row-major).
+fn grid_elements(ids: &[usize], rows: usize, cols: usize) -> Vec<[usize; 8]> {
+    let at = |r: usize, c: usize| ids[r * cols + c];
+    let mut out = Vec::new();
+    for r in (0..rows - 1).step_by(2) {
+        for c in (0..cols - 1).step_by(2) {
+            out.push([
+                at(r, c),
+                at(r, c + 2),
+                at(r + 2, c + 2),
+                at(r + 2, c),
+                at(r, c + 1),
+                at(r + 1, c + 2),
+                at(r + 2, c + 1),
+                at(r + 1, c),
+            ]);
+        }
+    }
+    out
+}
+
+/// Radial layer fractions of the base block, from the top (1) to the bore (0), with midpoints.
+/// The first layer below the root is `top_size` thick; layers grow by [`GROWTH`] up to 2.5 times
+/// the width of a coarse sector's columns at that radius.
+fn base_layers(gear: &Gear, top_size: f64, coarse: &SectorLayout) -> Vec<f64> {
+    let (top, bore) = (gear.root_radius, gear.spec.bore_radius);
+    let column_angle = gear.angular_pitch() / (coarse.base_top.len() / 2) as f64;
+    let mut thicknesses = Vec::new();
+    let (mut r, mut t) = (top, top_size);
+    loop {
+        let remaining = r - bore;
+        // The last layer takes the remainder rather than leaving a sliver.
+        if remaining <= 1.3 * t {
+            thicknesses.push(remaining);
+            break;
+        }
+        thicknesses.push(t);
+        r -= t;
+        let cap = (2.5 * r * column_angle).max(top_size);
+        t = (t * GROWTH).min(cap);
+    }
+    let total = top - bore;
+    let mut fractions = vec![1.0];
+    let mut acc = 0.0;
+    for t in &thicknesses {
+        acc += t;
+        fractions.push((1.0 - acc / total).max(0.0));
+    }
+    *fractions.last_mut().expect("layers") = 0.0;
+    with_midpoints(&fractions)
+}
+
+/// The node grids of one tooth sector (tooth 0), for one element size.
+struct SectorLayout {
+    /// Tooth block grid, row-major: rows bottom (chord) to top (tip), columns right to left.
+    tooth_grid: Vec<Point2<f64>>,
+    tooth_cols: usize,
+    /// Row index (quadratic grid) where the flank starts (the form point).
+    flank_first_row: usize,
+    flank_roll_angles: Vec<f64>,
+    /// Top curve of the base block, right space centre to left space centre (quadratic grid).
+    base_top: Vec<Point2<f64>>,
+    bore_radius: f64,
+}
+
+impl SectorLayout {
+    fn new(gear: &Gear, modification: &FlankModification, size: f64, coarse: f64) -> Self {
+        let (beta_form, beta_root) = gear.fillet_parameter_range();
+        let beta_split = fillet_split(gear, modification);
+        let fillet = |b: f64| gear.modified_fillet_point(b, modification);
+        let xi_form = gear.form_roll_angle();
+        let xi_end = gear.modified_tip_roll_angle(modification);
+        let flank = |xi: f64| gear.modified_flank_point(xi, modification);
+        let count = |length: f64| ((length / size).ceil() as usize).max(1);
+
+        // Side curve: upper fillet then flank, with midpoints.
+        // The fillets turn by ~45° each: at least two quadratic elements follow them closely.
+        let n_uf = count(curve_length(&fillet, beta_split, beta_form)).max(2);
+        let n_fl = count(curve_length(&flank, xi_form, xi_end)).max(2);
+        let mut side: Vec<Point2<f64>> = with_midpoints(&uniform_fractions(n_uf))
+            .iter()
+            .map(|t| fillet(beta_split + (beta_form - beta_split) * t))
+            .collect();
+        let flank_params: Vec<f64> = with_midpoints(&uniform_fractions(n_fl))
+            .iter()
+            .map(|t| xi_form + (xi_end - xi_form) * t)
+            .collect();
+        side.pop(); // the form point is the flank's first point
+        let flank_first_row = side.len();
+        side.extend(flank_params.iter().map(|&xi| flank(xi)));
+        let mirror = |p: &Point2<f64>| Point2::new(-p.x, p.y);
+
+        // Across the tooth: graded from both flanks.
+        let corner_r = side[0];
+        let corner_l = mirror(&corner_r);
+        let across = with_midpoints(&symmetric_graded_fractions(
+            (corner_r - corner_l).norm(),
+            size,
+            GROWTH,
+            coarse.max(size),
+        ));
+        let bottom: Vec<Point2<f64>> = across
+            .iter()
+            .map(|u| corner_r + (corner_l - corner_r) * *u)
+            .collect();
+        let tip_corner = *side.last().expect("side");
+        let theta_tip = tip_corner.x.atan2(tip_corner.y);
+        let top: Vec<Point2<f64>> = across
+            .iter()
+            .map(|u| polar(gear.tip_radius, theta_tip * (1.0 - 2.0 * u)))
+            .collect();
+
+        // Arc-length parameter of the side curve, for the Coons blend.
+        let mut v = vec![0.0];
+        for w in side.windows(2) {
+            v.push(v.last().unwrap() + (w[1] - w[0]).norm());
+        }
+        let total = *v.last().unwrap();
+        v.iter_mut().for_each(|x| *x /= total);
+
+        let (rows, cols) = (side.len(), across.len());
+        let mut grid = Vec::with_capacity(rows * cols);
+        for k in 0..rows {
+            for j in 0..cols {
+                let (u, vk) = (across[j], v[k]);
+                let p = if k == 0 {
+                    bottom[j]
+                } else if k == rows - 1 {
+                    top[j]
+                } else if j == 0 {
+                    side[k]
+                } else if j == cols - 1 {
+                    mirror(&side[k])
+                } else {
+                    let coons = side[k].coords * (1.0 - u)
+                        + mirror(&side[k]).coords * u
+                        + bottom[j].coords * (1.0 - vk)
+                        + top[j].coords * vk
+                        - (bottom[0].coords * ((1.0 - u) * (1.0 - vk))
+                            + bottom[cols - 1].coords * (u * (1.0 - vk))
+                            + top[0].coords * ((1.0 - u) * vk)
+                            + top[cols - 1].coords * (u * vk));
+                    Point2::from(coons)
+                };
+                grid.push(p);
+            }
+        }
+
+        // Base-block top: root arc + lower fillet as one curve (the root arc alone is a fraction
+        // of a module wide and would leave a thin column down to the bore), chord, and mirror.
+        let half_pitch = 0.5 * gear.angular_pitch();
+        let root_end = gear.fillet_root_angle();
+        let root_length = (half_pitch - root_end) * gear.root_radius;
+        let lower_fillet_length = curve_length(&fillet, beta_root, beta_split);
+        // Parameter s ∈ [0, 1] over the root arc, s ∈ [1, 2] over the lower fillet.
+        let point_at = |s: f64| {
+            if s <= 1.0 {
+                polar(gear.root_radius, half_pitch + (root_end - half_pitch) * s)
+            } else {
+                fillet(beta_root + (beta_split - beta_root) * (s - 1.0))
+            }
+        };
+        let arc = ArcLengthTable::new(&point_at, 0.0, 1.0, 2.0, root_length);
+        let n_rl = count(root_length + lower_fillet_length).max(2);
+        let mut right: Vec<Point2<f64>> = with_midpoints(&uniform_fractions(n_rl))
+            .iter()
+            .map(|t| point_at(arc.parameter_at(*t)))
+            .collect();
+        right.pop(); // F*, the chord's first point
+        let mut base_top = right.clone();
+        base_top.extend(bottom.iter().copied());
+        base_top.extend(right.iter().rev().map(mirror));
+
+        SectorLayout {
+            tooth_grid: grid,
+            tooth_cols: cols,
+            flank_first_row,
+            flank_roll_angles: flank_params,
+            base_top,
+            bore_radius: gear.spec.bore_radius,
+        }
+    }
+
+    fn tooth_cols(&self) -> usize {
+        self.tooth_cols
+    }
+
+    fn tooth_rows(&self) -> usize {
+        self.tooth_grid.len() / self.tooth_cols
+    }
+
+    /// Base block grid, row-major: rows from the top curve down to the bore.
+    fn base_grid(&self, layers: &[f64]) -> Vec<Point2<f64>> {
+        // Along the ray through each top node: r = r_bore + (|p| − r_bore)·g.
+        let bore = self.bore_radius;
+        let mut grid = Vec::with_capacity(layers.len() * self.base_top.len());
+        for (k, g) in layers.iter().enumerate() {
+            for p in &self.base_top {
+                let r = p.coords.norm();
+                let scaled = Point2::from(p.coords * ((bore + (r - bore) * g) / r));
+                grid.push(if k == 0 { *p } else { scaled });
+            }
+        }
+        grid
+    }
+}
+
+/// Arc-length parametrisation of a two-piece curve: parameters [a, m] and [m, b], sampled finely;
+/// `parameter_at(f)` returns the parameter at fraction f of the total length.
+struct ArcLengthTable {
+    parameters: Vec<f64>,
+    lengths: Vec<f64>,
+}
+
+impl ArcLengthTable {
+    fn new(curve: &dyn Fn(f64) -> Point2<f64>, a: f64, m: f64, b: f64, first_length: f64) -> Self {
+        // Sample each piece evenly in its parameter; the pieces can differ in length a lot.
+        let n = 512;
+        let mut parameters = Vec::with_capacity(2 * n + 1);
+        for i in 0..n {
+            parameters.push(a + (m - a) * i as f64 / n as f64);
+        }
+        for i in 0..=n {
+            parameters.push(m + (b - m) * i as f64 / n as f64);
+        }
+        let mut lengths = vec![0.0];
+        for w in parameters.windows(2) {
+            lengths.push(lengths.last().unwrap() + (curve(w[1]) - curve(w[0])).norm());
+        }
+        debug_assert!((lengths[n] - first_length).abs() < 1e-6 * first_length.max(1e-9) + 1e-12);
+        let total = *lengths.last().unwrap();
+        lengths.iter_mut().for_each(|l| *l /= total);
+        Self {
+            parameters,
+            lengths,
+        }
+    }
+
+    fn parameter_at(&self, fraction: f64) -> f64 {
+        let k = self
+            .lengths
+            .partition_point(|l| *l < fraction)
+            .clamp(1, self.lengths.len() - 1);
+        let (l0, l1) = (self.lengths[k - 1], self.lengths[k]);
+        let t = if l1 > l0 {
+            (fraction - l0) / (l1 - l0)
+        } else {
+            0.0
+        };
+        self.parameters[k - 1] + (self.parameters[k] - self.parameters[k - 1]) * t
+    }
+}
+
+fn polar(radius: f64, theta: f64) -> Point2<f64> {
+    Point2::new(radius * theta.sin(), radius * theta.cos())
+}
+
+/// Length of a parametric curve between two parameters (256-segment polyline).
+fn curve_length(curve: &dyn Fn(f64) -> Point2<f64>, from: f64, to: f64) -> f64 {
+    let n = 256;
+    (0..n)
+        .map(|i| {
+            let a = curve(from + (to - from) * i as f64 / n as f64);
+            let b = curve(from + (to - from) * (i + 1) as f64 / n as f64);
+            (b - a).norm()
+        })
+        .sum()
+}
+
+/// Fillet parameter β* where the fillet's tangent makes 45° with the radial direction (bisection;
+/// the angle falls from 90° at the root circle to the involute's α_F at the form point).
+fn fillet_split(gear: &Gear, modification: &FlankModification) -> f64 {
+    let (beta_form, beta_root) = gear.fillet_parameter_range();
+    let angle_from_radial = |beta: f64| {
+        let h = 1e-7;
+        let p = gear.modified_fillet_point(beta, modification);
+        let t: Vector2<f64> = gear.modified_fillet_point(beta - h, modification)
+            - gear.modified_fillet_point(beta + h, modification);
+        let radial = p.coords.normalize();
+        (t.normalize().dot(&radial)).abs().clamp(0.0, 1.0).acos()
+    };
+    let (mut lo, mut hi) = (beta_form, beta_root - 1e-6);
+    if angle_from_radial(lo) >= PI / 4.0 {
+        return 0.5 * (beta_form + beta_root);
+    }
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if angle_from_radial(mid) < PI / 4.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}

@@ -1,0 +1,99 @@
+//! The gear mesh: valid elements, the right area, flank nodes on the modified profile, and a
+//! stiffness matrix whose null space is exactly the rigid-body motions.
+
+use geardyn::fe::assembly::{check_elements, element_nodes, stiffness_triplets, symmetric_product};
+use geardyn::fe::{elasticity_matrix, q8, PlaneState};
+use geardyn::geometry::{OutlineResolution, Side};
+use geardyn::samples;
+use nalgebra::{Point2, Rotation2};
+
+#[test]
+fn paper_gear_mesh_is_valid_and_fills_the_gear() {
+    let mesh = samples::paper36_gear_mesh(0.4e-3, 1.5e-3);
+    check_elements(&mesh.nodes, &mesh.elements).expect("all elements have det J > 0");
+
+    // Area: gear outline polygon (very fine) minus the bore.
+    let case = samples::paper36_case();
+    let gear = &case.pair.gears[0];
+    let modification = case.relief_variant("tip20-root10").unwrap().modifications[0];
+    let res = OutlineResolution {
+        root: 16,
+        fillet: 200,
+        flank: 400,
+        tip: 32,
+    };
+    let polygon = gear.gear_outline(&modification, res);
+    let outline_area = 0.5
+        * polygon
+            .iter()
+            .zip(polygon.iter().cycle().skip(1))
+            .map(|(a, b)| a.x * b.y - b.x * a.y)
+            .sum::<f64>();
+    let expected = outline_area - std::f64::consts::PI * gear.spec.bore_radius.powi(2);
+    let area: f64 = mesh
+        .elements
+        .iter()
+        .map(|e| q8::area(&element_nodes(&mesh.nodes, e)))
+        .sum();
+    // Quadratic edges follow the curved boundary to ~1e-6 of the area here.
+    assert!(
+        ((area - expected) / expected).abs() < 1e-5,
+        "mesh area {area:e} vs {expected:e}"
+    );
+
+    // Bore nodes sit on the bore circle, all around.
+    assert!(mesh.bore_nodes.len() >= 2 * gear.teeth() as usize);
+    for &i in &mesh.bore_nodes {
+        assert!((mesh.nodes[i].coords.norm() - gear.spec.bore_radius).abs() < 1e-12);
+    }
+
+    // Flank nodes lie on the modified flank, roll angles increasing; fine teeth have more.
+    for tooth in [0usize, 5] {
+        let flank = mesh.flank(tooth, Side::Right);
+        let rotation = Rotation2::new(tooth as f64 * gear.angular_pitch());
+        for (node, xi) in flank.nodes.iter().zip(&flank.roll_angles) {
+            let expected = rotation * gear.modified_flank_point(*xi, &modification).coords;
+            assert!((mesh.nodes[*node].coords - expected).norm() < 1e-12);
+        }
+        assert!(flank.roll_angles.windows(2).all(|w| w[1] > w[0]));
+    }
+    assert!(mesh.flank(0, Side::Left).nodes.len() > 2 * mesh.flank(5, Side::Left).nodes.len());
+}
+
+/// K u = 0 for the two translations and the infinitesimal rotation (to round-off), and a rigid
+/// rotation stores no strain energy.
+#[test]
+fn gear_stiffness_null_space_is_the_rigid_motions() {
+    let mesh = samples::paper36_gear_mesh(0.6e-3, 2.0e-3);
+    let d = elasticity_matrix(206e9, 0.3, PlaneState::Strain);
+    let triplets = stiffness_triplets(&mesh.nodes, &mesh.elements, &d, 0.0254);
+    let scale = triplets.iter().map(|t| t.2.abs()).fold(0.0, f64::max);
+    type Motion = Box<dyn Fn(&Point2<f64>) -> (f64, f64)>;
+    let motions: [(&str, Motion); 3] = [
+        ("x translation", Box::new(|_| (1e-6, 0.0))),
+        ("y translation", Box::new(|_| (0.0, 1e-6))),
+        ("rotation", Box::new(|p| (-1e-5 * p.y, 1e-5 * p.x))),
+    ];
+    for (name, motion) in motions {
+        let u: Vec<f64> = mesh
+            .nodes
+            .iter()
+            .flat_map(|p| {
+                let (a, b) = motion(p);
+                [a, b]
+            })
+            .collect();
+        let f = symmetric_product(&triplets, &u);
+        let residual = f.iter().map(|x| x.abs()).fold(0.0, f64::max);
+        let norm_u = u.iter().map(|x| x.abs()).fold(0.0, f64::max);
+        assert!(
+            residual < 1e-10 * scale * norm_u,
+            "{name}: |K u| = {residual:e}"
+        );
+        let energy: f64 = 0.5 * u.iter().zip(&f).map(|(a, b)| a * b).sum::<f64>();
+        assert!(
+            energy.abs() < 1e-12 * scale * norm_u * norm_u * mesh.nodes.len() as f64,
+            "{name}: energy {energy:e}"
+        );
+    }
+}

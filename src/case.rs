@@ -235,7 +235,7 @@ impl Default for ContactSection {
 }
 
 fn default_fine_element() -> f64 {
-    0.4
+    0.2
 }
 fn default_coarse_element() -> f64 {
     1.5

@@ -16,6 +16,8 @@
 pub mod case;
 pub mod fe;
 pub mod geometry;
+pub mod ltca;
 pub mod mesh;
 pub mod report;
 pub mod samples;
+pub mod stiffness;

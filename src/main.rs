@@ -37,6 +37,23 @@ enum Command {
         #[arg(long, value_name = "NAME")]
         relief: Option<String>,
     },
+    /// Quasi-static loaded tooth contact analysis over one base pitch for every relief variant
+    /// (or the one named): static transmission error, load sharing and the mesh stiffness k(θ),
+    /// next to ISO 6336-1 method B. Writes ltca_<variant>.csv, ste/stiffness/load-sharing plots
+    /// (SVG, PNG) and summary.json.
+    Ltca {
+        #[command(flatten)]
+        common: CommonArgs,
+        /// Load torque on the driven gear [N·m]; default: the case's first operating point.
+        #[arg(long, value_name = "T", allow_negative_numbers = true)]
+        torque_nm: Option<f64>,
+        /// Mesh positions over one base pitch.
+        #[arg(long, default_value_t = 64, value_name = "N")]
+        positions: usize,
+        /// Only this relief variant; default: every variant of the case.
+        #[arg(long, value_name = "NAME")]
+        relief: Option<String>,
+    },
     /// Prints a case file: the given one, or the embedded default (start your own from it:
     /// `geardyn case > my.toml`).
     Case {
@@ -59,6 +76,12 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Geometry(args) => geometry(&args),
         Command::Mesh { common, relief } => mesh(&common, relief.as_deref()),
+        Command::Ltca {
+            common,
+            torque_nm,
+            positions,
+            relief,
+        } => ltca(&common, torque_nm, positions, relief.as_deref()),
         Command::Case { case } => print_case(case.as_deref()),
     };
     match result {
@@ -225,6 +248,217 @@ fn mesh(args: &CommonArgs, relief: Option<&str>) -> Result<()> {
             &drawing,
         )?;
     }
+    println!("wrote {}", dir.display());
+    Ok(())
+}
+
+fn ltca(
+    args: &CommonArgs,
+    torque_nm: Option<f64>,
+    positions: usize,
+    relief: Option<&str>,
+) -> Result<()> {
+    use geardyn::ltca::{body::BodyMaterial, engaging_teeth, LtcaModel};
+    use geardyn::report::ltca as rep;
+    use indicatif::{ProgressBar, ProgressStyle};
+
+    let started = std::time::Instant::now();
+    let case = load_case(args.case.as_deref())?;
+    let torque = match torque_nm {
+        Some(t) => t,
+        None => case
+            .operating_points
+            .first()
+            .map(|o| o.torque)
+            .context("the case has no operating point: give --torque-nm")?,
+    };
+    if !(torque > 0.0 && torque.is_finite()) {
+        anyhow::bail!(
+            "--torque-nm {torque} is invalid: the LTCA needs a load torque > 0 on the driven gear"
+        );
+    }
+    let variants: Vec<_> = match relief {
+        Some(name) => vec![case
+            .relief_variant(name)
+            .with_context(|| format!("no relief variant {name:?} in the case"))?],
+        None => case.relief_variants.iter().collect(),
+    };
+    let dir = output_dir(args.out.as_deref(), "ltca", &case)?;
+    report::write_atomic(&dir.join("case.toml"), case.text.as_bytes())
+        .context("cannot write case.toml")?;
+    let material = BodyMaterial {
+        youngs_modulus: case.material.youngs_modulus,
+        poisson_ratio: case.material.poisson_ratio,
+        plane: case.file.fe.plane,
+    };
+    let rb2 = case.pair.gears[1].base_radius;
+    let teeth = engaging_teeth(&case.pair);
+    let mut summaries = Vec::new();
+    let mut ste_series = Vec::new();
+    let mut k_series = Vec::new();
+    for variant in &variants {
+        eprintln!(
+            "relief variant \"{}\": meshing and factorizing both gears ...",
+            variant.name
+        );
+        let model = LtcaModel::new(
+            &case.pair,
+            &variant.modifications,
+            [
+                case.mesh_spec(teeth[0].clone()),
+                case.mesh_spec(teeth[1].clone()),
+            ],
+            material,
+        )?;
+        let bar = ProgressBar::new(positions as u64);
+        bar.set_style(
+            ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} positions, ETA {eta}")
+                .expect("valid template"),
+        );
+        bar.set_message(format!("LTCA \"{}\"", variant.name));
+        let cycle_started = std::time::Instant::now();
+        let results = model.run(positions, torque, &|done| bar.set_position(done as u64))?;
+        let cycle_s = cycle_started.elapsed().as_secs_f64();
+        bar.finish_and_clear();
+        let [b1, b2] = &model.bodies;
+        let summary = rep::variant_summary(
+            &variant.name,
+            &results,
+            rb2,
+            [b1.mesh.elements.len(), b2.mesh.elements.len()],
+            [b1.free_dofs, b2.free_dofs],
+            (
+                b1.factorization_s + b2.factorization_s,
+                b1.condensation_s + b2.condensation_s,
+                cycle_s,
+            ),
+        );
+        let name = format!("ltca_{}.csv", variant.name);
+        report::write_csv(
+            &dir.join(&name),
+            &rep::position_header(&model.tooth_pairs)
+                .iter()
+                .map(String::as_str)
+                .collect::<Vec<_>>(),
+            rep::position_rows(&results, rb2),
+        )
+        .with_context(|| format!("cannot write {name}"))?;
+        let deg = |r: &geardyn::ltca::PositionResult| r.roll_angle.to_degrees();
+        ste_series.push((
+            format!("{} loaded", variant.name),
+            results
+                .iter()
+                .map(|r| (deg(r), r.ste * rb2 * 1e6))
+                .collect(),
+        ));
+        if !variant.modifications.iter().all(|m| m.is_none()) {
+            ste_series.push((
+                format!("{} unloaded", variant.name),
+                results
+                    .iter()
+                    .map(|r| (deg(r), r.unloaded_te * rb2 * 1e6))
+                    .collect(),
+            ));
+        }
+        k_series.push((
+            variant.name.clone(),
+            results.iter().map(|r| (deg(r), r.mesh_stiffness)).collect(),
+        ));
+        let sharing = report::plot::LinePlot {
+            title: format!(
+                "{}: load per tooth pair, relief \"{}\", T = {torque} N·m",
+                case.name(),
+                variant.name
+            ),
+            x_label: "driver roll angle [deg]".into(),
+            y_label: "normal force [N]".into(),
+            series: model
+                .tooth_pairs
+                .iter()
+                .enumerate()
+                .map(|(i, (t1, t2))| {
+                    (
+                        format!("pair {t1}/{t2}"),
+                        results.iter().map(|r| (deg(r), r.pair_forces[i])).collect(),
+                    )
+                })
+                .collect(),
+        };
+        let stem = format!("load_sharing_{}", variant.name);
+        report::plot::draw_svg_and_png(
+            &dir.join(format!("{stem}.svg")),
+            &dir.join(format!("{stem}.png")),
+            (1200, 700),
+            &sharing,
+        )?;
+        println!(
+            "{:<16} k mean {:.4e} min {:.4e} max {:.4e} N/m, STE mean {:.3} um p-p {:.3} um, KKT <= {:.1e}",
+            variant.name,
+            summary.mesh_stiffness_mean_n_per_m,
+            summary.mesh_stiffness_min_n_per_m,
+            summary.mesh_stiffness_max_n_per_m,
+            summary.ste_mean_um,
+            summary.ste_peak_to_peak_um,
+            summary.max_kkt_residual
+        );
+        summaries.push(summary);
+    }
+    let ste_plot = report::plot::LinePlot {
+        title: format!(
+            "{}: static transmission error, T = {torque} N·m",
+            case.name()
+        ),
+        x_label: "driver roll angle [deg]".into(),
+        y_label: "transmission error along the LOA [um]".into(),
+        series: ste_series,
+    };
+    report::plot::draw_svg_and_png(
+        &dir.join("ste.svg"),
+        &dir.join("ste.png"),
+        (1200, 700),
+        &ste_plot,
+    )?;
+    let k_plot = report::plot::LinePlot {
+        title: format!("{}: mesh stiffness, T = {torque} N·m", case.name()),
+        x_label: "driver roll angle [deg]".into(),
+        y_label: "mesh stiffness [N/m]".into(),
+        series: k_series,
+    };
+    report::plot::draw_svg_and_png(
+        &dir.join("stiffness.svg"),
+        &dir.join("stiffness.png"),
+        (1200, 700),
+        &k_plot,
+    )?;
+
+    let iso =
+        geardyn::stiffness::iso_6336_method_b(&case.pair, torque, case.material.youngs_modulus);
+    println!(
+        "ISO 6336-1 method B: c_gamma_alpha*b = {:.4e} N/m, c'*b = {:.4e} N/m",
+        iso.mean_n_per_m, iso.single_pair_n_per_m
+    );
+    let first = &summaries[0];
+    let summary = serde_json::json!({
+        "case": case.name(),
+        "torque_nm": torque,
+        "positions": positions,
+        "plane": case.file.fe.plane,
+        "fine_element_mm": case.file.mesh.fine_element_mm,
+        "coarse_element_mm": case.file.mesh.coarse_element_mm,
+        "relief_variant": first.relief_variant,
+        "mesh_stiffness_mean_n_per_m": first.mesh_stiffness_mean_n_per_m,
+        "mesh_stiffness_min_n_per_m": first.mesh_stiffness_min_n_per_m,
+        "mesh_stiffness_max_n_per_m": first.mesh_stiffness_max_n_per_m,
+        "ste_mean_um": first.ste_mean_um,
+        "ste_peak_to_peak_um": first.ste_peak_to_peak_um,
+        "iso_c_gamma_n_per_m": iso.mean_n_per_m,
+        "iso_c_prime_n_per_m": iso.single_pair_n_per_m,
+        "elements": first.elements[0] + first.elements[1],
+        "wall_s": started.elapsed().as_secs_f64(),
+        "variants": summaries,
+        "model": "2D FE (Q8), bores held rigid; frictionless node-to-surface contact on the drive flanks; one base pitch",
+    });
+    report::write_json(&dir.join("summary.json"), &summary).context("cannot write summary.json")?;
     println!("wrote {}", dir.display());
     Ok(())
 }

@@ -233,6 +233,64 @@ fn mesh_writes_vtk_and_png_for_both_gears() {
 
 #[test]
 fn mesh_sizes_out_of_range_are_named() {
-    let text = DEFAULT.replace("fine_element_mm = 0.4", "fine_element_mm = 3.0");
+    let text = DEFAULT.replace("fine_element_mm = 0.2", "fine_element_mm = 3.0");
     assert_fails_naming(&text, &["mesh.fine_element_mm", "3"]);
+}
+
+#[test]
+fn ltca_writes_csv_plots_and_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = write_case(
+        dir.path(),
+        &DEFAULT.replace("fine_element_mm = 0.2", "fine_element_mm = 0.5"),
+    );
+    let out = dir.path().join("ltca");
+    let output = geardyn()
+        .args(["ltca"])
+        .arg(&case)
+        .args(["--positions", "8", "--relief", "none", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    for key in [
+        "mesh_stiffness_mean_n_per_m",
+        "mesh_stiffness_min_n_per_m",
+        "mesh_stiffness_max_n_per_m",
+        "ste_mean_um",
+        "ste_peak_to_peak_um",
+        "iso_c_gamma_n_per_m",
+        "wall_s",
+    ] {
+        assert!(summary[key].as_f64().unwrap().is_finite(), "{key}");
+    }
+    assert!(summary["elements"].as_u64().unwrap() > 1000);
+    let k = summary["mesh_stiffness_mean_n_per_m"].as_f64().unwrap();
+    assert!(summary["mesh_stiffness_min_n_per_m"].as_f64().unwrap() < k);
+    let rows = csv::Reader::from_path(out.join("ltca_none.csv"))
+        .unwrap()
+        .records()
+        .count();
+    assert_eq!(rows, 8);
+    for plot in [
+        "ste.png",
+        "stiffness.png",
+        "load_sharing_none.png",
+        "ste.svg",
+    ] {
+        assert!(out.join(plot).exists(), "{plot}");
+    }
+    let bad = geardyn()
+        .args(["ltca", "--torque-nm", "-5", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("torque"));
 }

@@ -11,6 +11,9 @@ use nalgebra::{Point2, Rotation2};
 fn paper_gear_mesh_is_valid_and_fills_the_gear() {
     let mesh = samples::paper36_gear_mesh(0.4e-3, 1.5e-3);
     check_elements(&mesh.nodes, &mesh.elements).expect("all elements have det J > 0");
+    let mut used = vec![false; mesh.nodes.len()];
+    mesh.elements.iter().flatten().for_each(|&i| used[i] = true);
+    assert!(used.iter().all(|u| *u), "every node belongs to an element");
 
     // Area: gear outline polygon (very fine) minus the bore.
     let case = samples::paper36_case();

@@ -149,6 +149,41 @@ impl FactorizedStiffness {
             .collect()
     }
 
+    /// Condensed compliance between point loads: G[k, l] = d_kᵀ u_l at node k, where u_l solves
+    /// K u = unit force at node l along d_l. Solved in blocks of columns so memory stays
+    /// O(free DOFs × block).
+    pub fn compliance_between(&self, points: &[(usize, [f64; 2])]) -> nalgebra::DMatrix<f64> {
+        const BLOCK: usize = 64;
+        let n = self.free_dofs();
+        let m = points.len();
+        let mut g = nalgebra::DMatrix::<f64>::zeros(m, m);
+        let reduced = |node: usize, axis: usize| self.free_index[2 * node + axis];
+        for start in (0..m).step_by(BLOCK) {
+            let end = (start + BLOCK).min(m);
+            let mut rhs = Mat::<f64>::zeros(n, end - start);
+            for (j, (node, d)) in points[start..end].iter().enumerate() {
+                for (axis, component) in d.iter().enumerate() {
+                    if let Some(i) = reduced(*node, axis) {
+                        rhs[(i, j)] = *component;
+                    }
+                }
+            }
+            self.llt.solve_in_place(rhs.as_mut());
+            for (k, (node, d)) in points.iter().enumerate() {
+                for j in 0..end - start {
+                    let mut value = 0.0;
+                    for (axis, component) in d.iter().enumerate() {
+                        if let Some(i) = reduced(*node, axis) {
+                            value += component * rhs[(i, j)];
+                        }
+                    }
+                    g[(k, start + j)] = value;
+                }
+            }
+        }
+        g
+    }
+
     pub fn solve(&self, load: &[f64]) -> Vec<f64> {
         self.solve_columns(std::slice::from_ref(&load.to_vec()))
             .pop()

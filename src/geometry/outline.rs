@@ -67,10 +67,16 @@ impl Gear {
         modification: &FlankModification,
     ) -> Point2<f64> {
         let p = self.generated_flank_point(roll_angle);
+        let inward = self.flank_inward_normal(roll_angle);
+        p + modification.deviation(roll_angle) * inward
+    }
+
+    /// Unit normal of the right flank at roll angle ξ pointing into the tooth (−n of the generating
+    /// rack flank, rotated with the gear; the involute's normal, tangent to the base circle).
+    pub fn flank_inward_normal(&self, roll_angle: f64) -> Vector2<f64> {
         let alpha = self.rack.pressure_angle;
         let roll = self.generating_roll_of_flank(roll_angle);
-        let inward = Rotation2::new(roll) * -Vector2::new(alpha.cos(), alpha.sin());
-        p + modification.deviation(roll_angle) * inward
+        Rotation2::new(roll) * -Vector2::new(alpha.cos(), alpha.sin())
     }
 
     /// Point of the right fillet at generating normal angle β (see

@@ -108,14 +108,22 @@ pub fn mesh_gear(gear: &Gear, modification: &FlankModification, spec: &MeshSpec)
         let is_fine = spec.fine_teeth.contains(&tooth);
         let layout = if is_fine { &fine } else { &coarse };
         let rotation = Rotation2::new(tooth as f64 * gear.angular_pitch());
-        let mut ids = |grid: &[Point2<f64>]| -> Vec<usize> {
+        // Q8 has no node at the element centre (odd row and odd column of the grid).
+        let mut ids = |grid: &[Point2<f64>], cols: usize| -> Vec<usize> {
             grid.iter()
-                .map(|p| merger.insert(Point2::from(rotation * p.coords)))
+                .enumerate()
+                .map(|(i, p)| {
+                    if (i / cols) % 2 == 1 && (i % cols) % 2 == 1 {
+                        usize::MAX
+                    } else {
+                        merger.insert(Point2::from(rotation * p.coords))
+                    }
+                })
                 .collect()
         };
-        let tooth_ids = ids(&layout.tooth_grid);
+        let tooth_ids = ids(&layout.tooth_grid, layout.tooth_cols());
         let base_grid = layout.base_grid(&layers);
-        let base_ids = ids(&base_grid);
+        let base_ids = ids(&base_grid, layout.base_top.len());
         for e in grid_elements(&tooth_ids, layout.tooth_rows(), layout.tooth_cols()) {
             elements.push(e);
             element_fine.push(is_fine);

@@ -4,6 +4,7 @@
 //! (or a crash) never sees half a file.
 
 pub mod geometry;
+pub mod ltca;
 pub mod plot;
 pub mod vtk;
 

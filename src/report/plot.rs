@@ -416,3 +416,82 @@ impl Drawing for MeshDrawing {
         self.panel(&right, xr, (cy - hh, cy + hh), "fine teeth [mm]")
     }
 }
+
+/// A line chart of one or more named series.
+pub struct LinePlot {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    pub series: Vec<(String, Vec<(f64, f64)>)>,
+}
+
+impl Drawing for LinePlot {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError> {
+        let err = plot_err::<DrawingAreaErrorKind<DB::ErrorType>>(&self.title);
+        root.fill(&WHITE).map_err(&err)?;
+        let points = self
+            .series
+            .iter()
+            .flat_map(|(_, s)| s.iter())
+            .filter(|p| p.0.is_finite() && p.1.is_finite());
+        let (mut x0, mut x1, mut y0, mut y1) = (
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        );
+        for p in points {
+            x0 = x0.min(p.0);
+            x1 = x1.max(p.0);
+            y0 = y0.min(p.1);
+            y1 = y1.max(p.1);
+        }
+        if !x0.is_finite() {
+            (x0, x1, y0, y1) = (0.0, 1.0, 0.0, 1.0);
+        }
+        let pad = 0.06 * (y1 - y0).max(1e-12 * y1.abs().max(1.0));
+        let mut chart = ChartBuilder::on(root)
+            .caption(&self.title, ("sans-serif", 20))
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(80)
+            .build_cartesian_2d(x0..x1.max(x0 + 1e-12), (y0 - pad)..(y1 + pad))
+            .map_err(&err)?;
+        chart
+            .configure_mesh()
+            .x_desc(&self.x_label)
+            .y_desc(&self.y_label)
+            .axis_desc_style(("sans-serif", 16))
+            .draw()
+            .map_err(&err)?;
+        let palette = [
+            RGBColor(31, 90, 180),
+            RGBColor(200, 50, 40),
+            RGBColor(20, 140, 60),
+            RGBColor(150, 80, 170),
+            RGBColor(230, 140, 20),
+            RGBColor(60, 60, 60),
+        ];
+        for (i, (name, data)) in self.series.iter().enumerate() {
+            let colour = palette[i % palette.len()];
+            chart
+                .draw_series(LineSeries::new(
+                    data.iter().copied().filter(|p| p.1.is_finite()),
+                    colour.stroke_width(2),
+                ))
+                .map_err(&err)?
+                .label(name)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(&err)?;
+        Ok(())
+    }
+}

@@ -1,0 +1,462 @@
+//! Quasi-static loaded tooth contact analysis (LTCA) over one base pitch: static transmission
+//! error, load sharing and the mesh stiffness k(θ) — the stiffness currency of geardyn.
+//!
+//! # Model
+//! * Two elastic FE bodies ([`body::LtcaBody`]) with their bores held; the driver's hub is held at
+//!   θ₁, the driven gear's rigid hub rotation φ carries the load torque T.
+//! * Frictionless node-to-surface contact: the candidate points are the FE nodes of the loaded
+//!   flanks of gear 1's engaging teeth; the opposing surface is gear 2's exact (modified) profile
+//!   of the partner tooth — flank, tip corner and tip — so contact outside the nominal path
+//!   (corner contact under load, or with relief) is found too. For each candidate k:
+//!   ```text
+//!   g₀ₖ = (xₖ − yₖ)·n₂ₖ               initial gap to the closest point yₖ, n₂: gear 2's outward normal
+//!   aₖ  = ((yₖ − O₂) × n₂ₖ)·ẑ        gap closed per unit lag rotation of gear 2 (≈ r_b2)
+//!   C   = G₁ + W G₂ Wᵀ               compliance; W spreads the reaction at yₖ over gear 2's flank
+//!                                    nodes with the quadratic edge shape functions
+//!   ```
+//!   and the contact problem of [`contact`] gives forces F ≥ 0 and the loaded static transmission
+//!   error φ (angular, driven gear lagging) with Σ Fₖ aₖ = T.
+//! * Unloaded transmission error φ₀ = minₖ g₀ₖ/aₖ (first touch; from relief), elastic approach
+//!   δ = r_b2 (φ − φ₀), total normal load W = Σ Fₖ, mesh stiffness k = W / δ.
+//!
+//! Positions: θ₁ = j·(2π/z₁)/N, j = 0 … N−1, starting with tooth 0 of each gear at the pitch
+//! point; the driver's roll angle of tooth 0's contact is ξ = ξ_pitch + θ₁. Only the loaded
+//! (drive-side) flanks are in contact: for T > 0 the back flanks open as the driven gear lags.
+
+pub mod body;
+pub mod contact;
+
+use nalgebra::{DMatrix, DVector, Point2, Rotation2, Vector2};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use crate::fe::FeError;
+use crate::geometry::{FlankModification, GearPair, OutlineResolution, Segment, Side};
+use crate::mesh::MeshSpec;
+use body::{BodyMaterial, LtcaBody};
+use contact::{solve_contact, ContactError};
+
+#[derive(Debug, thiserror::Error)]
+pub enum LtcaError {
+    #[error(
+        "torque_nm = {torque} is invalid: the LTCA needs a load torque > 0 on the driven gear"
+    )]
+    Torque { torque: f64 },
+    #[error("positions = {positions} is invalid: use at least 4 positions per base pitch")]
+    Positions { positions: usize },
+    #[error(transparent)]
+    Fe(#[from] FeError),
+    #[error("contact solve failed at position {position} (driver rotation {rotation_deg:.4}°): {source}")]
+    Contact {
+        position: usize,
+        rotation_deg: f64,
+        #[source]
+        source: ContactError,
+    },
+    #[error("no tooth pair is in contact at position {position}: the geometry leaves a gap everywhere within the search window")]
+    NoContact { position: usize },
+}
+
+/// The two bodies and the geometry an LTCA runs on.
+pub struct LtcaModel {
+    pub pair: GearPair,
+    pub bodies: [LtcaBody; 2],
+    /// Gear 2's loaded-side profile (tooth-local): dense polyline from the tip centre down to the
+    /// root, with the roll angle of flank points.
+    profile: Vec<(Point2<f64>, Segment, Option<f64>)>,
+    /// Tooth pairs (gear-1 tooth, gear-2 tooth) that can engage.
+    pub tooth_pairs: Vec<(usize, usize)>,
+    modifications: [FlankModification; 2],
+}
+
+/// The teeth of each gear that engage while the driver turns one base pitch from the pitch-point
+/// position (tooth 0 of each gear at the pitch point): the leaving, the present and the entering
+/// tooth. Gear-1 tooth k meshes with gear-2 tooth (−k mod z₂).
+pub fn engaging_teeth(pair: &GearPair) -> [Vec<usize>; 2] {
+    let (z1, z2) = (
+        pair.gears[0].teeth() as usize,
+        pair.gears[1].teeth() as usize,
+    );
+    [vec![z1 - 1, 0, 1], vec![1, 0, z2 - 1]]
+}
+
+impl LtcaModel {
+    /// Meshes and factorizes both gears, condenses their flank compliance.
+    pub fn new(
+        pair: &GearPair,
+        modifications: &[FlankModification; 2],
+        mesh_specs: [MeshSpec; 2],
+        material: BodyMaterial,
+    ) -> Result<Self, LtcaError> {
+        let [spec1, spec2] = mesh_specs;
+        let body1 = LtcaBody::new(
+            &pair.gears[0],
+            &modifications[0],
+            &spec1,
+            material,
+            Side::Left,
+        )?;
+        let body2 = LtcaBody::new(
+            &pair.gears[1],
+            &modifications[1],
+            &spec2,
+            material,
+            Side::Left,
+        )?;
+        let res = OutlineResolution {
+            root: 4,
+            fillet: 64,
+            flank: 2000,
+            tip: 16,
+        };
+        let outline = pair.gears[1].tooth_outline(&modifications[1], res);
+        let mid = (outline.len() - 1) / 2;
+        let profile = outline[mid..]
+            .iter()
+            .map(|p| (p.position, p.segment, p.roll_angle))
+            .collect();
+        let z2 = pair.gears[1].teeth() as usize;
+        let tooth_pairs = spec1
+            .fine_teeth
+            .iter()
+            .map(|&t1| (t1, (z2 - t1 % z2) % z2))
+            .filter(|(_, t2)| spec2.fine_teeth.contains(t2))
+            .collect();
+        Ok(LtcaModel {
+            pair: pair.clone(),
+            bodies: [body1, body2],
+            profile,
+            tooth_pairs,
+            modifications: *modifications,
+        })
+    }
+
+    /// Global rotations of the two gears' tooth-local frames at driver rotation θ₁ (unloaded
+    /// kinematics: θ₂ = −(z₁/z₂) θ₁).
+    fn rotations(&self, driver_rotation: f64) -> [f64; 2] {
+        let placement = self.pair.mesh_placement();
+        let ratio = self.pair.gears[0].teeth() as f64 / self.pair.gears[1].teeth() as f64;
+        [
+            placement[0].rotation + driver_rotation,
+            placement[1].rotation - ratio * driver_rotation,
+        ]
+    }
+
+    /// Solves one position.
+    pub fn solve_position(
+        &self,
+        index: usize,
+        positions: usize,
+        torque: f64,
+    ) -> Result<PositionResult, LtcaError> {
+        let pair = &self.pair;
+        let driver_rotation = index as f64 / positions as f64 * pair.gears[0].angular_pitch();
+        let [rot1, rot2] = self.rotations(driver_rotation);
+        let placement = pair.mesh_placement();
+        let (o1, o2) = (placement[0].centre, placement[1].centre);
+        let [body1, body2] = &self.bodies;
+        let gear1 = &pair.gears[0];
+        let aw = pair.operating_pressure_angle;
+        let loa_direction = Vector2::new(aw.sin(), aw.cos());
+        let t1 = pair.loa_point(0.0);
+
+        let mut points: Vec<ContactPoint> = Vec::new();
+        let mut unloaded = f64::INFINITY;
+        for (pair_index, &(tooth1, tooth2)) in self.tooth_pairs.iter().enumerate() {
+            let rotation1 = Rotation2::new(rot1 + tooth1 as f64 * gear1.angular_pitch());
+            let rotation2 = Rotation2::new(rot2 + tooth2 as f64 * pair.gears[1].angular_pitch());
+            let surface: Vec<Point2<f64>> = self
+                .profile
+                .iter()
+                .map(|(p, _, _)| o2 + rotation2 * p.coords)
+                .collect();
+            let nodes1 = tooth_nodes(body1, tooth1);
+            let nodes2 = tooth_nodes(body2, tooth2);
+            let (xi_first, xi_last) = (
+                body1.candidates[nodes1[0]].roll_angle,
+                body1.candidates[*nodes1.last().unwrap()].roll_angle,
+            );
+            // Gear 1's loaded flank point at roll angle ξ, global.
+            let flank_point = |xi: f64| {
+                let p = self.flank1(xi);
+                o1 + rotation1 * p.coords
+            };
+            let probe = |xi: f64| -> Option<Probe> {
+                let x = flank_point(xi);
+                let (segment, t) = closest_segment(&surface, &x)?;
+                let (a, b) = (surface[segment], surface[segment + 1]);
+                let y = a + (b - a) * t;
+                let tangent = (b - a).normalize();
+                let normal = Vector2::new(tangent.y, -tangent.x);
+                let r = y - o2;
+                let arm = r.x * normal.y - r.y * normal.x;
+                (arm > 0.0).then(|| Probe {
+                    gap: (x - y).dot(&normal),
+                    arm,
+                    segment,
+                    t,
+                    y,
+                })
+            };
+            // Geometric contact: the flank point that closes first (min g/a) on a fine grid.
+            let samples = 800;
+            let mut best: Option<(f64, f64)> = None;
+            for i in 0..=samples {
+                let xi = xi_first + (xi_last - xi_first) * i as f64 / samples as f64;
+                if let Some(p) = probe(xi) {
+                    let closing = p.gap / p.arm;
+                    if best.is_none_or(|(_, c)| closing < c) {
+                        best = Some((xi, closing));
+                    }
+                }
+            }
+            let Some((xi_contact, closing)) = best else {
+                continue;
+            };
+            // A pair whose first touch needs more rotation than a tooth can deflect stays open.
+            if closing * pair.gears[1].base_radius > 0.05 * gear1.module() {
+                continue;
+            }
+            unloaded = unloaded.min(closing);
+            // Contact lattice: node spacing, centred on the geometric contact point.
+            let spacing = (xi_last - xi_first) / (nodes1.len() - 1) as f64;
+            for j in -LATTICE_HALF_WIDTH..=LATTICE_HALF_WIDTH {
+                let xi = xi_contact + j as f64 * spacing;
+                if xi < xi_first - 1e-12 || xi > xi_last + 1e-12 {
+                    continue;
+                }
+                let xi = xi.clamp(xi_first, xi_last);
+                let Some(p) = probe(xi) else { continue };
+                points.push(ContactPoint {
+                    pair: pair_index,
+                    gap: p.gap,
+                    arm: p.arm,
+                    loa: (p.y - t1).dot(&loa_direction),
+                    weights1: flank_weights(body1, &nodes1, Some(xi), true),
+                    weights2: self.surface_weights(p.segment, p.t, &nodes2),
+                });
+            }
+        }
+        if points.is_empty() {
+            return Err(LtcaError::NoContact { position: index });
+        }
+
+        let m = points.len();
+        let compliance = DMatrix::from_fn(m, m, |i, j| {
+            let (p, q) = (&points[i], &points[j]);
+            let mut c = 0.0;
+            for (a, wa) in p.weights1 {
+                for (b, wb) in q.weights1 {
+                    c += wa * wb * body1.compliance[(a, b)];
+                }
+            }
+            for (a, wa) in p.weights2 {
+                for (b, wb) in q.weights2 {
+                    c += wa * wb * body2.compliance[(a, b)];
+                }
+            }
+            c
+        });
+        let gaps = DVector::from_iterator(m, points.iter().map(|p| p.gap));
+        let arms = DVector::from_iterator(m, points.iter().map(|p| p.arm));
+        let mut forces = DVector::zeros(m);
+        let solution =
+            solve_contact(&compliance, &gaps, &arms, torque, &mut forces).map_err(|source| {
+                LtcaError::Contact {
+                    position: index,
+                    rotation_deg: driver_rotation.to_degrees(),
+                    source,
+                }
+            })?;
+        let total_force: f64 = forces.iter().sum();
+        let rb2 = pair.gears[1].base_radius;
+        let mut pair_forces = vec![0.0; self.tooth_pairs.len()];
+        let mut pair_moment = vec![0.0; self.tooth_pairs.len()];
+        for (i, p) in points.iter().enumerate() {
+            pair_forces[p.pair] += forces[i];
+            pair_moment[p.pair] += forces[i] * p.loa;
+        }
+        let pair_positions = pair_forces
+            .iter()
+            .zip(&pair_moment)
+            .map(|(f, fm)| if *f > 0.0 { Some(fm / f) } else { None })
+            .collect();
+        let roll_pitch = pair.roll_angle_at(1, pair.contact_points.pitch);
+        Ok(PositionResult {
+            driver_rotation,
+            roll_angle: roll_pitch + driver_rotation,
+            ste: solution.rotation,
+            unloaded_te: unloaded,
+            total_force,
+            pair_forces,
+            pair_positions,
+            mesh_stiffness: total_force / (rb2 * (solution.rotation - unloaded)),
+            kkt_residual: solution.kkt_residual,
+            active_points: forces.iter().filter(|f| **f > 0.0).count(),
+            candidate_points: m,
+            iterations: solution.iterations,
+        })
+    }
+
+    /// Gear 1's loaded (tooth-local left) flank at roll angle ξ, tooth-local frame of tooth 0.
+    fn flank1(&self, roll_angle: f64) -> Point2<f64> {
+        let p = self.pair.gears[0].modified_flank_point(roll_angle, &self.modifications[0]);
+        Point2::new(-p.x, p.y)
+    }
+
+    /// Weights spreading a point of gear 2's surface (segment, parameter) over gear 2's flank
+    /// nodes of that tooth (`nodes`, root to tip): quadratic edge shape functions at the point's
+    /// roll angle; tip points go to the tip-corner node, fillet points to the form-point node.
+    fn surface_weights(&self, segment: usize, t: f64, nodes: &[usize]) -> [(usize, f64); 3] {
+        let (pa, pb) = (&self.profile[segment], &self.profile[segment + 1]);
+        let roll = match (pa.2, pb.2) {
+            (Some(a), Some(b)) => Some(a + (b - a) * t),
+            (Some(a), None) if t < 0.5 => Some(a),
+            (None, Some(b)) if t >= 0.5 => Some(b),
+            _ => None,
+        };
+        let at_tip = pa.1 == Segment::Tip || pb.1 == Segment::Tip;
+        flank_weights(&self.bodies[1], nodes, roll, at_tip)
+    }
+
+    /// Runs the LTCA over one base pitch; `progress` is called with the number of positions done.
+    pub fn run(
+        &self,
+        positions: usize,
+        torque: f64,
+        progress: &(dyn Fn(usize) + Sync),
+    ) -> Result<Vec<PositionResult>, LtcaError> {
+        if !(torque > 0.0 && torque.is_finite()) {
+            return Err(LtcaError::Torque { torque });
+        }
+        if positions < 4 {
+            return Err(LtcaError::Positions { positions });
+        }
+        let done = AtomicUsize::new(0);
+        (0..positions)
+            .into_par_iter()
+            .map(|j| {
+                let result = self.solve_position(j, positions, torque);
+                progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+                result
+            })
+            .collect()
+    }
+}
+
+/// Half the number of lattice points per tooth pair: the lattice spans ±8 node spacings around
+/// the geometric contact point, several times the Hertzian contact width at any sensible mesh.
+const LATTICE_HALF_WIDTH: i32 = 8;
+
+/// A candidate contact point of one position.
+struct ContactPoint {
+    pair: usize,
+    gap: f64,
+    arm: f64,
+    loa: f64,
+    /// Gear 1 / gear 2 flank-node (candidate index) weights.
+    weights1: [(usize, f64); 3],
+    weights2: [(usize, f64); 3],
+}
+
+/// The closest point of gear 2's surface to a gear-1 flank point.
+struct Probe {
+    gap: f64,
+    arm: f64,
+    segment: usize,
+    t: f64,
+    y: Point2<f64>,
+}
+
+/// Candidate indices of `tooth`'s loaded flank, root to tip.
+fn tooth_nodes(body: &LtcaBody, tooth: usize) -> Vec<usize> {
+    (0..body.candidates.len())
+        .filter(|&i| body.candidates[i].tooth == tooth)
+        .collect()
+}
+
+/// Weights of a flank point at roll angle ξ over the flank nodes `nodes` (uniform in ξ, 2n+1
+/// nodes of n quadratic edges): the edge's shape functions [s(s−1)/2, 1−s², s(s+1)/2]. Without a
+/// roll angle the point is beyond the flank: all weight on the tip corner (`at_tip`) or on the
+/// form point.
+fn flank_weights(
+    body: &LtcaBody,
+    nodes: &[usize],
+    roll: Option<f64>,
+    at_tip: bool,
+) -> [(usize, f64); 3] {
+    let last = nodes.len() - 1;
+    let Some(xi) = roll else {
+        let node = if at_tip { nodes[last] } else { nodes[0] };
+        return [(node, 1.0), (node, 0.0), (node, 0.0)];
+    };
+    let (xi_first, xi_last) = (
+        body.candidates[nodes[0]].roll_angle,
+        body.candidates[nodes[last]].roll_angle,
+    );
+    let u = ((xi - xi_first) / (xi_last - xi_first) * last as f64).clamp(0.0, last as f64);
+    let element = ((u / 2.0).floor() as usize).min(last / 2 - 1);
+    let s = u - 2.0 * element as f64 - 1.0;
+    let base = 2 * element;
+    [
+        (nodes[base], 0.5 * s * (s - 1.0)),
+        (nodes[base + 1], 1.0 - s * s),
+        (nodes[base + 2], 0.5 * s * (s + 1.0)),
+    ]
+}
+
+/// Closest point of a polyline to `x`: (segment index, parameter t ∈ [0, 1]). A coarse pass
+/// over every 16th vertex picks the neighbourhood, then the segments within ±64 of it are
+/// searched (the profile's curvature radius is far larger than 16 vertex spacings).
+fn closest_segment(polyline: &[Point2<f64>], x: &Point2<f64>) -> Option<(usize, f64)> {
+    let segments = polyline.len().checked_sub(1)?;
+    let centre = (0..polyline.len())
+        .step_by(16)
+        .min_by(|&i, &j| {
+            (polyline[i] - x)
+                .norm_squared()
+                .total_cmp(&(polyline[j] - x).norm_squared())
+        })
+        .unwrap_or(0);
+    let (from, to) = (centre.saturating_sub(64), (centre + 64).min(segments));
+    let mut best: Option<(usize, f64, f64)> = None;
+    for i in from..to {
+        let (a, b) = (polyline[i], polyline[i + 1]);
+        let d = b - a;
+        let length2 = d.norm_squared();
+        if length2 == 0.0 {
+            continue;
+        }
+        let t = ((x - a).dot(&d) / length2).clamp(0.0, 1.0);
+        let distance = (x - (a + d * t)).norm_squared();
+        if best.is_none_or(|(_, _, b)| distance < b) {
+            best = Some((i, t, distance));
+        }
+    }
+    best.map(|(i, t, _)| (i, t))
+}
+
+/// The LTCA answer at one mesh position.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PositionResult {
+    /// Driver rotation θ₁ from the pitch-point position [rad].
+    pub driver_rotation: f64,
+    /// Driver roll angle of tooth 0's contact, ξ_pitch + θ₁ [rad].
+    pub roll_angle: f64,
+    /// Loaded static transmission error: driven-gear lag φ [rad].
+    pub ste: f64,
+    /// Unloaded transmission error φ₀ (from relief) [rad].
+    pub unloaded_te: f64,
+    /// Total normal contact force W [N].
+    pub total_force: f64,
+    /// Normal force per tooth pair (order of `LtcaModel::tooth_pairs`) [N].
+    pub pair_forces: Vec<f64>,
+    /// Force-weighted contact position of each loaded pair, distance from T1 [m].
+    pub pair_positions: Vec<Option<f64>>,
+    /// Mesh stiffness k = W / (r_b2 (φ − φ₀)) [N/m].
+    pub mesh_stiffness: f64,
+    pub kkt_residual: f64,
+    pub active_points: usize,
+    pub candidate_points: usize,
+    pub iterations: usize,
+}

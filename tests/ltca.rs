@@ -1,0 +1,169 @@
+//! LTCA on the paper's pair with a light mesh (0.4 mm on the engaging flanks, 16 positions):
+//! equilibrium, exact geometry (zero unloaded TE), periodicity, single- vs double-contact
+//! stiffness, the effect of relief, and clear errors.
+
+use std::sync::OnceLock;
+
+use geardyn::case::Case;
+use geardyn::fe::PlaneState;
+use geardyn::ltca::{body::BodyMaterial, engaging_teeth, LtcaError, LtcaModel, PositionResult};
+use geardyn::samples;
+
+const TORQUE: f64 = 143.6;
+const POSITIONS: usize = 16;
+
+fn model(case: &Case, variant: &str) -> LtcaModel {
+    let teeth = engaging_teeth(&case.pair);
+    let spec = |t: Vec<usize>| {
+        let mut s = case.mesh_spec(t);
+        s.fine_size = 0.4e-3;
+        s
+    };
+    let material = BodyMaterial {
+        youngs_modulus: 206e9,
+        poisson_ratio: 0.3,
+        plane: PlaneState::Strain,
+    };
+    let mods = case.relief_variant(variant).unwrap().modifications;
+    LtcaModel::new(
+        &case.pair,
+        &mods,
+        [spec(teeth[0].clone()), spec(teeth[1].clone())],
+        material,
+    )
+    .unwrap()
+}
+
+fn cycle(variant: &'static str) -> &'static (LtcaModel, Vec<PositionResult>) {
+    static NONE: OnceLock<(LtcaModel, Vec<PositionResult>)> = OnceLock::new();
+    static RELIEF: OnceLock<(LtcaModel, Vec<PositionResult>)> = OnceLock::new();
+    let cell = if variant == "none" { &NONE } else { &RELIEF };
+    cell.get_or_init(|| {
+        let case = samples::paper36_case();
+        let m = model(&case, variant);
+        let results = m.run(POSITIONS, TORQUE, &|_| {}).unwrap();
+        (m, results)
+    })
+}
+
+#[test]
+fn loads_balance_the_torque_and_sum_to_t_over_rb() {
+    let (model, results) = cycle("none");
+    let rb2 = model.pair.gears[1].base_radius;
+    for r in results {
+        assert!(r.kkt_residual < 1e-9, "KKT residual {}", r.kkt_residual);
+        // Unmodified involutes: every contact normal lies on the line of action, arm = r_b2.
+        assert!(
+            (r.total_force - TORQUE / rb2).abs() < 1e-3 * TORQUE / rb2,
+            "W = {}",
+            r.total_force
+        );
+        let pair_sum: f64 = r.pair_forces.iter().sum();
+        assert!((pair_sum - r.total_force).abs() < 1e-9 * r.total_force);
+    }
+}
+
+#[test]
+fn unmodified_pair_has_no_unloaded_transmission_error() {
+    let (model, results) = cycle("none");
+    let rb2 = model.pair.gears[1].base_radius;
+    for r in results {
+        assert!(
+            (r.unloaded_te * rb2).abs() < 0.05e-6,
+            "unloaded TE {} um",
+            r.unloaded_te * rb2 * 1e6
+        );
+    }
+}
+
+#[test]
+fn ste_is_periodic_over_one_base_pitch() {
+    let (model, results) = cycle("none");
+    let next = model.solve_position(POSITIONS, POSITIONS, TORQUE).unwrap();
+    let first = &results[0];
+    assert!(
+        ((next.ste - first.ste) / first.ste).abs() < 5e-3,
+        "{} vs {}",
+        next.ste,
+        first.ste
+    );
+    assert!(((next.mesh_stiffness - first.mesh_stiffness) / first.mesh_stiffness).abs() < 5e-3);
+}
+
+#[test]
+fn single_contact_is_softer_than_double_contact() {
+    let (_, results) = cycle("none");
+    let results: &[PositionResult] = results;
+    let loaded_pairs = |r: &PositionResult| {
+        r.pair_forces
+            .iter()
+            .filter(|f| **f > 0.05 * r.total_force)
+            .count()
+    };
+    let single: Vec<f64> = results
+        .iter()
+        .filter(|r| loaded_pairs(r) == 1)
+        .map(|r| r.mesh_stiffness)
+        .collect();
+    let double: Vec<f64> = results
+        .iter()
+        .filter(|r| loaded_pairs(r) == 2)
+        .map(|r| r.mesh_stiffness)
+        .collect();
+    assert!(!single.is_empty() && !double.is_empty());
+    let max_single = single.iter().copied().fold(0.0, f64::max);
+    let min_double = double.iter().copied().fold(f64::INFINITY, f64::min);
+    assert!(
+        max_single < min_double,
+        "single {max_single:e} vs double {min_double:e}"
+    );
+    // Geometrically ε − 1 = 69 % of the cycle has two pairs; under load the deflection brings
+    // the next pair in early and keeps the last one late, so the loaded share is larger.
+    let fraction = double.len() as f64 / results.len() as f64;
+    let geometric = samples::paper36_pair().contact_ratio - 1.0;
+    assert!(
+        fraction >= geometric - 1.0 / POSITIONS as f64 && fraction < 0.95,
+        "double-contact fraction {fraction}"
+    );
+}
+
+#[test]
+fn relief_raises_ste_near_the_transitions_and_opens_unloaded_te() {
+    let (model, relieved) = cycle("tip20-root10");
+    let (_, plain) = cycle("none");
+    let rb2 = model.pair.gears[1].base_radius;
+    // Roll angles are the same grid for both variants.
+    let hpstc = model.pair.flank_roll_angles(1).hpstc;
+    let near = relieved
+        .iter()
+        .zip(plain)
+        .filter(|(r, _)| (r.roll_angle - hpstc).abs() < 1.5_f64.to_radians())
+        .map(|(r, p)| (r.ste - p.ste) * rb2)
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert!(
+        near > 1e-6,
+        "relief raises STE near the HPSTC by only {} um",
+        near * 1e6
+    );
+    let max_unloaded = relieved
+        .iter()
+        .map(|r| r.unloaded_te * rb2)
+        .fold(0.0, f64::max);
+    // Tip relief 20 µm of one gear plus root relief of the other meet in the middle of the
+    // double-contact zone: the unloaded TE stays below their sum.
+    assert!(
+        max_unloaded > 5e-6 && max_unloaded < 30e-6,
+        "unloaded TE {} um",
+        max_unloaded * 1e6
+    );
+}
+
+#[test]
+fn non_positive_torque_is_rejected() {
+    let (model, _) = cycle("none");
+    for torque in [0.0, -10.0, f64::NAN] {
+        let err = model.run(8, torque, &|_| {}).unwrap_err();
+        assert!(matches!(err, LtcaError::Torque { .. }));
+        assert!(err.to_string().contains("torque"));
+    }
+}

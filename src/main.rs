@@ -418,6 +418,40 @@ fn ltca(
         (1200, 700),
         &ste_plot,
     )?;
+    let pe = geardyn::stiffness::potential_energy::potential_energy_table(
+        &case.pair,
+        positions,
+        case.material.youngs_modulus,
+        case.material.poisson_ratio,
+        case.file.fe.plane,
+    );
+    let iso =
+        geardyn::stiffness::iso_6336_method_b(&case.pair, torque, case.material.youngs_modulus);
+    k_series.push((
+        "potential energy (unmodified)".into(),
+        pe.roll_angles
+            .iter()
+            .zip(&pe.stiffness)
+            .map(|(x, k)| (x.to_degrees(), *k))
+            .collect(),
+    ));
+    let (x0, x1) = (
+        pe.roll_angles[0].to_degrees(),
+        pe.roll_angles[positions - 1].to_degrees(),
+    );
+    k_series.push((
+        "ISO 6336-1 c_gamma_alpha * b".into(),
+        vec![(x0, iso.mean_n_per_m), (x1, iso.mean_n_per_m)],
+    ));
+    report::write_csv(
+        &dir.join("stiffness_potential_energy.csv"),
+        &["roll_angle_deg", "mesh_stiffness_n_per_m"],
+        pe.roll_angles
+            .iter()
+            .zip(&pe.stiffness)
+            .map(|(x, k)| vec![format!("{:.6}", x.to_degrees()), format!("{k:.6e}")]),
+    )
+    .context("cannot write stiffness_potential_energy.csv")?;
     let k_plot = report::plot::LinePlot {
         title: format!("{}: mesh stiffness, T = {torque} N·m", case.name()),
         x_label: "driver roll angle [deg]".into(),
@@ -431,8 +465,12 @@ fn ltca(
         &k_plot,
     )?;
 
-    let iso =
-        geardyn::stiffness::iso_6336_method_b(&case.pair, torque, case.material.youngs_modulus);
+    println!(
+        "potential energy: mean {:.4e} N/m (min {:.4e}, max {:.4e})",
+        pe.mean(),
+        pe.min(),
+        pe.max()
+    );
     println!(
         "ISO 6336-1 method B: c_gamma_alpha*b = {:.4e} N/m, c'*b = {:.4e} N/m",
         iso.mean_n_per_m, iso.single_pair_n_per_m
@@ -453,6 +491,9 @@ fn ltca(
         "ste_peak_to_peak_um": first.ste_peak_to_peak_um,
         "iso_c_gamma_n_per_m": iso.mean_n_per_m,
         "iso_c_prime_n_per_m": iso.single_pair_n_per_m,
+        "potential_energy_mean_n_per_m": pe.mean(),
+        "potential_energy_min_n_per_m": pe.min(),
+        "potential_energy_max_n_per_m": pe.max(),
         "elements": first.elements[0] + first.elements[1],
         "wall_s": started.elapsed().as_secs_f64(),
         "variants": summaries,

@@ -13,6 +13,8 @@
 //! face width b they are in N/µm. The standard's model is a solid steel disc gear; it ignores
 //! the bore and the rim/web compliance the FE carries down to the bore.
 
+pub mod potential_energy;
+
 use crate::geometry::GearPair;
 
 /// ISO 6336-1 method B stiffness of a spur pair (SI: N/m).

@@ -24,6 +24,9 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// The whole pipeline built so far on one case: geometry, meshes and LTCA (every relief
+    /// variant), each in its own sub-folder of one output folder.
+    Run(CommonArgs),
     /// Derived geometry of the pair: radii, contact ratio, line of action, contact points,
     /// backlash, resolved reliefs; writes summary.json, a drawing (SVG, PNG) and profile CSVs.
     Geometry(CommonArgs),
@@ -74,6 +77,7 @@ struct CommonArgs {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Run(args) => run(&args),
         Command::Geometry(args) => geometry(&args),
         Command::Mesh { common, relief } => mesh(&common, relief.as_deref()),
         Command::Ltca {
@@ -111,6 +115,23 @@ fn output_dir(out: Option<&Path>, command: &str, case: &Case) -> Result<PathBuf>
         None => report::fresh_output_dir(Path::new("out"), command, case.name())
             .context("cannot create an output folder under out/"),
     }
+}
+
+fn run(args: &CommonArgs) -> Result<()> {
+    let case = load_case(args.case.as_deref())?;
+    let dir = output_dir(args.out.as_deref(), "run", &case)?;
+    let stage = |name: &str| CommonArgs {
+        case: args.case.clone(),
+        out: Some(dir.join(name)),
+    };
+    println!("== geometry");
+    geometry(&stage("geometry"))?;
+    println!("\n== mesh");
+    mesh(&stage("mesh"), None)?;
+    println!("\n== ltca");
+    ltca(&stage("ltca"), None, 64, None)?;
+    println!("\nall outputs in {}", dir.display());
+    Ok(())
 }
 
 fn geometry(args: &CommonArgs) -> Result<()> {

@@ -294,3 +294,33 @@ fn ltca_writes_csv_plots_and_summary() {
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("torque"));
 }
+
+#[test]
+fn run_writes_every_stage() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = write_case(
+        dir.path(),
+        &DEFAULT.replace("fine_element_mm = 0.2", "fine_element_mm = 0.6"),
+    );
+    let out = dir.path().join("run");
+    let output = geardyn()
+        .arg("run")
+        .arg(&case)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    for file in [
+        "geometry/summary.json",
+        "mesh/mesh_gear1.vtk",
+        "ltca/summary.json",
+        "ltca/ltca_tip20-root10.csv",
+    ] {
+        assert!(out.join(file).exists(), "{file}");
+    }
+}

@@ -457,10 +457,18 @@ impl Drawing for LinePlot {
             .y_label_area_size(80)
             .build_cartesian_2d(x0..x1.max(x0 + 1e-12), (y0 - pad)..(y1 + pad))
             .map_err(&err)?;
+        let number = |v: &f64| {
+            if *v != 0.0 && (v.abs() >= 1e5 || v.abs() < 1e-3) {
+                format!("{v:.3e}")
+            } else {
+                format!("{v:.3}")
+            }
+        };
         chart
             .configure_mesh()
             .x_desc(&self.x_label)
             .y_desc(&self.y_label)
+            .y_label_formatter(&number)
             .axis_desc_style(("sans-serif", 16))
             .draw()
             .map_err(&err)?;

@@ -183,6 +183,42 @@ pub fn lumped_mass(nodes: &[Point2<f64>; 8], density: f64, thickness: f64) -> [f
     diag.map(|m| m * mass / sum)
 }
 
+/// Strain energy of the element under a displacement of any size, with the Green–Lagrange
+/// strain (total Lagrangian, St Venant–Kirchhoff material):
+/// ```text
+/// F = I + ∂u/∂X,   E = ½ (Fᵀ F − I),   W = ½ ∫ {E}ᵀ D {E} t dA,   {E} = (E_xx, E_yy, 2E_xy)
+/// ```
+/// E vanishes for every rigid rotation, however large, so W = 0 there; for small displacements
+/// W → ½ uᵀ K_e u. This is the measure the explicit solver's large-rotation check uses.
+pub fn green_lagrange_strain_energy(
+    nodes: &[Point2<f64>; 8],
+    d: &Matrix3<f64>,
+    displacement: &ElementVector,
+    thickness: f64,
+) -> f64 {
+    let mut energy = 0.0;
+    for (xi, wx) in GAUSS_3 {
+        for (eta, wy) in GAUSS_3 {
+            let (b, det) = strain_matrix(nodes, xi, eta);
+            // Displacement gradient from the B matrix rows: b[(0, 2k)] = ∂N_k/∂x, b[(1, 2k+1)] = ∂N_k/∂y.
+            let (mut ux, mut uy, mut vx, mut vy) = (0.0, 0.0, 0.0, 0.0);
+            for k in 0..8 {
+                let (dx, dy) = (b[(0, 2 * k)], b[(1, 2 * k + 1)]);
+                ux += dx * displacement[2 * k];
+                uy += dy * displacement[2 * k];
+                vx += dx * displacement[2 * k + 1];
+                vy += dy * displacement[2 * k + 1];
+            }
+            let e_xx = ux + 0.5 * (ux * ux + vx * vx);
+            let e_yy = vy + 0.5 * (uy * uy + vy * vy);
+            let gamma = uy + vx + ux * uy + vx * vy;
+            let e = Vector3::new(e_xx, e_yy, gamma);
+            energy += 0.5 * e.dot(&(d * e)) * det * wx * wy * thickness;
+        }
+    }
+    energy
+}
+
 /// Stress (σ_xx, σ_yy, τ_xy) at (ξ, η) from the element's nodal displacements.
 pub fn stress(
     nodes: &[Point2<f64>; 8],
@@ -254,6 +290,45 @@ mod tests {
             sorted[3] > 1e-6 * scale,
             "a spurious zero-energy mode: {sorted:?}"
         );
+    }
+
+    /// A rigid rotation of any angle stores no Green–Lagrange strain energy; a small stretch
+    /// stores ½ uᵀ K u.
+    #[test]
+    fn finite_rotation_has_zero_green_lagrange_energy() {
+        let nodes = square();
+        let d = elasticity_matrix(206e9, 0.3, PlaneState::Strain);
+        for angle in [1e-3, 0.3, 1.0, 2.5, 3.14159, 5.0] {
+            let (s, c) = f64::sin_cos(angle);
+            let u = ElementVector::from_fn(|i, _| {
+                let p = nodes[i / 2];
+                let rotated = (c * p.x - s * p.y, s * p.x + c * p.y);
+                if i % 2 == 0 {
+                    rotated.0 - p.x
+                } else {
+                    rotated.1 - p.y
+                }
+            });
+            let w = green_lagrange_strain_energy(&nodes, &d, &u, 0.01);
+            // Against the energy of a unit strain over the element; round-off in E is ~1e-16, so
+            // W is ~1e-32 of it. Linear strain would give (1 − cos θ)² of it instead.
+            let unit_strain_energy: f64 = 0.5 * 206e9 * 2.0 * 0.01;
+            assert!(
+                w.abs() < 1e-24 * unit_strain_energy,
+                "angle {angle}: W = {w:e}"
+            );
+        }
+        let u = ElementVector::from_fn(|i, _| {
+            if i % 2 == 0 {
+                1e-7 * nodes[i / 2].x
+            } else {
+                0.0
+            }
+        });
+        let k = stiffness(&nodes, &d, 0.01);
+        let linear = 0.5 * u.dot(&(k * u));
+        let w = green_lagrange_strain_energy(&nodes, &d, &u, 0.01);
+        assert!(((w - linear) / linear).abs() < 1e-6, "{w:e} vs {linear:e}");
     }
 
     #[test]

@@ -196,6 +196,17 @@ mod tests {
         assert!((f[0] - 2000.0).abs() < 1e-9);
     }
 
+    #[test]
+    fn no_candidate_with_a_moment_arm_is_a_clear_error() {
+        let c = DMatrix::from_diagonal(&DVector::from_vec(vec![1e-9, 1e-9]));
+        let g0 = DVector::zeros(2);
+        let a = DVector::from_vec(vec![-0.05, 0.0]);
+        let mut f = DVector::zeros(2);
+        let err = solve_contact(&c, &g0, &a, 100.0, &mut f).unwrap_err();
+        assert_eq!(err, ContactError::NoCandidate);
+        assert!(err.to_string().contains("no candidate"));
+    }
+
     /// Against brute force: every subset of active points, keep the one that satisfies all KKT
     /// conditions; it must equal the active-set answer.
     #[test]

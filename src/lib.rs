@@ -14,6 +14,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod case;
+pub mod explicit;
 pub mod fe;
 pub mod geometry;
 pub mod ltca;

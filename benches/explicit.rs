@@ -1,0 +1,61 @@
+//! Cost of the explicit kernel: corotational internal forces of one gear body at the default
+//! mesh (one core), reported per element per step.
+
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use geardyn::explicit::body::{ExplicitBody, ExplicitMaterial};
+use geardyn::fe::PlaneState;
+use geardyn::ltca::engaging_teeth;
+use geardyn::mesh::mesh_gear;
+use geardyn::samples;
+use std::hint::black_box;
+
+fn explicit(c: &mut Criterion) {
+    let case = samples::paper36_case();
+    let gear = &case.pair.gears[0];
+    let mods = case.relief_variant("none").unwrap().modifications;
+    let mesh = mesh_gear(
+        gear,
+        &mods[0],
+        &case.mesh_spec(engaging_teeth(&case.pair)[0].clone()),
+    );
+    let material = ExplicitMaterial {
+        youngs_modulus: case.material.youngs_modulus,
+        poisson_ratio: case.material.poisson_ratio,
+        density: case.material.density,
+        plane: PlaneState::Strain,
+        thickness: gear.spec.face_width,
+    };
+    let body = ExplicitBody::new(&mesh.nodes, &mesh.elements, material).unwrap();
+    let (s, co) = 0.3_f64.sin_cos();
+    let x: Vec<f64> = mesh
+        .nodes
+        .iter()
+        .flat_map(|p| [co * p.x - s * p.y + 1e-7, s * p.x + co * p.y])
+        .collect();
+    let v = vec![1e-3; x.len()];
+    let mut force = vec![0.0; x.len()];
+    let mut group = c.benchmark_group("explicit_paper36_default_mesh");
+    group.throughput(Throughput::Elements(mesh.elements.len() as u64));
+    group.bench_function("internal_forces_one_gear", |b| {
+        b.iter(|| {
+            force.iter_mut().for_each(|f| *f = 0.0);
+            body.internal_forces(black_box(&x), &v, 0.0, &mut force)
+        })
+    });
+    group.bench_function("internal_and_damping_forces_one_gear", |b| {
+        b.iter(|| {
+            force.iter_mut().for_each(|f| *f = 0.0);
+            body.internal_forces(black_box(&x), &v, 1e-8, &mut force)
+        })
+    });
+    group.finish();
+    eprintln!(
+        "elements {}, paper L/c {:.4e} s, element eigenvalue bound {:.4e} s",
+        mesh.elements.len(),
+        body.paper_critical_step(),
+        body.element_eigen_critical_step()
+    );
+}
+
+criterion_group!(benches, explicit);
+criterion_main!(benches);

@@ -11,7 +11,10 @@
 //! * **Base block**: from the bore up to the curve root arc → lower fillet → chord → lower fillet
 //!   → root arc, meshed along radial rays through the nodes of that curve, with layers that thin
 //!   geometrically towards the root (one layer distribution for all sectors, so neighbouring
-//!   sectors share the nodes of their common radial edge).
+//!   sectors share the nodes of their common radial edge). Going down, three columns that have
+//!   become narrow against the layer thickness merge into one through a 3-to-1 transition unit,
+//!   so the fine columns under an engaging tooth do not run as slivers down to the bore (they
+//!   would set the explicit time step and waste DOFs).
 //!
 //! Splitting the fillet at F* keeps the corners of both blocks well away from 180° (the fillet
 //! meets the root circle tangentially). Coincident nodes of neighbouring blocks are merged.
@@ -122,14 +125,12 @@ pub fn mesh_gear(gear: &Gear, modification: &FlankModification, spec: &MeshSpec)
                 .collect()
         };
         let tooth_ids = ids(&layout.tooth_grid, layout.tooth_cols());
-        let base_grid = layout.base_grid(&layers);
-        let base_ids = ids(&base_grid, layout.base_top.len());
         for e in grid_elements(&tooth_ids, layout.tooth_rows(), layout.tooth_cols()) {
             elements.push(e);
             element_fine.push(is_fine);
         }
-        for e in grid_elements(&base_ids, layers.len(), layout.base_top.len()) {
-            elements.push(e);
+        for points in layout.base_elements(&layers) {
+            elements.push(points.map(|p| merger.insert(Point2::from(rotation * p.coords))));
             element_fine.push(is_fine);
         }
         let cols = layout.tooth_cols();
@@ -186,7 +187,7 @@ fn grid_elements(ids: &[usize], rows: usize, cols: usize) -> Vec<[usize; 8]> {
     out
 }
 
-/// Radial layer fractions of the base block, from the top (1) to the bore (0), with midpoints.
+/// Radial layer fractions g of the base block, from the top (1) to the bore (0).
 /// The first layer below the root is `top_size` thick; layers grow by [`GROWTH`] up to 2.5 times
 /// the width of a coarse sector's columns at that radius.
 fn base_layers(gear: &Gear, top_size: f64, coarse: &SectorLayout) -> Vec<f64> {
@@ -214,7 +215,7 @@ fn base_layers(gear: &Gear, top_size: f64, coarse: &SectorLayout) -> Vec<f64> {
         fractions.push((1.0 - acc / total).max(0.0));
     }
     *fractions.last_mut().expect("layers") = 0.0;
-    with_midpoints(&fractions)
+    fractions
 }
 
 /// The node grids of one tooth sector (tooth 0), for one element size.
@@ -356,19 +357,92 @@ impl SectorLayout {
         self.tooth_grid.len() / self.tooth_cols
     }
 
-    /// Base block grid, row-major: rows from the top curve down to the bore.
-    fn base_grid(&self, layers: &[f64]) -> Vec<Point2<f64>> {
-        // Along the ray through each top node: r = r_bore + (|p| − r_bore)·g.
-        let bore = self.bore_radius;
-        let mut grid = Vec::with_capacity(layers.len() * self.base_top.len());
-        for (k, g) in layers.iter().enumerate() {
-            for p in &self.base_top {
-                let r = p.coords.norm();
-                let scaled = Point2::from(p.coords * ((bore + (r - bore) * g) / r));
-                grid.push(if k == 0 { *p } else { scaled });
-            }
+    /// Base-block node on the ray through top-curve grid point `index` (corner column c is index
+    /// 2c, the mid-side between c and c+1 is 2c+1) at layer fraction g: r = r_bore + (|p| − r_bore)·g.
+    fn base_point(&self, index: usize, g: f64) -> Point2<f64> {
+        let p = self.base_top[index];
+        if g == 1.0 {
+            return p;
         }
-        grid
+        let r = p.coords.norm();
+        Point2::from(p.coords * ((self.bore_radius + (r - self.bore_radius) * g) / r))
+    }
+
+    /// Base-block elements (8 node positions each) from the top curve down to the bore, layer by
+    /// layer. Where three neighbouring columns have become narrow against the layer thickness
+    /// (their joint width below twice the layer), a 3-to-1 transition unit merges them:
+    /// ```text
+    ///   T0 ── T1 ── T2 ── T3        four quads: T0 T1 I1 B0 | T1 T2 I2 I1 | T2 T3 B1 I2 | I1 I2 B1 B0
+    ///   │     │     │     │         I1, I2 half-way down the layer below T1, T2
+    ///   │     I1 ── I2    │         the unit's side edges T0–B0 and T3–B1 are ordinary column
+    ///   │   ╱         ╲   │         edges, so units and plain columns sit side by side and the
+    ///   B0 ───────────── B1         neighbouring sector sees the same radial edge.
+    /// ```
+    /// Mid-side nodes of edges along a ray or across columns lie on the ray through the
+    /// corresponding top-curve grid point (column indices ca, cb → grid index ca + cb), so two
+    /// elements sharing an edge compute the same node; the slanted edges take the straight
+    /// midpoint.
+    fn base_elements(&self, layers: &[f64]) -> Vec<[Point2<f64>; 8]> {
+        let columns = self.base_top.len() / 2;
+        let mut active: Vec<usize> = (0..=columns).collect();
+        let mut out = Vec::new();
+        let depth = self.base_top[0].coords.norm() - self.bore_radius;
+        let mid = |a: Point2<f64>, b: Point2<f64>| Point2::from((a.coords + b.coords) * 0.5);
+        for (k, w) in layers.windows(2).enumerate() {
+            let (gt, gb) = (w[0], w[1]);
+            let gm = 0.5 * (gt + gb);
+            let thickness = depth * (gt - gb);
+            let at = |c: usize, g: f64| self.base_point(2 * c, g);
+            let on = |index: usize, g: f64| self.base_point(index, g);
+            // Mid-side of an edge across columns ca–cb at fraction g: the top curve's own mid-side
+            // for neighbouring columns (the top row follows the fillet exactly), else the polar
+            // midpoint of the two ends, which both elements sharing the edge compute alike.
+            let across = |ca: usize, cb: usize, g: f64| {
+                if ca.abs_diff(cb) == 1 {
+                    return on(ca + cb, g);
+                }
+                let (a, b) = (at(ca, g), at(cb, g));
+                let angle = 0.5 * (a.x.atan2(a.y) + b.x.atan2(b.y));
+                let radius = 0.5 * (a.coords.norm() + b.coords.norm());
+                Point2::new(radius * angle.sin(), radius * angle.cos())
+            };
+            let mut next = vec![active[0]];
+            let mut i = 0;
+            while i + 1 < active.len() {
+                let merge = k >= 2
+                    && i + 3 < active.len()
+                    && (at(active[i + 3], gb) - at(active[i], gb)).norm() <= 2.0 * thickness;
+                if merge {
+                    let [c0, c1, c2, c3] = [active[i], active[i + 1], active[i + 2], active[i + 3]];
+                    let (t0, t1, t2, t3) = (at(c0, gt), at(c1, gt), at(c2, gt), at(c3, gt));
+                    let (i1, i2) = (at(c1, gm), at(c2, gm));
+                    let (b0, b1) = (at(c0, gb), at(c3, gb));
+                    let half = 0.5 * (gt + gm);
+                    out.push([t0, t1, i1, b0, across(c0, c1, gt), on(2 * c1, half), mid(i1, b0), on(2 * c0, gm)]);
+                    out.push([t1, t2, i2, i1, across(c1, c2, gt), on(2 * c2, half), across(c1, c2, gm), on(2 * c1, half)]);
+                    out.push([t2, t3, b1, i2, across(c2, c3, gt), on(2 * c3, gm), mid(b1, i2), on(2 * c2, half)]);
+                    out.push([i1, i2, b1, b0, across(c1, c2, gm), mid(i2, b1), across(c0, c3, gb), mid(b0, i1)]);
+                    next.push(c3);
+                    i += 3;
+                } else {
+                    let (ca, cb) = (active[i], active[i + 1]);
+                    out.push([
+                        at(ca, gt),
+                        at(cb, gt),
+                        at(cb, gb),
+                        at(ca, gb),
+                        across(ca, cb, gt),
+                        on(2 * cb, gm),
+                        across(ca, cb, gb),
+                        on(2 * ca, gm),
+                    ]);
+                    next.push(cb);
+                    i += 1;
+                }
+            }
+            active = next;
+        }
+        out
     }
 }
 

@@ -25,7 +25,18 @@ fn explicit(c: &mut Criterion) {
         plane: PlaneState::Strain,
         thickness: gear.spec.face_width,
     };
-    let body = ExplicitBody::new(&mesh.nodes, &mesh.elements, material).unwrap();
+    let body = ExplicitBody::with_symmetry(
+        &mesh.nodes,
+        &mesh.elements,
+        material,
+        Some(gear.teeth() as usize),
+    )
+    .unwrap();
+    eprintln!(
+        "prototypes {} for {} elements",
+        body.prototypes.len(),
+        mesh.elements.len()
+    );
     let (s, co) = 0.3_f64.sin_cos();
     let x: Vec<f64> = mesh
         .nodes

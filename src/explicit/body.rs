@@ -4,16 +4,15 @@
 //! For each element, with reference nodes X, current nodes x and centroids X_c, x_c:
 //! ```text
 //! F_c = ∂x/∂X at the element centre,   R = rotation of the polar decomposition F_c = R U
-//!       (2D: angle atan2(F₂₁ − F₁₂, F₁₁ + F₂₂))
+//!       (2D: (cos, sin) ∝ (F₁₁ + F₂₂, F₂₁ − F₁₂))
 //! u_loc = Rᵀ (x − x_c) − (X − X_c)        deformation in the element's rotated frame
 //! f_int = R K_e u_loc                      K_e the linear Q8 stiffness in the reference frame
 //! ```
 //! A rigid motion x = x₀ + Q X gives R = Q and u_loc = 0, so no force and no strain energy; small
 //! deformations give f_int = K u. Strain energy ½ u_locᵀ K_e u_loc per element. Stiffness-
-//! proportional damping acts on the deformation rate only, v_loc = Rᵀ(v − v_c) − ω×…, written as
-//! f_d = R (β_K K_e) Rᵀ (v − v̄) with v̄ the element's rigid-body velocity part removed by K_e's
-//! null space (K_e annihilates translations and, to first order, the spin), so a spinning gear is
-//! not braked.
+//! proportional damping f_d = R (β_K K_e) Rᵀ (v − v_c) acts on the deformation rate only: K_e
+//! annihilates the translation and, to first order, the spin part of the velocity, so a spinning
+//! gear is not braked.
 
 use nalgebra::{Matrix2, Point2, Vector2};
 
@@ -30,16 +29,34 @@ pub struct ExplicitMaterial {
     pub thickness: f64,
 }
 
+/// The shared data of congruent elements: stiffness, centre gradients and node offsets from the
+/// centroid, all in the prototype's reference frame.
+pub struct Prototype {
+    pub stiffness: ElementMatrix,
+    /// ∂N/∂X at the element centre (prototype frame), for the deformation gradient.
+    centre_gradients: [Vector2<f64>; 8],
+    /// Reference node positions minus the centroid of the 8 nodes (prototype frame).
+    offsets: [Vector2<f64>; 8],
+}
+
 /// Precomputed element data and nodal masses.
+///
+/// A gear's sectors are rotated copies of a few layouts. With `symmetry = Some(z)`, elements that
+/// are the same element turned by a multiple of 2π/z share one [`Prototype`]: the corotational
+/// frame absorbs the sector rotation (F is taken against the prototype's coordinates, so its
+/// rotation R includes the turn), and the stiffness data stay cache-resident instead of being
+/// streamed from memory every step.
 pub struct ExplicitBody {
     pub reference: Vec<Point2<f64>>,
     pub elements: Vec<[usize; 8]>,
-    /// K_e per element (reference frame).
-    pub stiffness: Vec<ElementMatrix>,
+    /// Prototype index of each element.
+    pub prototype_of: Vec<u32>,
+    /// Elements in prototype order: consecutive elements share their matrix, which then stays in
+    /// the L1 cache.
+    order: Vec<u32>,
+    pub prototypes: Vec<Prototype>,
     /// Lumped mass per node (both directions) [kg].
     pub mass: Vec<f64>,
-    /// Shape-function derivatives ∂N/∂X at each element centre, for the deformation gradient.
-    centre_gradients: Vec<[Vector2<f64>; 8]>,
     pub material: ExplicitMaterial,
 }
 
@@ -53,10 +70,21 @@ pub struct ForceOutput {
 }
 
 impl ExplicitBody {
+    /// Body without symmetry: one prototype per element.
     pub fn new(
         nodes: &[Point2<f64>],
         elements: &[[usize; 8]],
         material: ExplicitMaterial,
+    ) -> Result<Self, FeError> {
+        Self::with_symmetry(nodes, elements, material, None)
+    }
+
+    /// Body whose congruent elements under rotation by k·2π/z share their data.
+    pub fn with_symmetry(
+        nodes: &[Point2<f64>],
+        elements: &[[usize; 8]],
+        material: ExplicitMaterial,
+        symmetry: Option<usize>,
     ) -> Result<Self, FeError> {
         crate::fe::assembly::check_elements(nodes, elements)?;
         let d = elasticity_matrix(
@@ -65,30 +93,75 @@ impl ExplicitBody {
             material.plane,
         );
         let mut mass = vec![0.0; nodes.len()];
-        let mut stiffness = Vec::with_capacity(elements.len());
-        let mut centre_gradients = Vec::with_capacity(elements.len());
+        let mut prototypes = Vec::new();
+        let mut prototype_of = Vec::with_capacity(elements.len());
+        let mut index = std::collections::HashMap::new();
+        let scale = nodes
+            .iter()
+            .map(|p| p.coords.norm())
+            .fold(0.0, f64::max)
+            .max(1e-12);
         for e in elements {
             let xe = e.map(|i| nodes[i]);
-            stiffness.push(q8::stiffness(&xe, &d, material.thickness));
             for (k, m) in q8::lumped_mass(&xe, material.density, material.thickness)
                 .iter()
                 .enumerate()
             {
                 mass[e[k]] += m;
             }
-            centre_gradients.push(centre_gradient(&xe));
+            // Turn the element back into sector 0 (tooth-local frame: tooth k at k·2π/z).
+            let local = match symmetry {
+                Some(z) => {
+                    let pitch = 2.0 * std::f64::consts::PI / z as f64;
+                    let c = xe.iter().fold(Vector2::zeros(), |a, p| a + p.coords) / 8.0;
+                    let sector = ((-c.x).atan2(c.y) / pitch).round();
+                    let back = nalgebra::Rotation2::new(-sector * pitch);
+                    xe.map(|p| Point2::from(back * p.coords))
+                }
+                None => xe,
+            };
+            // Congruent elements agree to round-off; quantize at 1e-9 of the body size.
+            let key: Vec<i64> = match symmetry {
+                Some(_) => local
+                    .iter()
+                    .flat_map(|p| {
+                        [
+                            (p.x / scale * 1e9).round() as i64,
+                            (p.y / scale * 1e9).round() as i64,
+                        ]
+                    })
+                    .collect(),
+                None => vec![prototype_of.len() as i64],
+            };
+            let id = *index.entry(key).or_insert_with(|| {
+                let centroid = local.iter().fold(Vector2::zeros(), |a, p| a + p.coords) / 8.0;
+                prototypes.push(Prototype {
+                    stiffness: q8::stiffness(&local, &d, material.thickness),
+                    centre_gradients: centre_gradient(&local),
+                    offsets: local.map(|p| p.coords - centroid),
+                });
+                prototypes.len() - 1
+            });
+            prototype_of.push(id as u32);
         }
+        let mut order: Vec<u32> = (0..elements.len() as u32).collect();
+        order.sort_by_key(|&e| prototype_of[e as usize]);
         Ok(ExplicitBody {
             reference: nodes.to_vec(),
             elements: elements.to_vec(),
-            stiffness,
+            prototype_of,
+            order,
+            prototypes,
             mass,
-            centre_gradients,
             material,
         })
     }
 
-    /// Dilatational wave speed c = √(E(1−ν)/((1+ν)(1−2ν)ρ)) (seed paper eq. 31; plane strain;
+    /// The element's stiffness matrix in its prototype frame.
+    pub fn element_stiffness(&self, element: usize) -> &ElementMatrix {
+        &self.prototypes[self.prototype_of[element] as usize].stiffness
+    }
+
     /// plane stress uses √(E/((1−ν²)ρ))).
     pub fn wave_speed(&self) -> f64 {
         let m = &self.material;
@@ -122,7 +195,7 @@ impl ExplicitBody {
         for (index, e) in self.elements.iter().enumerate() {
             let xe = e.map(|i| self.reference[i]);
             let m = q8::lumped_mass(&xe, self.material.density, self.material.thickness);
-            let k = &self.stiffness[index];
+            let k = self.element_stiffness(index);
             let scaled = ElementMatrix::from_fn(|i, j| k[(i, j)] / (m[i / 2] * m[j / 2]).sqrt());
             let max = scaled
                 .symmetric_eigenvalues()
@@ -137,6 +210,10 @@ impl ExplicitBody {
     /// Internal (and damping) forces at positions `x` and velocities `v` (2 per node), added into
     /// `force` as −(f_int + f_damp); returns strain energy and damping power. `beta_k` is the
     /// stiffness-proportional damping coefficient [s].
+
+    /// Internal (and damping) forces at positions `x` and velocities `v` (2 per node), added into
+    /// `force` as −(f_int + f_damp); returns strain energy and damping power. `beta_k` is the
+    /// stiffness-proportional damping coefficient [s].
     pub fn internal_forces(
         &self,
         x: &[f64],
@@ -145,48 +222,53 @@ impl ExplicitBody {
         force: &mut [f64],
     ) -> ForceOutput {
         let mut out = ForceOutput::default();
-        for (index, e) in self.elements.iter().enumerate() {
-            let grads = &self.centre_gradients[index];
-            // Deformation gradient at the centre and its rotation.
-            let mut f = Matrix2::zeros();
-            for k in 0..8 {
-                let xk = Vector2::new(x[2 * e[k]], x[2 * e[k] + 1]);
-                f += xk * grads[k].transpose();
-            }
-            let angle = (f[(1, 0)] - f[(0, 1)]).atan2(f[(0, 0)] + f[(1, 1)]);
-            let (s, c) = angle.sin_cos();
-            // Centroids of the 8 nodes (consistent with the corner/mid-side layout).
-            let (mut xc, mut yc, mut rx, mut ry) = (0.0, 0.0, 0.0, 0.0);
-            for &n in e {
-                xc += x[2 * n];
-                yc += x[2 * n + 1];
-                rx += self.reference[n].x;
-                ry += self.reference[n].y;
-            }
-            let (xc, yc, rx, ry) = (xc / 8.0, yc / 8.0, rx / 8.0, ry / 8.0);
-            let mut u_loc = ElementVector::zeros();
-            let mut v_loc = ElementVector::zeros();
-            let (mut vcx, mut vcy) = (0.0, 0.0);
-            for &n in e {
-                vcx += v[2 * n] / 8.0;
-                vcy += v[2 * n + 1] / 8.0;
-            }
+        for &index in &self.order {
+            let e = &self.elements[index as usize];
+            let proto = &self.prototypes[self.prototype_of[index as usize] as usize];
+            let mut xs = [0.0; 16];
             for (k, &n) in e.iter().enumerate() {
-                let (dx, dy) = (x[2 * n] - xc, x[2 * n + 1] - yc);
-                // Rᵀ d
-                u_loc[2 * k] = c * dx + s * dy - (self.reference[n].x - rx);
-                u_loc[2 * k + 1] = -s * dx + c * dy - (self.reference[n].y - ry);
-                if beta_k > 0.0 {
+                xs[2 * k] = x[2 * n];
+                xs[2 * k + 1] = x[2 * n + 1];
+            }
+            // Deformation gradient at the centre against the prototype frame and its rotation.
+            let (mut f11, mut f12, mut f21, mut f22) = (0.0, 0.0, 0.0, 0.0);
+            let (mut xc, mut yc) = (0.0, 0.0);
+            for k in 0..8 {
+                let g = proto.centre_gradients[k];
+                let (px, py) = (xs[2 * k], xs[2 * k + 1]);
+                f11 += px * g.x;
+                f12 += px * g.y;
+                f21 += py * g.x;
+                f22 += py * g.y;
+                xc += px;
+                yc += py;
+            }
+            let (xc, yc) = (xc / 8.0, yc / 8.0);
+            let (a, b) = (f11 + f22, f21 - f12);
+            let norm = a.hypot(b);
+            let (c, s) = (a / norm, b / norm);
+            let mut u_loc = ElementVector::zeros();
+            for k in 0..8 {
+                let (dx, dy) = (xs[2 * k] - xc, xs[2 * k + 1] - yc);
+                u_loc[2 * k] = c * dx + s * dy - proto.offsets[k].x;
+                u_loc[2 * k + 1] = -s * dx + c * dy - proto.offsets[k].y;
+            }
+            let mut f_loc = proto.stiffness * u_loc;
+            out.strain_energy += 0.5 * u_loc.dot(&f_loc);
+            if beta_k > 0.0 {
+                let (mut vcx, mut vcy) = (0.0, 0.0);
+                for &n in e {
+                    vcx += v[2 * n];
+                    vcy += v[2 * n + 1];
+                }
+                let (vcx, vcy) = (vcx / 8.0, vcy / 8.0);
+                let mut v_loc = ElementVector::zeros();
+                for (k, &n) in e.iter().enumerate() {
                     let (wx, wy) = (v[2 * n] - vcx, v[2 * n + 1] - vcy);
                     v_loc[2 * k] = c * wx + s * wy;
                     v_loc[2 * k + 1] = -s * wx + c * wy;
                 }
-            }
-            let k_e = &self.stiffness[index];
-            let mut f_loc = k_e * u_loc;
-            out.strain_energy += 0.5 * u_loc.dot(&f_loc);
-            if beta_k > 0.0 {
-                let f_damp = k_e * v_loc * beta_k;
+                let f_damp = proto.stiffness * v_loc * beta_k;
                 out.damping_power += v_loc.dot(&f_damp);
                 f_loc += f_damp;
             }

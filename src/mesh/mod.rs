@@ -418,10 +418,46 @@ impl SectorLayout {
                     let (i1, i2) = (at(c1, gm), at(c2, gm));
                     let (b0, b1) = (at(c0, gb), at(c3, gb));
                     let half = 0.5 * (gt + gm);
-                    out.push([t0, t1, i1, b0, across(c0, c1, gt), on(2 * c1, half), mid(i1, b0), on(2 * c0, gm)]);
-                    out.push([t1, t2, i2, i1, across(c1, c2, gt), on(2 * c2, half), across(c1, c2, gm), on(2 * c1, half)]);
-                    out.push([t2, t3, b1, i2, across(c2, c3, gt), on(2 * c3, gm), mid(b1, i2), on(2 * c2, half)]);
-                    out.push([i1, i2, b1, b0, across(c1, c2, gm), mid(i2, b1), across(c0, c3, gb), mid(b0, i1)]);
+                    out.push([
+                        t0,
+                        t1,
+                        i1,
+                        b0,
+                        across(c0, c1, gt),
+                        on(2 * c1, half),
+                        mid(i1, b0),
+                        on(2 * c0, gm),
+                    ]);
+                    out.push([
+                        t1,
+                        t2,
+                        i2,
+                        i1,
+                        across(c1, c2, gt),
+                        on(2 * c2, half),
+                        across(c1, c2, gm),
+                        on(2 * c1, half),
+                    ]);
+                    out.push([
+                        t2,
+                        t3,
+                        b1,
+                        i2,
+                        across(c2, c3, gt),
+                        on(2 * c3, gm),
+                        mid(b1, i2),
+                        on(2 * c2, half),
+                    ]);
+                    out.push([
+                        i1,
+                        i2,
+                        b1,
+                        b0,
+                        across(c1, c2, gm),
+                        mid(i2, b1),
+                        across(c0, c3, gb),
+                        mid(b0, i1),
+                    ]);
                     next.push(c3);
                     i += 3;
                 } else {

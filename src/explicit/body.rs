@@ -210,10 +210,6 @@ impl ExplicitBody {
     /// Internal (and damping) forces at positions `x` and velocities `v` (2 per node), added into
     /// `force` as −(f_int + f_damp); returns strain energy and damping power. `beta_k` is the
     /// stiffness-proportional damping coefficient [s].
-
-    /// Internal (and damping) forces at positions `x` and velocities `v` (2 per node), added into
-    /// `force` as −(f_int + f_damp); returns strain energy and damping power. `beta_k` is the
-    /// stiffness-proportional damping coefficient [s].
     pub fn internal_forces(
         &self,
         x: &[f64],

@@ -12,6 +12,8 @@
 
 // Input checks are written `!(x > limit)` on purpose: a NaN must fail them.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
+// Units are written in brackets, [m] or [N/m], as the docs of every quantity do; they are not links.
+#![allow(rustdoc::broken_intra_doc_links)]
 
 pub mod case;
 pub mod explicit;

@@ -6,9 +6,9 @@
 //! ```
 //! (the damping force uses v_{n+½}, which keeps the scheme explicit). Stable for
 //! Δt ≤ Δt_cr = 2/ω_max, ω_max² the largest eigenvalue of M⁻¹K; [`critical_step`] measures it by
-//! power iteration, [`ExplicitBody::element_critical_step`] estimates it per element.
+//! power iteration, [`ExplicitBody::element_eigen_critical_step`] bounds it per element.
 
-use super::body::ExplicitBody;
+use super::body::{ExplicitBody, ForceOutput};
 
 /// Positions, velocities and accelerations of all DOFs (2 per node).
 #[derive(Debug, Clone)]
@@ -134,14 +134,19 @@ impl<'a> CentralDifference<'a> {
         }
     }
 
-    /// Initial accelerations and energies for a state.
-    pub fn initialize(&mut self, state: &mut State, external: &dyn Fn(f64, &mut [f64])) {
+    /// Net nodal forces f_ext − f_int − f_damp at the state's time, positions and velocities,
+    /// into `self.force` (external part kept in `self.external`).
+    fn net_forces(&mut self, state: &State, external: &dyn Fn(f64, &mut [f64])) -> ForceOutput {
         self.external.iter_mut().for_each(|f| *f = 0.0);
         external(state.time, &mut self.external);
         self.force.copy_from_slice(&self.external);
-        let out = self
-            .body
-            .internal_forces(&state.x, &state.v, self.beta_k, &mut self.force);
+        self.body
+            .internal_forces(&state.x, &state.v, self.beta_k, &mut self.force)
+    }
+
+    /// Initial accelerations and energies for a state.
+    pub fn initialize(&mut self, state: &mut State, external: &dyn Fn(f64, &mut [f64])) {
+        let out = self.net_forces(state, external);
         for d in 0..state.a.len() {
             state.a[d] = if self.fixed[d] {
                 0.0
@@ -174,12 +179,7 @@ impl<'a> CentralDifference<'a> {
             state.x[d] += dx;
         }
         state.time += dt;
-        self.external.iter_mut().for_each(|f| *f = 0.0);
-        external(state.time, &mut self.external);
-        self.force.copy_from_slice(&self.external);
-        let out = self
-            .body
-            .internal_forces(&state.x, &state.v, self.beta_k, &mut self.force);
+        let out = self.net_forces(state, external);
         for d in 0..n {
             if self.fixed[d] {
                 continue;

@@ -219,18 +219,6 @@ pub fn green_lagrange_strain_energy(
     energy
 }
 
-/// Stress (σ_xx, σ_yy, τ_xy) at (ξ, η) from the element's nodal displacements.
-pub fn stress(
-    nodes: &[Point2<f64>; 8],
-    d: &Matrix3<f64>,
-    displacement: &ElementVector,
-    xi: f64,
-    eta: f64,
-) -> Vector3<f64> {
-    let (b, _) = strain_matrix(nodes, xi, eta);
-    d * (b * displacement)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -227,11 +227,6 @@ impl Gear {
             - involute(alpha_r)
     }
 
-    /// Half tooth angle at the base circle, ψ_b = s/(2r) + inv α [rad].
-    pub fn base_half_angle(&self) -> f64 {
-        self.half_thickness_angle(self.base_radius)
-    }
-
     /// Circular (arc) tooth thickness 2 R ψ(R) of the unmodified involute at radius R [m].
     pub fn thickness_at_radius(&self, radius: f64) -> f64 {
         2.0 * radius * self.half_thickness_angle(radius)

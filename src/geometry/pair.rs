@@ -262,14 +262,6 @@ impl GearPair {
         }
     }
 
-    /// LOA position (distance from T1) of roll angle ξ on gear `index`'s flank.
-    pub fn loa_position_of(&self, index: GearIndex, roll_angle: f64) -> f64 {
-        match index {
-            1 => roll_angle * self.gears[0].base_radius,
-            _ => self.line_of_action_length - roll_angle * self.gears[1].base_radius,
-        }
-    }
-
     /// The characteristic roll angles on gear `index`'s own flank, root to tip.
     pub fn flank_roll_angles(&self, index: GearIndex) -> FlankRollAngles {
         let c = &self.contact_points;

@@ -240,14 +240,25 @@ impl PairDrawing {
     }
 }
 
+/// A left and a right panel.
+type Panels<DB> = (DrawingArea<DB, Shift>, DrawingArea<DB, Shift>);
+
+/// A white picture with a title, split into a left and a right panel.
+fn two_panels<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+) -> Result<Panels<DB>, PlotError> {
+    let err = plot_err::<DrawingAreaErrorKind<DB::ErrorType>>(title);
+    root.fill(&WHITE).map_err(&err)?;
+    let (width, _) = root.dim_in_pixel();
+    let titled = root.titled(title, ("sans-serif", 22)).map_err(&err)?;
+    Ok(titled.split_horizontally(width / 2))
+}
+
 impl Drawing for PairDrawing {
     /// Two panels: the whole pair, and the mesh zone around the path of contact.
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError> {
-        let err = plot_err::<DrawingAreaErrorKind<DB::ErrorType>>("the meshing pair");
-        root.fill(&WHITE).map_err(&err)?;
-        let (width, _) = root.dim_in_pixel();
-        let titled = root.titled(&self.title, ("sans-serif", 22)).map_err(&err)?;
-        let (left, right) = titled.split_horizontally(width / 2);
+        let (left, right) = two_panels(root, &self.title)?;
 
         // Whole pair: equal scales, both tip circles inside.
         let (c1, c2) = (self.centres[0], self.centres[1]);
@@ -396,11 +407,7 @@ impl MeshDrawing {
 
 impl Drawing for MeshDrawing {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError> {
-        let err = plot_err::<DrawingAreaErrorKind<DB::ErrorType>>("the mesh");
-        root.fill(&WHITE).map_err(&err)?;
-        let (width, _) = root.dim_in_pixel();
-        let titled = root.titled(&self.title, ("sans-serif", 22)).map_err(&err)?;
-        let (left, right) = titled.split_horizontally(width / 2);
+        let (left, right) = two_panels(root, &self.title)?;
         let r = self.extent;
         let h = r * aspect(&left);
         self.panel(

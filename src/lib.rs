@@ -16,6 +16,7 @@
 #![allow(rustdoc::broken_intra_doc_links)]
 
 pub mod case;
+pub mod contact;
 pub mod explicit;
 pub mod fe;
 pub mod geometry;

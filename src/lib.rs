@@ -21,6 +21,7 @@ pub mod explicit;
 pub mod fe;
 pub mod geometry;
 pub mod ltca;
+pub mod lumped;
 pub mod mesh;
 pub mod report;
 pub mod samples;

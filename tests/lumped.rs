@@ -1,0 +1,205 @@
+//! The 1-DOF mesh model against analytic solutions: the forced response of a constant-stiffness
+//! mesh (FRF), the Mathieu instability tongue from Floquet theory, and brute-force integration.
+
+use geardyn::lumped::{floquet_max_multiplier, steady_state, MeshModel, PeriodicTable};
+use std::f64::consts::PI;
+
+const PERIOD: f64 = 2.0 * PI / 36.0; // one base pitch of the paper's driver, in roll angle
+const MASS: f64 = 0.5743; // the paper's effective mass [kg]
+const K_MEAN: f64 = 4.0e8;
+
+fn model(stiffness: PeriodicTable, te_amplitude: f64, zeta: f64) -> MeshModel {
+    let mut m = MeshModel {
+        effective_mass: MASS,
+        stiffness,
+        unloaded_te: PeriodicTable::from_fn(PERIOD, 256, |t| {
+            te_amplitude * (2.0 * PI * t / PERIOD).cos()
+        }),
+        damping: 0.0,
+        force: 2670.0,
+        backlash: None,
+    };
+    m.damping = m.damping_from_ratio(zeta);
+    m
+}
+
+/// Driver speed [rad/s] whose mesh frequency is `omega_mesh` [rad/s].
+fn driver_speed(omega_mesh: f64) -> f64 {
+    omega_mesh * PERIOD / (2.0 * PI)
+}
+
+/// Constant stiffness excited by a transmission error e₀ cos(ω_m t):
+/// |X| = k e₀ / √((k − m ω²)² + (c ω)²), peak at ω_n √(1 − 2ζ²).
+#[test]
+fn constant_stiffness_follows_the_analytic_frf() {
+    let (e0, zeta) = (1e-6, 0.05);
+    let m = model(PeriodicTable::constant(PERIOD, K_MEAN), e0, zeta);
+    let wn = m.natural_frequency();
+    let amplitude = |w: f64| {
+        let s = steady_state(
+            &m,
+            driver_speed(w),
+            256,
+            (m.force / K_MEAN, 0.0),
+            1e-10,
+            5000,
+        );
+        assert!(s.converged);
+        let (lo, hi) = s
+            .displacement
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                (a.min(*x), b.max(*x))
+            });
+        0.5 * (hi - lo)
+    };
+    for ratio in [0.5, 0.9, 1.0, 1.1, 2.0] {
+        let w = ratio * wn;
+        let exact =
+            K_MEAN * e0 / ((K_MEAN - MASS * w * w).powi(2) + (m.damping * w).powi(2)).sqrt();
+        let got = amplitude(w);
+        assert!(
+            ((got - exact) / exact).abs() < 1e-3,
+            "ω/ωn = {ratio}: {got:e} vs {exact:e}"
+        );
+    }
+    // Resonance: golden-section search for the peak amplitude.
+    let (mut a, mut b) = (0.9 * wn, 1.05 * wn);
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    for _ in 0..40 {
+        let (c, d) = (b - g * (b - a), a + g * (b - a));
+        if amplitude(c) > amplitude(d) {
+            b = d;
+        } else {
+            a = c;
+        }
+    }
+    let peak = 0.5 * (a + b);
+    let expected = wn * (1.0 - 2.0 * zeta * zeta).sqrt();
+    assert!(
+        ((peak - expected) / expected).abs() < 1e-3,
+        "peak {peak} vs {expected}"
+    );
+}
+
+/// Mathieu: ẍ + ω_n²(1 + ε cos ω_m t) x = 0. With τ = ω_m t/2 it is x″ + (a − 2q cos 2τ) x = 0,
+/// a = 4ω_n²/ω_m², q = −aε/2; the first tongue is bounded by a = 1 ± q − q²/8 ∓ q³/64 − q⁴/1536
+/// (McLachlan, *Theory and Application of Mathieu Functions*, §2.151). Solved for ω_m by fixed
+/// point; the Floquet boundaries must agree within 0.5 % (they do to ~1e-5), and with the
+/// small-ε formula 2ω_n(1 ± ε/4) to O(ε²).
+#[test]
+fn floquet_boundaries_match_mathieu() {
+    let eps = 0.1;
+    let m = model(
+        PeriodicTable::from_fn(PERIOD, 512, |t| {
+            K_MEAN * (1.0 + eps * (2.0 * PI * t / PERIOD).cos())
+        }),
+        0.0,
+        0.0,
+    );
+    let wn = m.natural_frequency();
+    let unstable = |w: f64| floquet_max_multiplier(&m, driver_speed(w), 512) > 1.0 + 1e-7;
+    assert!(unstable(2.0 * wn), "the centre of the tongue is unstable");
+    assert!(!unstable(1.8 * wn) && !unstable(2.2 * wn));
+    let edge = |mut stable: f64, mut inside: f64| {
+        for _ in 0..50 {
+            let mid = 0.5 * (stable + inside);
+            if unstable(mid) {
+                inside = mid;
+            } else {
+                stable = mid;
+            }
+        }
+        0.5 * (stable + inside)
+    };
+    let lower = edge(1.8 * wn, 2.0 * wn);
+    let upper = edge(2.2 * wn, 2.0 * wn);
+    let mathieu = |sign: f64| {
+        let mut a: f64 = 1.0;
+        for _ in 0..100 {
+            let q = a * eps / 2.0;
+            a = 1.0 + sign * q - q * q / 8.0 - sign * q.powi(3) / 64.0 - q.powi(4) / 1536.0;
+        }
+        2.0 * wn / a.sqrt()
+    };
+    // a = 1 + q is the lower-frequency edge (a larger ↔ ω_m smaller).
+    let (exact_lower, exact_upper) = (mathieu(1.0), mathieu(-1.0));
+    eprintln!(
+        "Mathieu ε = {eps}: Floquet edges {:.6} / {:.6} × 2ω_n, McLachlan {:.6} / {:.6}, small-ε {:.6} / {:.6}",
+        lower / (2.0 * wn),
+        upper / (2.0 * wn),
+        exact_lower / (2.0 * wn),
+        exact_upper / (2.0 * wn),
+        1.0 - eps / 4.0,
+        1.0 + eps / 4.0
+    );
+    assert!(
+        ((lower - exact_lower) / exact_lower).abs() < 5e-3,
+        "lower {lower} vs {exact_lower}"
+    );
+    assert!(
+        ((upper - exact_upper) / exact_upper).abs() < 5e-3,
+        "upper {upper} vs {exact_upper}"
+    );
+    assert!(
+        ((lower - exact_lower) / exact_lower).abs() < 1e-4
+            && ((upper - exact_upper) / exact_upper).abs() < 1e-4
+    );
+    // Small-ε formula, good to O(ε²) = 1 %.
+    assert!((lower / (2.0 * wn) - (1.0 - eps / 4.0)).abs() < eps * eps);
+    assert!((upper / (2.0 * wn) - (1.0 + eps / 4.0)).abs() < eps * eps);
+}
+
+/// With damping the tongue opens only if ε > 4ζ (small-ε theory).
+#[test]
+fn damping_closes_the_tongue_below_four_zeta() {
+    let zeta = 0.02;
+    for (eps, opens) in [(0.05, false), (0.2, true)] {
+        let m = model(
+            PeriodicTable::from_fn(PERIOD, 512, |t| {
+                K_MEAN * (1.0 + eps * (2.0 * PI * t / PERIOD).cos())
+            }),
+            0.0,
+            zeta,
+        );
+        let wn = m.natural_frequency();
+        let worst = (0..41)
+            .map(|i| 1.9 + 0.005 * i as f64)
+            .map(|r| floquet_max_multiplier(&m, driver_speed(r * wn), 512))
+            .fold(0.0, f64::max);
+        assert_eq!(
+            worst > 1.0,
+            opens,
+            "ε = {eps}, ζ = {zeta}: max |λ| = {worst}"
+        );
+    }
+}
+
+/// Brute force: integrating the free linear model for N periods multiplies a disturbance by
+/// about max|λ|^N inside the tongue.
+#[test]
+fn brute_force_growth_matches_the_floquet_multiplier() {
+    let eps = 0.2;
+    let m = model(
+        PeriodicTable::from_fn(PERIOD, 512, |t| {
+            K_MEAN * (1.0 + eps * (2.0 * PI * t / PERIOD).cos())
+        }),
+        0.0,
+        0.0,
+    );
+    let free = MeshModel {
+        force: 0.0,
+        ..m.clone()
+    };
+    let w = 2.0 * m.natural_frequency();
+    let lambda = floquet_max_multiplier(&m, driver_speed(w), 512);
+    let periods = 40;
+    let s = steady_state(&free, driver_speed(w), 512, (1e-9, 0.0), 0.0, periods);
+    let (x, v) = (s.displacement[0], s.velocity[0]);
+    let growth = (x * x + (v / w).powi(2)).sqrt() / 1e-9;
+    let per_period = growth.powf(1.0 / (periods - 1) as f64);
+    assert!(
+        ((per_period - lambda) / lambda).abs() < 0.02,
+        "growth {per_period} vs λ {lambda}"
+    );
+}

@@ -26,3 +26,4 @@ pub mod mesh;
 pub mod report;
 pub mod samples;
 pub mod stiffness;
+pub mod sweep;

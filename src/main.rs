@@ -57,6 +57,27 @@ enum Command {
         #[arg(long, value_name = "NAME")]
         relief: Option<String>,
     },
+    /// Speed sweep of the 1-DOF lumped mesh model driven by the mesh stiffness k(θ): periodic
+    /// steady state per driver speed (up- and down-sweep), DTE rms and peak-to-peak, dynamic
+    /// factor, separation, mesh-harmonic amplitudes, Floquet stability. Writes sweep.csv, plots
+    /// and summary.json.
+    Sweep {
+        #[command(flatten)]
+        common: CommonArgs,
+        /// Driver speeds FROM:TO:N in rpm.
+        #[arg(long, default_value = "100:12000:600", value_name = "FROM:TO:N")]
+        rpm: String,
+        /// Stiffness source: ltca (the case's FE, first relief variant), pe (potential energy)
+        /// or iso (ISO 6336-1 c_gamma_alpha, constant).
+        #[arg(long, default_value = "ltca", value_name = "SOURCE")]
+        stiffness: String,
+        /// Mesh damping ratio ζ (c = 2ζ√(k̄ m_e)).
+        #[arg(long, default_value_t = 0.05, value_name = "ZETA")]
+        damping_ratio: f64,
+        /// Load torque on the driven gear [N·m]; default: the case's first operating point.
+        #[arg(long, value_name = "T", allow_negative_numbers = true)]
+        torque_nm: Option<f64>,
+    },
     /// Prints a case file: the given one, or the embedded default (start your own from it:
     /// `geardyn case > my.toml`).
     Case {
@@ -86,6 +107,13 @@ fn main() -> ExitCode {
             positions,
             relief,
         } => ltca(&common, torque_nm, positions, relief.as_deref()),
+        Command::Sweep {
+            common,
+            rpm,
+            stiffness,
+            damping_ratio,
+            torque_nm,
+        } => sweep(&common, &rpm, &stiffness, damping_ratio, torque_nm),
         Command::Case { case } => print_case(case.as_deref()),
     };
     match result {
@@ -521,6 +549,322 @@ fn ltca(
         "model": "2D FE (Q8), bores held rigid; frictionless node-to-surface contact on the drive flanks; one base pitch",
     });
     report::write_json(&dir.join("summary.json"), &summary).context("cannot write summary.json")?;
+    println!("wrote {}", dir.display());
+    Ok(())
+}
+
+fn parse_range(text: &str) -> Result<Vec<f64>> {
+    let parts: Vec<&str> = text.split(':').collect();
+    let bad = || {
+        anyhow::anyhow!("--rpm {text:?} is invalid: write FROM:TO:N with 0 < FROM < TO and N ≥ 2, e.g. 100:12000:600")
+    };
+    if parts.len() != 3 {
+        return Err(bad());
+    }
+    let (from, to): (f64, f64) = (
+        parts[0].parse().map_err(|_| bad())?,
+        parts[1].parse().map_err(|_| bad())?,
+    );
+    let n: usize = parts[2].parse().map_err(|_| bad())?;
+    if !(from > 0.0 && to > from && n >= 2) {
+        return Err(bad());
+    }
+    Ok((0..n)
+        .map(|i| from + (to - from) * i as f64 / (n - 1) as f64)
+        .collect())
+}
+
+fn sweep(
+    args: &CommonArgs,
+    rpm: &str,
+    source: &str,
+    damping_ratio: f64,
+    torque_nm: Option<f64>,
+) -> Result<()> {
+    use geardyn::lumped::{MeshModel, PeriodicTable};
+    use geardyn::sweep as sw;
+    let started = std::time::Instant::now();
+    let case = load_case(args.case.as_deref())?;
+    let rpms = parse_range(rpm)?;
+    if !(0.0..1.0).contains(&damping_ratio) {
+        anyhow::bail!(
+            "--damping-ratio {damping_ratio} is invalid: use a value in [0, 1), typically 0.02–0.1"
+        );
+    }
+    let torque = match torque_nm {
+        Some(t) => t,
+        None => case
+            .operating_points
+            .first()
+            .map(|o| o.torque)
+            .context("the case has no operating point: give --torque-nm")?,
+    };
+    if !(torque > 0.0 && torque.is_finite()) {
+        anyhow::bail!(
+            "--torque-nm {torque} is invalid: the sweep needs a load torque > 0 on the driven gear"
+        );
+    }
+    let pair = &case.pair;
+    let period = pair.gears[0].angular_pitch();
+    let positions = 64;
+    let stiffness_started = std::time::Instant::now();
+    let (stiffness, unloaded_te, source_name) = match source {
+        "ltca" => {
+            use geardyn::ltca::{body::BodyMaterial, engaging_teeth, LtcaModel};
+            let variant = case
+                .relief_variants
+                .first()
+                .context("the case has no relief variant")?;
+            let teeth = engaging_teeth(pair);
+            let material = BodyMaterial {
+                youngs_modulus: case.material.youngs_modulus,
+                poisson_ratio: case.material.poisson_ratio,
+                plane: case.file.fe.plane,
+            };
+            eprintln!(
+                "computing the LTCA stiffness (relief \"{}\") ...",
+                variant.name
+            );
+            let model = LtcaModel::new(
+                pair,
+                &variant.modifications,
+                [
+                    case.mesh_spec(teeth[0].clone()),
+                    case.mesh_spec(teeth[1].clone()),
+                ],
+                material,
+            )?;
+            let results = model.run(positions, torque, &|_| {})?;
+            let rb2 = pair.gears[1].base_radius;
+            (
+                PeriodicTable {
+                    period,
+                    values: results.iter().map(|r| r.mesh_stiffness).collect(),
+                },
+                PeriodicTable {
+                    period,
+                    values: results.iter().map(|r| r.unloaded_te * rb2).collect(),
+                },
+                format!("ltca (relief {})", variant.name),
+            )
+        }
+        "pe" => {
+            let table = geardyn::stiffness::potential_energy::potential_energy_table(
+                pair,
+                positions,
+                case.material.youngs_modulus,
+                case.material.poisson_ratio,
+                case.file.fe.plane,
+            );
+            (
+                PeriodicTable {
+                    period,
+                    values: table.stiffness,
+                },
+                PeriodicTable::constant(period, 0.0),
+                "potential-energy".to_string(),
+            )
+        }
+        "iso" => {
+            let iso =
+                geardyn::stiffness::iso_6336_method_b(pair, torque, case.material.youngs_modulus);
+            (
+                PeriodicTable::constant(period, iso.mean_n_per_m),
+                PeriodicTable::constant(period, 0.0),
+                "iso6336 (constant c_gamma_alpha)".to_string(),
+            )
+        }
+        other => anyhow::bail!("--stiffness {other:?} is unknown: use ltca, pe or iso"),
+    };
+    let stiffness_wall_s = stiffness_started.elapsed().as_secs_f64();
+    let inertia = |i: usize| {
+        let gear = &pair.gears[i];
+        case.material.density * gear.spec.face_width * gear.area_moments().1
+    };
+    let (i1, i2) = (inertia(0), inertia(1));
+    let (rb1, rb2) = (pair.gears[0].base_radius, pair.gears[1].base_radius);
+    let effective_mass = i1 * i2 / (i1 * rb2 * rb2 + i2 * rb1 * rb1);
+    let backlash = (pair.backlash_normal > 1e-9).then_some(pair.backlash_normal);
+    let mut model = MeshModel {
+        effective_mass,
+        stiffness,
+        unloaded_te,
+        damping: 0.0,
+        force: torque / rb2,
+        backlash,
+    };
+    model.damping = model.damping_from_ratio(damping_ratio);
+    let fn_hz = model.natural_frequency() / (2.0 * std::f64::consts::PI);
+    println!(
+        "stiffness {source_name}: mean {:.4e} N/m; I1 = {:.1} kg·mm², I2 = {:.1} kg·mm², m_e = {:.4} kg; f_n = {:.1} Hz; {}",
+        model.stiffness.mean(),
+        i1 * 1e6,
+        i2 * 1e6,
+        effective_mass,
+        fn_hz,
+        match backlash {
+            Some(j) => format!("backlash {:.2} um (separation modelled)", j * 1e6),
+            None => "zero backlash (no separation: the back flank engages at once)".into(),
+        }
+    );
+
+    let dir = output_dir(args.out.as_deref(), "sweep", &case)?;
+    report::write_atomic(&dir.join("case.toml"), case.text.as_bytes())
+        .context("cannot write case.toml")?;
+    let sweep_started = std::time::Instant::now();
+    let (up, down) = sw::sweep(&model, &rpms);
+    let wall_s = sweep_started.elapsed().as_secs_f64();
+
+    let header = [
+        "driver_rpm",
+        "mesh_hz",
+        "dte_rms_up_um",
+        "dte_rms_down_um",
+        "dte_pp_up_um",
+        "dynamic_factor_up",
+        "dynamic_factor_down",
+        "separated_up",
+        "h1_um",
+        "h2_um",
+        "h3_um",
+        "h4_um",
+        "h5_um",
+        "floquet_max_multiplier",
+        "periods_up",
+        "converged_up",
+    ];
+    let rows = up.iter().zip(&down).map(|(u, d)| {
+        let mut row = vec![
+            format!("{:.3}", u.driver_speed_rpm),
+            format!("{:.3}", u.mesh_frequency_hz),
+            format!("{:.6}", u.dte_rms * 1e6),
+            format!("{:.6}", d.dte_rms * 1e6),
+            format!("{:.6}", u.dte_peak_to_peak * 1e6),
+            format!("{:.6}", u.dynamic_factor),
+            format!("{:.6}", d.dynamic_factor),
+            u.separated.to_string(),
+        ];
+        row.extend(u.harmonics.iter().map(|h| format!("{:.6}", h * 1e6)));
+        row.extend([
+            format!("{:.6}", u.floquet),
+            u.periods.to_string(),
+            u.converged.to_string(),
+        ]);
+        row
+    });
+    report::write_csv(&dir.join("sweep.csv"), &header, rows).context("cannot write sweep.csv")?;
+
+    let curve =
+        |points: &[geardyn::sweep::SweepPoint],
+         f: &dyn Fn(&geardyn::sweep::SweepPoint) -> f64|
+         -> Vec<(f64, f64)> { points.iter().map(|p| (p.driver_speed_rpm, f(p))).collect() };
+    let plots = [
+        (
+            "response",
+            "DTE rms along the LOA [um]",
+            vec![
+                ("up-sweep".to_string(), curve(&up, &|p| p.dte_rms * 1e6)),
+                ("down-sweep".to_string(), curve(&down, &|p| p.dte_rms * 1e6)),
+            ],
+        ),
+        (
+            "dynamic_factor",
+            "max dynamic mesh force / static",
+            vec![
+                ("up-sweep".to_string(), curve(&up, &|p| p.dynamic_factor)),
+                (
+                    "down-sweep".to_string(),
+                    curve(&down, &|p| p.dynamic_factor),
+                ),
+            ],
+        ),
+        (
+            "harmonics",
+            "DTE amplitude at mesh harmonic [um]",
+            (0..geardyn::sweep::HARMONICS)
+                .map(|h| {
+                    (
+                        format!("order {} x z1", h + 1),
+                        curve(&up, &|p| p.harmonics[h] * 1e6),
+                    )
+                })
+                .collect(),
+        ),
+        (
+            "stability",
+            "largest Floquet multiplier |lambda| (> 1 unstable)",
+            vec![("max |lambda|".to_string(), curve(&up, &|p| p.floquet))],
+        ),
+    ];
+    for (stem, label, series) in plots {
+        let plot = report::plot::LinePlot {
+            title: format!(
+                "{}: {stem}, stiffness {source_name}, zeta = {damping_ratio}",
+                case.name()
+            ),
+            x_label: "driver speed [rpm]".into(),
+            y_label: label.into(),
+            series,
+        };
+        report::plot::draw_svg_and_png(
+            &dir.join(format!("{stem}.svg")),
+            &dir.join(format!("{stem}.png")),
+            (1200, 700),
+            &plot,
+        )?;
+    }
+
+    let rms: Vec<f64> = up.iter().map(|p| p.dte_rms).collect();
+    let resonance_rpm = geardyn::sweep::peaks(&rpms, &rms);
+    // The primary resonance: the response peak nearest f_mesh = f_n.
+    let primary_rpm = fn_hz * 60.0 / pair.gears[0].teeth() as f64;
+    let primary = resonance_rpm
+        .iter()
+        .copied()
+        .min_by(|a, b| (a - primary_rpm).abs().total_cmp(&(b - primary_rpm).abs()));
+    let mut separation_ranges: Vec<(f64, f64)> = Vec::new();
+    for p in &up {
+        if p.separated {
+            match separation_ranges.last_mut() {
+                Some(r) if (p.driver_speed_rpm - r.1) <= (rpms[1] - rpms[0]) * 1.0001 => {
+                    r.1 = p.driver_speed_rpm
+                }
+                _ => separation_ranges.push((p.driver_speed_rpm, p.driver_speed_rpm)),
+            }
+        }
+    }
+    let summary = serde_json::json!({
+        "case": case.name(),
+        "stiffness_source": source_name,
+        "mean_stiffness_n_per_m": model.stiffness.mean(),
+        "effective_mass_kg": effective_mass,
+        "inertia_kg_mm2": [i1 * 1e6, i2 * 1e6],
+        "natural_frequency_hz": fn_hz,
+        "damping_ratio": damping_ratio,
+        "torque_nm": torque,
+        "primary_resonance_rpm": primary,
+        "resonance_rpm": resonance_rpm,
+        "max_dynamic_factor": up.iter().chain(&down).map(|p| p.dynamic_factor).fold(0.0, f64::max),
+        "separation_rpm_ranges": separation_ranges,
+        "unstable_rpm": up.iter().filter(|p| p.floquet > 1.0).map(|p| p.driver_speed_rpm).collect::<Vec<_>>(),
+        "points": rpms.len(),
+        "all_converged": up.iter().chain(&down).all(|p| p.converged),
+        "wall_s": wall_s,
+        "stiffness_wall_s": stiffness_wall_s,
+        "total_wall_s": started.elapsed().as_secs_f64(),
+        "model": "1-DOF along the line of action, rigid shafts and bearings; mesh stiffness periodic in the driver roll angle",
+    });
+    report::write_json(&dir.join("summary.json"), &summary).context("cannot write summary.json")?;
+    println!(
+        "{} points in {:.2} s (stiffness {:.2} s); resonances at {:?} rpm; primary {:?} rpm (f_mesh = f_n at {:.0} rpm); max dynamic factor {:.3}",
+        rpms.len(),
+        wall_s,
+        stiffness_wall_s,
+        summary["resonance_rpm"],
+        primary,
+        primary_rpm,
+        summary["max_dynamic_factor"].as_f64().unwrap_or(f64::NAN)
+    );
     println!("wrote {}", dir.display());
     Ok(())
 }

@@ -324,3 +324,65 @@ fn run_writes_every_stage() {
         assert!(out.join(file).exists(), "{file}");
     }
 }
+
+#[test]
+fn sweep_writes_curves_and_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sweep");
+    let output = geardyn()
+        .args([
+            "sweep",
+            "--stiffness",
+            "pe",
+            "--rpm",
+            "1000:9000:40",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    for key in [
+        "mean_stiffness_n_per_m",
+        "natural_frequency_hz",
+        "max_dynamic_factor",
+        "wall_s",
+        "stiffness_wall_s",
+    ] {
+        assert!(summary[key].as_f64().unwrap().is_finite(), "{key}");
+    }
+    assert_eq!(summary["points"].as_u64(), Some(40));
+    assert!(summary["stiffness_source"]
+        .as_str()
+        .unwrap()
+        .starts_with("potential"));
+    assert!(summary["resonance_rpm"].is_array() && summary["separation_rpm_ranges"].is_array());
+    assert_eq!(
+        csv::Reader::from_path(out.join("sweep.csv"))
+            .unwrap()
+            .records()
+            .count(),
+        40
+    );
+    for plot in [
+        "response.png",
+        "dynamic_factor.png",
+        "harmonics.png",
+        "stability.svg",
+    ] {
+        assert!(out.join(plot).exists(), "{plot}");
+    }
+    let bad = geardyn()
+        .args(["sweep", "--rpm", "5:1:3", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("FROM:TO:N"));
+}

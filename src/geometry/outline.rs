@@ -233,6 +233,33 @@ impl Gear {
         polygon
     }
 
+    /// Area A and polar second moment J = ∫ r² dA of the gear body (outline polygon of the
+    /// unmodified profile minus the bore), by the polygon formulas
+    /// A = ½ Σ (xᵢ yᵢ₊₁ − xᵢ₊₁ yᵢ), J = 1/12 Σ (xᵢ yᵢ₊₁ − xᵢ₊₁ yᵢ)(xᵢ² + xᵢxᵢ₊₁ + xᵢ₊₁² + yᵢ² + yᵢyᵢ₊₁ + yᵢ₊₁²).
+    /// Rotary inertia I = ρ B J.
+    pub fn area_moments(&self) -> (f64, f64) {
+        let res = OutlineResolution {
+            root: 8,
+            fillet: 48,
+            flank: 96,
+            tip: 8,
+        };
+        let polygon = self.gear_outline(&FlankModification::none(), res);
+        let (mut area, mut polar) = (0.0, 0.0);
+        for (a, b) in polygon.iter().zip(polygon.iter().cycle().skip(1)) {
+            let cross = a.x * b.y - b.x * a.y;
+            area += 0.5 * cross;
+            polar += cross
+                * (a.x * a.x + a.x * b.x + b.x * b.x + a.y * a.y + a.y * b.y + b.y * b.y)
+                / 12.0;
+        }
+        let r = self.spec.bore_radius;
+        (
+            area - std::f64::consts::PI * r * r,
+            polar - std::f64::consts::PI * r.powi(4) / 2.0,
+        )
+    }
+
     /// Generating roll φ at which the rack flank cuts the involute point of roll angle ξ.
     pub(crate) fn generating_roll_of_flank(&self, roll_angle: f64) -> f64 {
         roll_angle - self.flank_line_offset() / self.base_radius
@@ -300,6 +327,24 @@ mod tests {
         let t_flank = (gear.generated_flank_point(xi_f + h) - flank_start).normalize();
         let angle = t_fillet.perp(&t_flank).atan2(t_fillet.dot(&t_flank));
         assert!(angle.abs() < 1e-5, "tangent kink {angle} rad");
+    }
+
+    /// The body's polar moment lies between the discs of the root and tip radii (less the bore).
+    #[test]
+    fn polar_moment_is_bounded_by_root_and_tip_discs() {
+        let pair = samples::paper36_pair();
+        let gear = &pair.gears[0];
+        let (area, polar) = gear.area_moments();
+        let disc = |r: f64| {
+            (
+                std::f64::consts::PI * r * r,
+                std::f64::consts::PI * r.powi(4) / 2.0,
+            )
+        };
+        let bore = disc(gear.spec.bore_radius);
+        let (root, tip) = (disc(gear.root_radius), disc(gear.tip_radius));
+        assert!(area > root.0 - bore.0 && area < tip.0 - bore.0);
+        assert!(polar > root.1 - bore.1 && polar < tip.1 - bore.1);
     }
 
     #[test]

@@ -24,8 +24,9 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// The whole pipeline built so far on one case: geometry, meshes and LTCA (every relief
-    /// variant), each in its own sub-folder of one output folder.
+    /// The whole pipeline built so far on one case: geometry, meshes, LTCA (every relief
+    /// variant) and the lumped speed sweep on the LTCA stiffness, each in its own sub-folder of
+    /// one output folder.
     Run(CommonArgs),
     /// Derived geometry of the pair: radii, contact ratio, line of action, contact points,
     /// backlash, resolved reliefs; writes summary.json, a drawing (SVG, PNG) and profile CSVs.
@@ -158,6 +159,8 @@ fn run(args: &CommonArgs) -> Result<()> {
     mesh(&stage("mesh"), None)?;
     println!("\n== ltca");
     ltca(&stage("ltca"), None, 64, None)?;
+    println!("\n== sweep");
+    sweep(&stage("sweep"), "100:12000:600", "ltca", 0.05, None)?;
     println!("\nall outputs in {}", dir.display());
     Ok(())
 }

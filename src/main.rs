@@ -79,6 +79,25 @@ enum Command {
         #[arg(long, value_name = "T", allow_negative_numbers = true)]
         torque_nm: Option<f64>,
     },
+    /// Floquet stability map of the linear time-periodic mesh model over a speed range:
+    /// the largest multiplier of the monodromy matrix per driver speed (> 1: parametric
+    /// instability, near f_mesh ≈ 2 f_n / j). Writes stability.csv, a plot and summary.json.
+    Stability {
+        #[command(flatten)]
+        common: CommonArgs,
+        /// Driver speeds FROM:TO:N in rpm.
+        #[arg(long, default_value = "100:20000:2000", value_name = "FROM:TO:N")]
+        rpm: String,
+        /// Stiffness source: ltca, pe or iso (iso is constant: always stable).
+        #[arg(long, default_value = "ltca", value_name = "SOURCE")]
+        stiffness: String,
+        /// Mesh damping ratio ζ.
+        #[arg(long, default_value_t = 0.05, value_name = "ZETA")]
+        damping_ratio: f64,
+        /// Load torque on the driven gear [N·m] (sets the LTCA stiffness); default: the case's first.
+        #[arg(long, value_name = "T", allow_negative_numbers = true)]
+        torque_nm: Option<f64>,
+    },
     /// Prints a case file: the given one, or the embedded default (start your own from it:
     /// `geardyn case > my.toml`).
     Case {
@@ -115,6 +134,13 @@ fn main() -> ExitCode {
             damping_ratio,
             torque_nm,
         } => sweep(&common, &rpm, &stiffness, damping_ratio, torque_nm),
+        Command::Stability {
+            common,
+            rpm,
+            stiffness,
+            damping_ratio,
+            torque_nm,
+        } => stability(&common, &rpm, &stiffness, damping_ratio, torque_nm),
         Command::Case { case } => print_case(case.as_deref()),
     };
     match result {
@@ -577,16 +603,28 @@ fn parse_range(text: &str) -> Result<Vec<f64>> {
         .collect())
 }
 
-fn sweep(
+/// Everything the lumped commands share: the case, the speeds, and the model on the chosen
+/// stiffness source.
+struct LumpedSetup {
+    case: Case,
+    rpms: Vec<f64>,
+    torque: f64,
+    model: geardyn::lumped::MeshModel,
+    source_name: String,
+    stiffness_wall_s: f64,
+    inertias: (f64, f64),
+    effective_mass: f64,
+    fn_hz: f64,
+}
+
+fn lumped_setup(
     args: &CommonArgs,
     rpm: &str,
     source: &str,
     damping_ratio: f64,
     torque_nm: Option<f64>,
-) -> Result<()> {
+) -> Result<LumpedSetup> {
     use geardyn::lumped::{MeshModel, PeriodicTable};
-    use geardyn::sweep as sw;
-    let started = std::time::Instant::now();
     let case = load_case(args.case.as_deref())?;
     let rpms = parse_range(rpm)?;
     if !(0.0..1.0).contains(&damping_ratio) {
@@ -604,7 +642,7 @@ fn sweep(
     };
     if !(torque > 0.0 && torque.is_finite()) {
         anyhow::bail!(
-            "--torque-nm {torque} is invalid: the sweep needs a load torque > 0 on the driven gear"
+            "--torque-nm {torque} is invalid: the lumped model needs a load torque > 0 on the driven gear"
         );
     }
     let pair = &case.pair;
@@ -711,6 +749,40 @@ fn sweep(
         }
     );
 
+    Ok(LumpedSetup {
+        case,
+        rpms,
+        torque,
+        model,
+        source_name,
+        stiffness_wall_s,
+        inertias: (i1, i2),
+        effective_mass,
+        fn_hz,
+    })
+}
+
+fn sweep(
+    args: &CommonArgs,
+    rpm: &str,
+    source: &str,
+    damping_ratio: f64,
+    torque_nm: Option<f64>,
+) -> Result<()> {
+    use geardyn::sweep as sw;
+    let started = std::time::Instant::now();
+    let LumpedSetup {
+        case,
+        rpms,
+        torque,
+        model,
+        source_name,
+        stiffness_wall_s,
+        inertias: (i1, i2),
+        effective_mass,
+        fn_hz,
+    } = lumped_setup(args, rpm, source, damping_ratio, torque_nm)?;
+    let pair = &case.pair;
     let dir = output_dir(args.out.as_deref(), "sweep", &case)?;
     report::write_atomic(&dir.join("case.toml"), case.text.as_bytes())
         .context("cannot write case.toml")?;
@@ -867,6 +939,108 @@ fn sweep(
         primary,
         primary_rpm,
         summary["max_dynamic_factor"].as_f64().unwrap_or(f64::NAN)
+    );
+    println!("wrote {}", dir.display());
+    Ok(())
+}
+
+fn stability(
+    args: &CommonArgs,
+    rpm: &str,
+    source: &str,
+    damping_ratio: f64,
+    torque_nm: Option<f64>,
+) -> Result<()> {
+    let setup = lumped_setup(args, rpm, source, damping_ratio, torque_nm)?;
+    let LumpedSetup {
+        case,
+        rpms,
+        model,
+        source_name,
+        fn_hz,
+        ..
+    } = &setup;
+    let dir = output_dir(args.out.as_deref(), "stability", case)?;
+    report::write_atomic(&dir.join("case.toml"), case.text.as_bytes())
+        .context("cannot write case.toml")?;
+    let started = std::time::Instant::now();
+    let multipliers = geardyn::sweep::floquet_map(model, rpms);
+    let wall_s = started.elapsed().as_secs_f64();
+    let z1 = case.pair.gears[0].teeth() as f64;
+    let rows = rpms.iter().zip(&multipliers).map(|(r, m)| {
+        vec![
+            format!("{r:.3}"),
+            format!("{:.3}", r / 60.0 * z1),
+            format!("{m:.8}"),
+        ]
+    });
+    report::write_csv(
+        &dir.join("stability.csv"),
+        &["driver_rpm", "mesh_hz", "floquet_max_multiplier"],
+        rows,
+    )
+    .context("cannot write stability.csv")?;
+    let mut ranges: Vec<(f64, f64)> = Vec::new();
+    for (i, m) in multipliers.iter().enumerate() {
+        if *m > 1.0 {
+            match ranges.last_mut() {
+                Some(range) if i > 0 && multipliers[i - 1] > 1.0 => range.1 = rpms[i],
+                _ => ranges.push((rpms[i], rpms[i])),
+            }
+        }
+    }
+    // Principal parametric regions of a cosine stiffness: f_mesh ≈ 2 f_n / j.
+    let theory: Vec<f64> = (1..=3)
+        .map(|j| 2.0 * fn_hz / j as f64 * 60.0 / z1)
+        .collect();
+    let plot = report::plot::LinePlot {
+        title: format!(
+            "{}: Floquet stability, stiffness {source_name}, zeta = {damping_ratio}",
+            case.name()
+        ),
+        x_label: "driver speed [rpm]".into(),
+        y_label: "largest Floquet multiplier |lambda|".into(),
+        series: vec![
+            (
+                "max |lambda|".into(),
+                rpms.iter()
+                    .copied()
+                    .zip(multipliers.iter().copied())
+                    .collect(),
+            ),
+            (
+                "stability limit |lambda| = 1".into(),
+                vec![(rpms[0], 1.0), (rpms[rpms.len() - 1], 1.0)],
+            ),
+        ],
+    };
+    report::plot::draw_svg_and_png(
+        &dir.join("stability.svg"),
+        &dir.join("stability.png"),
+        (1200, 700),
+        &plot,
+    )?;
+    let summary = serde_json::json!({
+        "case": case.name(),
+        "stiffness_source": source_name,
+        "mean_stiffness_n_per_m": model.stiffness.mean(),
+        "natural_frequency_hz": fn_hz,
+        "damping_ratio": damping_ratio,
+        "unstable_rpm_ranges": ranges,
+        "parametric_region_centres_rpm": theory,
+        "max_multiplier": multipliers.iter().copied().fold(0.0, f64::max),
+        "points": rpms.len(),
+        "wall_s": wall_s,
+        "stiffness_wall_s": setup.stiffness_wall_s,
+    });
+    report::write_json(&dir.join("summary.json"), &summary).context("cannot write summary.json")?;
+    println!(
+        "{} speeds in {:.3} s; unstable ranges {:?} rpm; principal regions expected near {:?} rpm; max |lambda| {:.4}",
+        rpms.len(),
+        wall_s,
+        ranges,
+        theory.iter().map(|r| r.round()).collect::<Vec<_>>(),
+        summary["max_multiplier"].as_f64().unwrap_or(f64::NAN)
     );
     println!("wrote {}", dir.display());
     Ok(())

@@ -386,3 +386,44 @@ fn sweep_writes_curves_and_summary() {
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("FROM:TO:N"));
 }
+
+#[test]
+fn stability_map_finds_the_principal_parametric_region() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("stability");
+    let output = geardyn()
+        .args([
+            "stability",
+            "--stiffness",
+            "pe",
+            "--rpm",
+            "2000:20000:400",
+            "--damping-ratio",
+            "0.005",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let centre = summary["parametric_region_centres_rpm"][0]
+        .as_f64()
+        .unwrap();
+    let ranges = summary["unstable_rpm_ranges"].as_array().unwrap();
+    // The largest region sits around f_mesh = 2 f_n (the mean-stiffness estimate; the
+    // stiffness's shape moves it by a few percent).
+    assert!(
+        ranges.iter().any(|r| {
+            let (a, b) = (r[0].as_f64().unwrap(), r[1].as_f64().unwrap());
+            a < 1.05 * centre && b > 0.95 * centre
+        }),
+        "no unstable range near {centre} rpm: {ranges:?}"
+    );
+    assert!(out.join("stability.png").exists() && out.join("stability.csv").exists());
+}

@@ -889,6 +889,40 @@ fn sweep(
         )?;
     }
 
+    // Waterfall: DTE amplitude at each mesh harmonic, at its frequency, over speed.
+    let step_rpm = if rpms.len() > 1 {
+        rpms[1] - rpms[0]
+    } else {
+        1.0
+    };
+    let mesh_hz_per_rpm = pair.gears[0].teeth() as f64 / 60.0;
+    let waterfall = report::plot::ColourMap {
+        title: format!(
+            "{}: DTE mesh harmonics (log colour, 3 decades), stiffness {source_name}",
+            case.name()
+        ),
+        x_label: "driver speed [rpm]".into(),
+        y_label: "frequency [Hz]".into(),
+        cells: up
+            .iter()
+            .flat_map(|p| {
+                p.harmonics.iter().enumerate().map(move |(h, a)| {
+                    (p.driver_speed_rpm, (h + 1) as f64 * p.mesh_frequency_hz, *a)
+                })
+            })
+            .collect(),
+        cell_size: (
+            step_rpm,
+            0.8 * step_rpm * mesh_hz_per_rpm * geardyn::sweep::HARMONICS as f64,
+        ),
+        decades: 3.0,
+    };
+    report::plot::draw_svg_and_png(
+        &dir.join("waterfall.svg"),
+        &dir.join("waterfall.png"),
+        (1200, 700),
+        &waterfall,
+    )?;
     let rms: Vec<f64> = up.iter().map(|p| p.dte_rms).collect();
     let resonance_rpm = geardyn::sweep::peaks(&rpms, &rms);
     // The primary resonance: the response peak nearest f_mesh = f_n.

@@ -375,6 +375,7 @@ fn sweep_writes_curves_and_summary() {
         "dynamic_factor.png",
         "harmonics.png",
         "stability.svg",
+        "waterfall.png",
     ] {
         assert!(out.join(plot).exists(), "{plot}");
     }

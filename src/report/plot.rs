@@ -510,3 +510,60 @@ impl Drawing for LinePlot {
         Ok(())
     }
 }
+
+/// A colour map of scattered values (a waterfall of spectra: x = speed, y = frequency, colour =
+/// amplitude on a log scale), each value drawn as a cell of the given size.
+pub struct ColourMap {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    /// (x, y, value ≥ 0).
+    pub cells: Vec<(f64, f64, f64)>,
+    pub cell_size: (f64, f64),
+    /// Decades of dynamic range shown below the largest value.
+    pub decades: f64,
+}
+
+impl Drawing for ColourMap {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError> {
+        let err = plot_err::<DrawingAreaErrorKind<DB::ErrorType>>(&self.title);
+        root.fill(&WHITE).map_err(&err)?;
+        let fold = |f: fn(f64, f64) -> f64, init: f64, pick: fn(&(f64, f64, f64)) -> f64| {
+            self.cells.iter().map(pick).fold(init, f)
+        };
+        let (x0, x1) = (
+            fold(f64::min, f64::INFINITY, |c| c.0),
+            fold(f64::max, f64::NEG_INFINITY, |c| c.0),
+        );
+        let (y0, y1) = (
+            0.0,
+            fold(f64::max, f64::NEG_INFINITY, |c| c.1) + self.cell_size.1,
+        );
+        let top = fold(f64::max, 0.0, |c| c.2).max(1e-300);
+        let mut chart = ChartBuilder::on(root)
+            .caption(&self.title, ("sans-serif", 20))
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(70)
+            .build_cartesian_2d(x0..x1.max(x0 + 1e-9), y0..y1.max(1e-9))
+            .map_err(&err)?;
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_desc(&self.x_label)
+            .y_desc(&self.y_label)
+            .axis_desc_style(("sans-serif", 16))
+            .draw()
+            .map_err(&err)?;
+        let (w, h) = (0.5 * self.cell_size.0, 0.5 * self.cell_size.1);
+        chart
+            .draw_series(self.cells.iter().filter(|c| c.2 > 0.0).map(|&(x, y, v)| {
+                // 0 at `decades` below the top, 1 at the top; blue → yellow → red.
+                let t = (1.0 + (v / top).log10() / self.decades).clamp(0.0, 1.0);
+                let colour = HSLColor(0.66 * (1.0 - t), 0.9, 0.25 + 0.35 * t);
+                Rectangle::new([(x - w, y - h), (x + w, y + h)], colour.filled())
+            }))
+            .map_err(&err)?;
+        Ok(())
+    }
+}

@@ -68,16 +68,8 @@ enum Command {
         /// Driver speeds FROM:TO:N in rpm.
         #[arg(long, default_value = "100:12000:600", value_name = "FROM:TO:N")]
         rpm: String,
-        /// Stiffness source: ltca (the case's FE, first relief variant), pe (potential energy)
-        /// or iso (ISO 6336-1 c_gamma_alpha, constant).
-        #[arg(long, default_value = "ltca", value_name = "SOURCE")]
-        stiffness: String,
-        /// Mesh damping ratio ζ (c = 2ζ√(k̄ m_e)).
-        #[arg(long, default_value_t = 0.05, value_name = "ZETA")]
-        damping_ratio: f64,
-        /// Load torque on the driven gear [N·m]; default: the case's first operating point.
-        #[arg(long, value_name = "T", allow_negative_numbers = true)]
-        torque_nm: Option<f64>,
+        #[command(flatten)]
+        model: LumpedArgs,
     },
     /// Floquet stability map of the linear time-periodic mesh model over a speed range:
     /// the largest multiplier of the monodromy matrix per driver speed (> 1: parametric
@@ -88,15 +80,8 @@ enum Command {
         /// Driver speeds FROM:TO:N in rpm.
         #[arg(long, default_value = "100:20000:2000", value_name = "FROM:TO:N")]
         rpm: String,
-        /// Stiffness source: ltca, pe or iso (iso is constant: always stable).
-        #[arg(long, default_value = "ltca", value_name = "SOURCE")]
-        stiffness: String,
-        /// Mesh damping ratio ζ.
-        #[arg(long, default_value_t = 0.05, value_name = "ZETA")]
-        damping_ratio: f64,
-        /// Load torque on the driven gear [N·m] (sets the LTCA stiffness); default: the case's first.
-        #[arg(long, value_name = "T", allow_negative_numbers = true)]
-        torque_nm: Option<f64>,
+        #[command(flatten)]
+        model: LumpedArgs,
     },
     /// Prints a case file: the given one, or the embedded default (start your own from it:
     /// `geardyn case > my.toml`).
@@ -104,6 +89,37 @@ enum Command {
         /// Case file to check and print; default: the embedded paper36 case.
         case: Option<PathBuf>,
     },
+}
+
+/// The lumped model's options, shared by `sweep` and `stability`.
+#[derive(Args, Clone)]
+struct LumpedArgs {
+    /// Stiffness source: ltca (the case's FE, first relief variant), pe (potential energy) or
+    /// iso (ISO 6336-1 c_gamma_alpha, constant).
+    #[arg(long, default_value = "ltca", value_name = "SOURCE")]
+    stiffness: String,
+    /// Mesh damping ratio ζ (c = 2ζ√(k̄ m)).
+    #[arg(long, default_value_t = 0.05, value_name = "ZETA")]
+    damping_ratio: f64,
+    /// Load torque on the driven gear [N·m]; default: the case's first operating point.
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
+    torque_nm: Option<f64>,
+    /// How the pair is driven. torque: both gears free, input and load torques (the torsional
+    /// 2-DOF reduces exactly to the relative coordinate with m_e = I₁I₂/(I₁r_b2² + I₂r_b1²));
+    /// speed: the driver turns at the prescribed speed, as in the explicit FE (m = I₂/r_b2²).
+    #[arg(long, default_value = "torque", value_name = "DRIVE")]
+    drive: String,
+}
+
+impl LumpedArgs {
+    fn defaults() -> Self {
+        LumpedArgs {
+            stiffness: "ltca".into(),
+            damping_ratio: 0.05,
+            torque_nm: None,
+            drive: "torque".into(),
+        }
+    }
 }
 
 #[derive(Args)]
@@ -127,20 +143,8 @@ fn main() -> ExitCode {
             positions,
             relief,
         } => ltca(&common, torque_nm, positions, relief.as_deref()),
-        Command::Sweep {
-            common,
-            rpm,
-            stiffness,
-            damping_ratio,
-            torque_nm,
-        } => sweep(&common, &rpm, &stiffness, damping_ratio, torque_nm),
-        Command::Stability {
-            common,
-            rpm,
-            stiffness,
-            damping_ratio,
-            torque_nm,
-        } => stability(&common, &rpm, &stiffness, damping_ratio, torque_nm),
+        Command::Sweep { common, rpm, model } => sweep(&common, &rpm, &model),
+        Command::Stability { common, rpm, model } => stability(&common, &rpm, &model),
         Command::Case { case } => print_case(case.as_deref()),
     };
     match result {
@@ -186,7 +190,7 @@ fn run(args: &CommonArgs) -> Result<()> {
     println!("\n== ltca");
     ltca(&stage("ltca"), None, 64, None)?;
     println!("\n== sweep");
-    sweep(&stage("sweep"), "100:12000:600", "ltca", 0.05, None)?;
+    sweep(&stage("sweep"), "100:12000:600", &LumpedArgs::defaults())?;
     println!("\nall outputs in {}", dir.display());
     Ok(())
 }
@@ -617,13 +621,12 @@ struct LumpedSetup {
     fn_hz: f64,
 }
 
-fn lumped_setup(
-    args: &CommonArgs,
-    rpm: &str,
-    source: &str,
-    damping_ratio: f64,
-    torque_nm: Option<f64>,
-) -> Result<LumpedSetup> {
+fn lumped_setup(args: &CommonArgs, rpm: &str, options: &LumpedArgs) -> Result<LumpedSetup> {
+    let (source, damping_ratio, torque_nm) = (
+        options.stiffness.as_str(),
+        options.damping_ratio,
+        options.torque_nm,
+    );
     use geardyn::lumped::{MeshModel, PeriodicTable};
     let case = load_case(args.case.as_deref())?;
     let rpms = parse_range(rpm)?;
@@ -724,7 +727,11 @@ fn lumped_setup(
     };
     let (i1, i2) = (inertia(0), inertia(1));
     let (rb1, rb2) = (pair.gears[0].base_radius, pair.gears[1].base_radius);
-    let effective_mass = i1 * i2 / (i1 * rb2 * rb2 + i2 * rb1 * rb1);
+    let effective_mass = match options.drive.as_str() {
+        "torque" => i1 * i2 / (i1 * rb2 * rb2 + i2 * rb1 * rb1),
+        "speed" => i2 / (rb2 * rb2),
+        other => anyhow::bail!("--drive {other:?} is unknown: use torque or speed"),
+    };
     let backlash = (pair.backlash_normal > 1e-9).then_some(pair.backlash_normal);
     let mut model = MeshModel {
         effective_mass,
@@ -762,13 +769,8 @@ fn lumped_setup(
     })
 }
 
-fn sweep(
-    args: &CommonArgs,
-    rpm: &str,
-    source: &str,
-    damping_ratio: f64,
-    torque_nm: Option<f64>,
-) -> Result<()> {
+fn sweep(args: &CommonArgs, rpm: &str, options: &LumpedArgs) -> Result<()> {
+    let damping_ratio = options.damping_ratio;
     use geardyn::sweep as sw;
     let started = std::time::Instant::now();
     let LumpedSetup {
@@ -781,7 +783,7 @@ fn sweep(
         inertias: (i1, i2),
         effective_mass,
         fn_hz,
-    } = lumped_setup(args, rpm, source, damping_ratio, torque_nm)?;
+    } = lumped_setup(args, rpm, options)?;
     let pair = &case.pair;
     let dir = output_dir(args.out.as_deref(), "sweep", &case)?;
     report::write_atomic(&dir.join("case.toml"), case.text.as_bytes())
@@ -945,6 +947,7 @@ fn sweep(
     let summary = serde_json::json!({
         "case": case.name(),
         "stiffness_source": source_name,
+        "drive": options.drive,
         "mean_stiffness_n_per_m": model.stiffness.mean(),
         "effective_mass_kg": effective_mass,
         "inertia_kg_mm2": [i1 * 1e6, i2 * 1e6],
@@ -961,7 +964,7 @@ fn sweep(
         "wall_s": wall_s,
         "stiffness_wall_s": stiffness_wall_s,
         "total_wall_s": started.elapsed().as_secs_f64(),
-        "model": "1-DOF along the line of action, rigid shafts and bearings; mesh stiffness periodic in the driver roll angle",
+        "model": "1-DOF along the line of action (the torsional 2-DOF with rigid shafts and bearings reduced exactly: torque drive -> relative coordinate, speed drive -> driven gear only); mesh stiffness periodic in the driver roll angle",
     });
     report::write_json(&dir.join("summary.json"), &summary).context("cannot write summary.json")?;
     println!(
@@ -978,14 +981,9 @@ fn sweep(
     Ok(())
 }
 
-fn stability(
-    args: &CommonArgs,
-    rpm: &str,
-    source: &str,
-    damping_ratio: f64,
-    torque_nm: Option<f64>,
-) -> Result<()> {
-    let setup = lumped_setup(args, rpm, source, damping_ratio, torque_nm)?;
+fn stability(args: &CommonArgs, rpm: &str, options: &LumpedArgs) -> Result<()> {
+    let damping_ratio = options.damping_ratio;
+    let setup = lumped_setup(args, rpm, options)?;
     let LumpedSetup {
         case,
         rpms,
@@ -1057,6 +1055,7 @@ fn stability(
     let summary = serde_json::json!({
         "case": case.name(),
         "stiffness_source": source_name,
+        "drive": options.drive,
         "mean_stiffness_n_per_m": model.stiffness.mean(),
         "natural_frequency_hz": fn_hz,
         "damping_ratio": damping_ratio,

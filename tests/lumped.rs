@@ -203,3 +203,43 @@ fn brute_force_growth_matches_the_floquet_multiplier() {
         "growth {per_period} vs λ {lambda}"
     );
 }
+
+/// Where the integrator fails: RK4 on the undamped oscillator multiplies the amplitude per step
+/// by |R(iωh)|, R(z) = 1 + z + z²/2 + z³/6 + z⁴/24, stable for ωh ≤ 2√2 = 2.828. Observed growth
+/// over many steps matches the prediction on both sides of the limit (the sweep keeps ωh ≤ 0.2).
+#[test]
+fn rk4_step_limit_is_where_theory_puts_it() {
+    let m = model(PeriodicTable::constant(PERIOD, K_MEAN), 0.0, 0.0);
+    let free = MeshModel {
+        force: 0.0,
+        ..m.clone()
+    };
+    let wn = m.natural_frequency();
+    for (omega_h, grows) in [(2.70, false), (2.95, true)] {
+        // Choose the driver speed so that one mesh period holds 64 steps of ωh each.
+        let steps = 64;
+        let period_time = steps as f64 * omega_h / wn;
+        let speed = PERIOD / period_time;
+        let periods = 3;
+        let s = steady_state(&free, speed, steps, (1e-9, 0.0), 0.0, periods);
+        let (x, v) = (s.displacement[0], s.velocity[0]);
+        let amplitude = (x * x + (v / wn).powi(2)).sqrt() / 1e-9;
+        let z2 = omega_h * omega_h;
+        let (re, im) = (
+            1.0 - z2 / 2.0 + z2 * z2 / 24.0,
+            omega_h - omega_h * z2 / 6.0,
+        );
+        let predicted = (re * re + im * im)
+            .sqrt()
+            .powi((steps * (periods - 1)) as i32);
+        assert_eq!(
+            amplitude > 1.0,
+            grows,
+            "ωh = {omega_h}: amplitude ×{amplitude:e}"
+        );
+        assert!(
+            (amplitude.ln() - predicted.ln()).abs() < 0.05 * predicted.ln().abs().max(1.0),
+            "ωh = {omega_h}: ×{amplitude:e} vs predicted ×{predicted:e}"
+        );
+    }
+}

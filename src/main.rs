@@ -340,25 +340,12 @@ fn ltca(
     positions: usize,
     relief: Option<&str>,
 ) -> Result<()> {
-    use geardyn::ltca::{body::BodyMaterial, engaging_teeth, LtcaModel};
     use geardyn::report::ltca as rep;
     use indicatif::{ProgressBar, ProgressStyle};
 
     let started = std::time::Instant::now();
     let case = load_case(args.case.as_deref())?;
-    let torque = match torque_nm {
-        Some(t) => t,
-        None => case
-            .operating_points
-            .first()
-            .map(|o| o.torque)
-            .context("the case has no operating point: give --torque-nm")?,
-    };
-    if !(torque > 0.0 && torque.is_finite()) {
-        anyhow::bail!(
-            "--torque-nm {torque} is invalid: the LTCA needs a load torque > 0 on the driven gear"
-        );
-    }
+    let torque = load_torque(&case, torque_nm)?;
     let variants: Vec<_> = match relief {
         Some(name) => vec![case
             .relief_variant(name)
@@ -368,13 +355,7 @@ fn ltca(
     let dir = output_dir(args.out.as_deref(), "ltca", &case)?;
     report::write_atomic(&dir.join("case.toml"), case.text.as_bytes())
         .context("cannot write case.toml")?;
-    let material = BodyMaterial {
-        youngs_modulus: case.material.youngs_modulus,
-        poisson_ratio: case.material.poisson_ratio,
-        plane: case.file.fe.plane,
-    };
     let rb2 = case.pair.gears[1].base_radius;
-    let teeth = engaging_teeth(&case.pair);
     let mut summaries = Vec::new();
     let mut ste_series = Vec::new();
     let mut k_series = Vec::new();
@@ -383,15 +364,7 @@ fn ltca(
             "relief variant \"{}\": meshing and factorizing both gears ...",
             variant.name
         );
-        let model = LtcaModel::new(
-            &case.pair,
-            &variant.modifications,
-            [
-                case.mesh_spec(teeth[0].clone()),
-                case.mesh_spec(teeth[1].clone()),
-            ],
-            material,
-        )?;
+        let model = ltca_model(&case, &variant.modifications)?;
         let bar = ProgressBar::new(positions as u64);
         bar.set_style(
             ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} positions, ETA {eta}")
@@ -586,6 +559,43 @@ fn ltca(
     Ok(())
 }
 
+/// Both gear bodies of the case, meshed fine on the engaging teeth, factorized and condensed.
+fn ltca_model(
+    case: &Case,
+    modifications: &[geardyn::geometry::FlankModification; 2],
+) -> Result<geardyn::ltca::LtcaModel> {
+    use geardyn::ltca::{body::BodyMaterial, engaging_teeth, LtcaModel};
+    let teeth = engaging_teeth(&case.pair);
+    let material = BodyMaterial {
+        youngs_modulus: case.material.youngs_modulus,
+        poisson_ratio: case.material.poisson_ratio,
+        plane: case.file.fe.plane,
+    };
+    let specs = [
+        case.mesh_spec(teeth[0].clone()),
+        case.mesh_spec(teeth[1].clone()),
+    ];
+    Ok(LtcaModel::new(&case.pair, modifications, specs, material)?)
+}
+
+/// The load torque on the driven gear: the one asked for, or the case's first operating point.
+fn load_torque(case: &Case, torque_nm: Option<f64>) -> Result<f64> {
+    let torque = match torque_nm {
+        Some(t) => t,
+        None => case
+            .operating_points
+            .first()
+            .map(|o| o.torque)
+            .context("the case has no operating point: give --torque-nm")?,
+    };
+    if !(torque > 0.0 && torque.is_finite()) {
+        anyhow::bail!(
+            "--torque-nm {torque} is invalid: the model needs a load torque > 0 on the driven gear"
+        );
+    }
+    Ok(torque)
+}
+
 fn parse_range(text: &str) -> Result<Vec<f64>> {
     let parts: Vec<&str> = text.split(':').collect();
     let bad = || {
@@ -635,49 +645,22 @@ fn lumped_setup(args: &CommonArgs, rpm: &str, options: &LumpedArgs) -> Result<Lu
             "--damping-ratio {damping_ratio} is invalid: use a value in [0, 1), typically 0.02–0.1"
         );
     }
-    let torque = match torque_nm {
-        Some(t) => t,
-        None => case
-            .operating_points
-            .first()
-            .map(|o| o.torque)
-            .context("the case has no operating point: give --torque-nm")?,
-    };
-    if !(torque > 0.0 && torque.is_finite()) {
-        anyhow::bail!(
-            "--torque-nm {torque} is invalid: the lumped model needs a load torque > 0 on the driven gear"
-        );
-    }
+    let torque = load_torque(&case, torque_nm)?;
     let pair = &case.pair;
     let period = pair.gears[0].angular_pitch();
     let positions = 64;
     let stiffness_started = std::time::Instant::now();
     let (stiffness, unloaded_te, source_name) = match source {
         "ltca" => {
-            use geardyn::ltca::{body::BodyMaterial, engaging_teeth, LtcaModel};
             let variant = case
                 .relief_variants
                 .first()
                 .context("the case has no relief variant")?;
-            let teeth = engaging_teeth(pair);
-            let material = BodyMaterial {
-                youngs_modulus: case.material.youngs_modulus,
-                poisson_ratio: case.material.poisson_ratio,
-                plane: case.file.fe.plane,
-            };
             eprintln!(
                 "computing the LTCA stiffness (relief \"{}\") ...",
                 variant.name
             );
-            let model = LtcaModel::new(
-                pair,
-                &variant.modifications,
-                [
-                    case.mesh_spec(teeth[0].clone()),
-                    case.mesh_spec(teeth[1].clone()),
-                ],
-                material,
-            )?;
+            let model = ltca_model(&case, &variant.modifications)?;
             let results = model.run(positions, torque, &|_| {})?;
             let rb2 = pair.gears[1].base_radius;
             (

@@ -243,3 +243,86 @@ fn rk4_step_limit_is_where_theory_puts_it() {
         );
     }
 }
+
+/// Damped Mathieu boundaries from Hill's determinant: for x″ + 2ζx′ + (1 + ε cos Ωt)x = 0 the
+/// first tongue's edges carry period-2T solutions x = Σ aₖ cos νₖt + bₖ sin νₖt, νₖ = (2k+1)Ω/2;
+/// balancing harmonics gives, for k ≥ 0 (with a₋₁ → a₀, b₋₁ → −b₀ from cos Ωt·cos(Ω/2)t):
+/// (1 − νₖ²) aₖ + 2ζνₖ bₖ + ε/2 (aₖ₋₁ + aₖ₊₁) = 0,  (1 − νₖ²) bₖ − 2ζνₖ aₖ + ε/2 (bₖ₋₁ + bₖ₊₁) = 0.
+/// The edges are the zeros of the truncated determinant (8 harmonics); the Floquet edges of our
+/// integrator with the same damping must agree within 0.5 % (they do to ~1e-5).
+#[test]
+fn damped_floquet_boundaries_match_hills_determinant() {
+    use nalgebra::DMatrix;
+    let (eps, zeta) = (0.1, 0.005);
+    let hill = |omega: f64| {
+        let n = 8;
+        let mut m = DMatrix::<f64>::zeros(2 * n, 2 * n);
+        for k in 0..n {
+            let nu = (2 * k + 1) as f64 * omega / 2.0;
+            let (a, b) = (2 * k, 2 * k + 1);
+            m[(a, a)] = 1.0 - nu * nu;
+            m[(a, b)] = 2.0 * zeta * nu;
+            m[(b, b)] = 1.0 - nu * nu;
+            m[(b, a)] = -2.0 * zeta * nu;
+            if k + 1 < n {
+                m[(a, a + 2)] += eps / 2.0;
+                m[(b, b + 2)] += eps / 2.0;
+            }
+            if k > 0 {
+                m[(a, a - 2)] += eps / 2.0;
+                m[(b, b - 2)] += eps / 2.0;
+            } else {
+                m[(a, a)] += eps / 2.0;
+                m[(b, b)] -= eps / 2.0;
+            }
+        }
+        m.determinant()
+    };
+    let root = |mut lo: f64, mut hi: f64| {
+        let f_lo = hill(lo);
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if (hill(mid) > 0.0) == (f_lo > 0.0) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        0.5 * (lo + hi)
+    };
+    let (hill_lower, hill_upper) = (root(1.9, 2.0), root(2.0, 2.1));
+
+    // Our model in the same nondimensional form: ω_n = √(k̄/m), c = 2ζ√(k̄ m).
+    let m = model(
+        PeriodicTable::from_fn(PERIOD, 512, |t| {
+            K_MEAN * (1.0 + eps * (2.0 * PI * t / PERIOD).cos())
+        }),
+        0.0,
+        zeta,
+    );
+    let wn = m.natural_frequency();
+    let unstable = |ratio: f64| floquet_max_multiplier(&m, driver_speed(ratio * wn), 512) > 1.0;
+    let edge = |mut stable: f64, mut inside: f64| {
+        for _ in 0..50 {
+            let mid = 0.5 * (stable + inside);
+            if unstable(mid) {
+                inside = mid;
+            } else {
+                stable = mid;
+            }
+        }
+        0.5 * (stable + inside)
+    };
+    let (lower, upper) = (edge(1.9, 2.0), edge(2.1, 2.0));
+    eprintln!("damped Mathieu ε = {eps}, ζ = {zeta}: Floquet {lower:.6} / {upper:.6}, Hill {hill_lower:.6} / {hill_upper:.6} (× ω_n)");
+    assert!(
+        ((lower - hill_lower) / hill_lower).abs() < 5e-3
+            && ((upper - hill_upper) / hill_upper).abs() < 5e-3
+    );
+    assert!(
+        ((lower - hill_lower) / hill_lower).abs() < 1e-4
+            && ((upper - hill_upper) / hill_upper).abs() < 1e-4
+    );
+    // Damping narrows the tongue compared with the undamped edges 2(1 ∓ ε/4).
+    assert!(lower > 2.0 * (1.0 - eps / 4.0) - 1e-3 && upper < 2.0 * (1.0 + eps / 4.0) + 1e-3);
+}

@@ -70,6 +70,10 @@ enum Command {
         rpm: String,
         #[command(flatten)]
         model: LumpedArgs,
+        /// Also run up through the same speed range in this many seconds (a linear speed ramp,
+        /// transient): writes runup.csv and runup.png.
+        #[arg(long, value_name = "SECONDS")]
+        run_up_s: Option<f64>,
     },
     /// Floquet stability map of the linear time-periodic mesh model over a speed range:
     /// the largest multiplier of the monodromy matrix per driver speed (> 1: parametric
@@ -143,7 +147,12 @@ fn main() -> ExitCode {
             positions,
             relief,
         } => ltca(&common, torque_nm, positions, relief.as_deref()),
-        Command::Sweep { common, rpm, model } => sweep(&common, &rpm, &model),
+        Command::Sweep {
+            common,
+            rpm,
+            model,
+            run_up_s,
+        } => sweep(&common, &rpm, &model, run_up_s),
         Command::Stability { common, rpm, model } => stability(&common, &rpm, &model),
         Command::Case { case } => print_case(case.as_deref()),
     };
@@ -190,7 +199,12 @@ fn run(args: &CommonArgs) -> Result<()> {
     println!("\n== ltca");
     ltca(&stage("ltca"), None, 64, None)?;
     println!("\n== sweep");
-    sweep(&stage("sweep"), "100:12000:600", &LumpedArgs::defaults())?;
+    sweep(
+        &stage("sweep"),
+        "100:12000:600",
+        &LumpedArgs::defaults(),
+        None,
+    )?;
     println!("\nall outputs in {}", dir.display());
     Ok(())
 }
@@ -752,7 +766,7 @@ fn lumped_setup(args: &CommonArgs, rpm: &str, options: &LumpedArgs) -> Result<Lu
     })
 }
 
-fn sweep(args: &CommonArgs, rpm: &str, options: &LumpedArgs) -> Result<()> {
+fn sweep(args: &CommonArgs, rpm: &str, options: &LumpedArgs, run_up_s: Option<f64>) -> Result<()> {
     let damping_ratio = options.damping_ratio;
     use geardyn::sweep as sw;
     let started = std::time::Instant::now();
@@ -908,6 +922,68 @@ fn sweep(args: &CommonArgs, rpm: &str, options: &LumpedArgs) -> Result<()> {
         (1200, 700),
         &waterfall,
     )?;
+    if let Some(duration) = run_up_s {
+        if !(duration > 0.0 && duration.is_finite()) {
+            anyhow::bail!("--run-up-s {duration} is invalid: give a duration > 0 in seconds");
+        }
+        let to_speed = |rpm: f64| rpm * 2.0 * std::f64::consts::PI / 60.0;
+        let (from, to) = (rpms[0], rpms[rpms.len() - 1]);
+        let r = geardyn::lumped::run_up(&model, to_speed(from), to_speed(to), duration, 200_000);
+        let static_x = model.force / model.stiffness.mean();
+        let rows = (0..r.time.len()).map(|i| {
+            vec![
+                format!("{:.9}", r.time[i]),
+                format!(
+                    "{:.4}",
+                    r.driver_speed[i] * 60.0 / (2.0 * std::f64::consts::PI)
+                ),
+                format!("{:.6}", (r.displacement[i] - static_x) * 1e6),
+                format!("{:.4}", r.mesh_force[i]),
+            ]
+        });
+        report::write_csv(
+            &dir.join("runup.csv"),
+            &[
+                "time_s",
+                "driver_rpm",
+                "dte_about_static_um",
+                "mesh_force_n",
+            ],
+            rows,
+        )
+        .context("cannot write runup.csv")?;
+        let plot = report::plot::LinePlot {
+            title: format!(
+                "{}: run-up {from:.0} -> {to:.0} rpm in {duration} s, stiffness {source_name}",
+                case.name()
+            ),
+            x_label: "driver speed [rpm]".into(),
+            y_label: "DTE about the static deflection [um]".into(),
+            series: vec![(
+                "run-up".into(),
+                (0..r.time.len())
+                    .step_by((r.time.len() / 20_000).max(1))
+                    .map(|i| {
+                        (
+                            r.driver_speed[i] * 60.0 / (2.0 * std::f64::consts::PI),
+                            (r.displacement[i] - static_x) * 1e6,
+                        )
+                    })
+                    .collect(),
+            )],
+        };
+        report::plot::draw_svg_and_png(
+            &dir.join("runup.svg"),
+            &dir.join("runup.png"),
+            (1200, 700),
+            &plot,
+        )?;
+        println!(
+            "run-up: {} RK4 steps, {} samples in runup.csv",
+            r.steps,
+            r.time.len()
+        );
+    }
     let rms: Vec<f64> = up.iter().map(|p| p.dte_rms).collect();
     let resonance_rpm = geardyn::sweep::peaks(&rpms, &rms);
     // The primary resonance: the response peak nearest f_mesh = f_n.

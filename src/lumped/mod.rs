@@ -248,3 +248,57 @@ fn rk4_step(
         v + h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4),
     )
 }
+
+/// A run-up (or run-down): the driver speed ramps linearly from `from` to `to` [rad/s] over
+/// `duration` [s]; θ(t) = Ω₀t + ½αt². Fixed RK4 steps of at most 1/32 of the natural period and
+/// 1/64 of the shortest mesh period; at most `max_samples` evenly spaced steps are recorded.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct RunUp {
+    pub time: Vec<f64>,
+    /// Driver speed [rad/s].
+    pub driver_speed: Vec<f64>,
+    /// Displacement along the line of action [m].
+    pub displacement: Vec<f64>,
+    /// Mesh force [N].
+    pub mesh_force: Vec<f64>,
+    pub steps: usize,
+}
+
+pub fn run_up(model: &MeshModel, from: f64, to: f64, duration: f64, max_samples: usize) -> RunUp {
+    let alpha = (to - from) / duration;
+    let fastest_mesh_period = model.stiffness.period / from.abs().max(to.abs()).max(1e-12);
+    let natural_period = 2.0 * std::f64::consts::PI / model.natural_frequency();
+    let h_max = (natural_period / 32.0).min(fastest_mesh_period / 64.0);
+    let steps = (duration / h_max).ceil() as usize;
+    let h = duration / steps as f64;
+    let decimate = steps.div_ceil(max_samples.max(1)).max(1);
+    let theta = |t: f64| from * t + 0.5 * alpha * t * t;
+    let accel = |t: f64, x: f64, v: f64| model.acceleration(theta(t), x, v);
+    let (mut x, mut v) = (model.force / model.stiffness.mean(), 0.0);
+    let mut out = RunUp {
+        steps,
+        ..RunUp::default()
+    };
+    for i in 0..=steps {
+        let t = i as f64 * h;
+        if i % decimate == 0 {
+            out.time.push(t);
+            out.driver_speed.push(from + alpha * t);
+            out.displacement.push(x);
+            out.mesh_force.push(model.mesh_force(theta(t), x));
+        }
+        if i == steps {
+            break;
+        }
+        let a1 = accel(t, x, v);
+        let (x2, v2) = (x + 0.5 * h * v, v + 0.5 * h * a1);
+        let a2 = accel(t + 0.5 * h, x2, v2);
+        let (x3, v3) = (x + 0.5 * h * v2, v + 0.5 * h * a2);
+        let a3 = accel(t + 0.5 * h, x3, v3);
+        let (x4, v4) = (x + h * v3, v + h * a3);
+        let a4 = accel(t + h, x4, v4);
+        x += h / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + v4);
+        v += h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
+    }
+    out
+}

@@ -709,8 +709,12 @@ fn lumped_setup(args: &CommonArgs, rpm: &str, options: &LumpedArgs) -> Result<Lu
         "iso" => {
             let iso =
                 geardyn::stiffness::iso_6336_method_b(pair, torque, case.material.youngs_modulus);
+            let table = iso.table(pair, positions);
             (
-                PeriodicTable::constant(period, iso.mean_n_per_m),
+                PeriodicTable {
+                    period,
+                    values: table.stiffness,
+                },
                 PeriodicTable::constant(period, 0.0),
                 "iso6336 (constant c_gamma_alpha)".to_string(),
             )

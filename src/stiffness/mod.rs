@@ -30,6 +30,21 @@ pub struct IsoStiffness {
     pub load_factor: f64,
 }
 
+impl IsoStiffness {
+    /// The mean mesh stiffness c_γα·b as a (constant) table over one base pitch, like the FE's.
+    pub fn table(&self, pair: &GearPair, positions: usize) -> StiffnessTable {
+        let rb1 = pair.gears[0].base_radius;
+        let pitch = pair.contact_points.pitch;
+        StiffnessTable {
+            source: "iso6336".into(),
+            roll_angles: (0..positions)
+                .map(|j| pitch / rb1 + j as f64 / positions as f64 * pair.gears[0].angular_pitch())
+                .collect(),
+            stiffness: vec![self.mean_n_per_m; positions],
+        }
+    }
+}
+
 /// ISO 6336-1 method B for spur gears (β = 0, K_A = 1) at load torque `torque` on gear 2,
 /// steel against steel (the standard's factors hold for E = 206 GPa; they are scaled by E/206 GPa
 /// for other moduli, as ISO 6336-1 §9.3 allows).

@@ -12,7 +12,9 @@
 //! ```
 //! e(θ) is the unloaded transmission error (relief). Integration: classical Runge–Kutta 4 with an
 //! integer number of steps per mesh period, so every step lands on the same stiffness samples and
-//! the periodic steady state is detected from the state at period boundaries (Poincaré map).
+//! the periodic steady state is detected from the state at period boundaries (Poincaré map); an
+//! adaptive Dormand–Prince 5(4) integration ([`reference_periods`]) is the reference it is
+//! checked against, also across the kinks of the backlash law.
 //!
 //! # Stability (Floquet)
 //! For the linear model (no separation) the monodromy matrix Φ over one mesh period T_m, from
@@ -301,4 +303,102 @@ pub fn run_up(model: &MeshModel, from: f64, to: f64, duration: f64, max_samples:
         v += h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
     }
     out
+}
+
+/// Reference integration with the adaptive Dormand–Prince 5(4) pair (Hairer, Nørsett & Wanner,
+/// *Solving ODEs I*, §II.5): error control per step (relative `tolerance`), so steps shrink by
+/// themselves at the kinks of the backlash law. Integrates `periods` mesh periods from `start`
+/// at θ = 0 and returns the state at the end and the number of accepted steps.
+pub fn reference_periods(
+    model: &MeshModel,
+    driver_speed: f64,
+    start: (f64, f64),
+    periods: usize,
+    tolerance: f64,
+) -> ((f64, f64), usize) {
+    const C: [f64; 7] = [0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0];
+    const A: [[f64; 6]; 7] = [
+        [0.0; 6],
+        [1.0 / 5.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [3.0 / 40.0, 9.0 / 40.0, 0.0, 0.0, 0.0, 0.0],
+        [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0, 0.0, 0.0, 0.0],
+        [
+            19372.0 / 6561.0,
+            -25360.0 / 2187.0,
+            64448.0 / 6561.0,
+            -212.0 / 729.0,
+            0.0,
+            0.0,
+        ],
+        [
+            9017.0 / 3168.0,
+            -355.0 / 33.0,
+            46732.0 / 5247.0,
+            49.0 / 176.0,
+            -5103.0 / 18656.0,
+            0.0,
+        ],
+        [
+            35.0 / 384.0,
+            0.0,
+            500.0 / 1113.0,
+            125.0 / 192.0,
+            -2187.0 / 6784.0,
+            11.0 / 84.0,
+        ],
+    ];
+    const B5: [f64; 7] = [
+        35.0 / 384.0,
+        0.0,
+        500.0 / 1113.0,
+        125.0 / 192.0,
+        -2187.0 / 6784.0,
+        11.0 / 84.0,
+        0.0,
+    ];
+    const B4: [f64; 7] = [
+        5179.0 / 57600.0,
+        0.0,
+        7571.0 / 16695.0,
+        393.0 / 640.0,
+        -92097.0 / 339200.0,
+        187.0 / 2100.0,
+        1.0 / 40.0,
+    ];
+    let end = periods as f64 * model.stiffness.period / driver_speed;
+    let rhs = |t: f64, y: [f64; 2]| [y[1], model.acceleration(driver_speed * t, y[0], y[1])];
+    let scale_x = (model.force / model.stiffness.mean()).abs().max(1e-12);
+    let scale_v = scale_x * model.natural_frequency();
+    let (mut t, mut y) = (0.0, [start.0, start.1]);
+    let mut h = 0.01 * 2.0 * std::f64::consts::PI / model.natural_frequency();
+    let mut accepted = 0;
+    while t < end {
+        h = h.min(end - t);
+        let mut k = [[0.0; 2]; 7];
+        for s in 0..7 {
+            let mut ys = y;
+            for (j, kj) in k.iter().enumerate().take(s) {
+                ys[0] += h * A[s][j] * kj[0];
+                ys[1] += h * A[s][j] * kj[1];
+            }
+            k[s] = rhs(t + C[s] * h, ys);
+        }
+        let (mut y5, mut err) = (y, [0.0; 2]);
+        for s in 0..7 {
+            for d in 0..2 {
+                y5[d] += h * B5[s] * k[s][d];
+                err[d] += h * (B5[s] - B4[s]) * k[s][d];
+            }
+        }
+        let e = (err[0] / (scale_x * tolerance))
+            .abs()
+            .max((err[1] / (scale_v * tolerance)).abs());
+        if e <= 1.0 {
+            t += h;
+            y = y5;
+            accepted += 1;
+        }
+        h *= (0.9 * e.max(1e-10).powf(-0.2)).clamp(0.2, 5.0);
+    }
+    ((y[0], y[1]), accepted)
 }

@@ -454,12 +454,7 @@ fn ltca(
                 .collect(),
         };
         let stem = format!("load_sharing_{}", variant.name);
-        report::plot::draw_svg_and_png(
-            &dir.join(format!("{stem}.svg")),
-            &dir.join(format!("{stem}.png")),
-            (1200, 700),
-            &sharing,
-        )?;
+        report::plot::save_chart(&dir, &stem, &sharing)?;
         println!(
             "{:<16} k mean {:.4e} min {:.4e} max {:.4e} N/m, STE mean {:.3} um p-p {:.3} um, KKT <= {:.1e}",
             variant.name,
@@ -481,12 +476,7 @@ fn ltca(
         y_label: "transmission error along the LOA [um]".into(),
         series: ste_series,
     };
-    report::plot::draw_svg_and_png(
-        &dir.join("ste.svg"),
-        &dir.join("ste.png"),
-        (1200, 700),
-        &ste_plot,
-    )?;
+    report::plot::save_chart(&dir, "ste", &ste_plot)?;
     let pe = geardyn::stiffness::potential_energy::potential_energy_table(
         &case.pair,
         positions,
@@ -496,14 +486,13 @@ fn ltca(
     );
     let iso =
         geardyn::stiffness::iso_6336_method_b(&case.pair, torque, case.material.youngs_modulus);
-    k_series.push((
-        "potential energy (unmodified)".into(),
-        pe.roll_angles
-            .iter()
-            .zip(&pe.stiffness)
-            .map(|(x, k)| (x.to_degrees(), *k))
-            .collect(),
-    ));
+    let pe_curve: Vec<(f64, f64)> = pe
+        .roll_angles
+        .iter()
+        .zip(&pe.stiffness)
+        .map(|(x, k)| (x.to_degrees(), *k))
+        .collect();
+    k_series.push(("potential energy (unmodified)".into(), pe_curve.clone()));
     let (x0, x1) = (
         pe.roll_angles[0].to_degrees(),
         pe.roll_angles[positions - 1].to_degrees(),
@@ -515,10 +504,9 @@ fn ltca(
     report::write_csv(
         &dir.join("stiffness_potential_energy.csv"),
         &["roll_angle_deg", "mesh_stiffness_n_per_m"],
-        pe.roll_angles
+        pe_curve
             .iter()
-            .zip(&pe.stiffness)
-            .map(|(x, k)| vec![format!("{:.6}", x.to_degrees()), format!("{k:.6e}")]),
+            .map(|(x, k)| vec![format!("{x:.6}"), format!("{k:.6e}")]),
     )
     .context("cannot write stiffness_potential_energy.csv")?;
     let k_plot = report::plot::LinePlot {
@@ -527,12 +515,7 @@ fn ltca(
         y_label: "mesh stiffness [N/m]".into(),
         series: k_series,
     };
-    report::plot::draw_svg_and_png(
-        &dir.join("stiffness.svg"),
-        &dir.join("stiffness.png"),
-        (1200, 700),
-        &k_plot,
-    )?;
+    report::plot::save_chart(&dir, "stiffness", &k_plot)?;
 
     println!(
         "potential energy: mean {:.4e} N/m (min {:.4e}, max {:.4e})",
@@ -884,12 +867,7 @@ fn sweep(args: &CommonArgs, rpm: &str, options: &LumpedArgs, run_up_s: Option<f6
             y_label: label.into(),
             series,
         };
-        report::plot::draw_svg_and_png(
-            &dir.join(format!("{stem}.svg")),
-            &dir.join(format!("{stem}.png")),
-            (1200, 700),
-            &plot,
-        )?;
+        report::plot::save_chart(&dir, stem, &plot)?;
     }
 
     // Waterfall: DTE amplitude at each mesh harmonic, at its frequency, over speed.
@@ -920,12 +898,7 @@ fn sweep(args: &CommonArgs, rpm: &str, options: &LumpedArgs, run_up_s: Option<f6
         ),
         decades: 3.0,
     };
-    report::plot::draw_svg_and_png(
-        &dir.join("waterfall.svg"),
-        &dir.join("waterfall.png"),
-        (1200, 700),
-        &waterfall,
-    )?;
+    report::plot::save_chart(&dir, "waterfall", &waterfall)?;
     if let Some(duration) = run_up_s {
         if !(duration > 0.0 && duration.is_finite()) {
             anyhow::bail!("--run-up-s {duration} is invalid: give a duration > 0 in seconds");
@@ -976,12 +949,7 @@ fn sweep(args: &CommonArgs, rpm: &str, options: &LumpedArgs, run_up_s: Option<f6
                     .collect(),
             )],
         };
-        report::plot::draw_svg_and_png(
-            &dir.join("runup.svg"),
-            &dir.join("runup.png"),
-            (1200, 700),
-            &plot,
-        )?;
+        report::plot::save_chart(&dir, "runup", &plot)?;
         println!(
             "run-up: {} RK4 steps, {} samples in runup.csv",
             r.steps,
@@ -1109,12 +1077,7 @@ fn stability(args: &CommonArgs, rpm: &str, options: &LumpedArgs) -> Result<()> {
             ),
         ],
     };
-    report::plot::draw_svg_and_png(
-        &dir.join("stability.svg"),
-        &dir.join("stability.png"),
-        (1200, 700),
-        &plot,
-    )?;
+    report::plot::save_chart(&dir, "stability", &plot)?;
     let summary = serde_json::json!({
         "case": case.name(),
         "stiffness_source": source_name,

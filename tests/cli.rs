@@ -10,6 +10,11 @@ fn geardyn() -> Command {
     Command::cargo_bin("geardyn").unwrap()
 }
 
+/// The `summary.json` of an output folder.
+fn read_summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap()
+}
+
 fn write_case(dir: &Path, text: &str) -> std::path::PathBuf {
     let path = dir.join("case.toml");
     std::fs::write(&path, text).unwrap();
@@ -33,8 +38,7 @@ fn geometry_on_the_embedded_case_writes_summary_drawings_and_csv() {
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert!(stdout.contains("contact ratio"), "{stdout}");
 
-    let summary: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let summary = read_summary(&out);
     for key in [
         "base_radius_mm",
         "contact_ratio",
@@ -257,8 +261,7 @@ fn ltca_writes_csv_plots_and_summary() {
         "{}",
         String::from_utf8_lossy(&output.stderr)
     );
-    let summary: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let summary = read_summary(&out);
     for key in [
         "mesh_stiffness_mean_n_per_m",
         "mesh_stiffness_min_n_per_m",
@@ -346,8 +349,7 @@ fn sweep_writes_curves_and_summary() {
         "{}",
         String::from_utf8_lossy(&output.stderr)
     );
-    let summary: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let summary = read_summary(&out);
     for key in [
         "mean_stiffness_n_per_m",
         "natural_frequency_hz",
@@ -411,8 +413,7 @@ fn stability_map_finds_the_principal_parametric_region() {
         "{}",
         String::from_utf8_lossy(&output.stderr)
     );
-    let summary: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let summary = read_summary(&out);
     let centre = summary["parametric_region_centres_rpm"][0]
         .as_f64()
         .unwrap();
@@ -427,4 +428,48 @@ fn stability_map_finds_the_principal_parametric_region() {
         "no unstable range near {centre} rpm: {ranges:?}"
     );
     assert!(out.join("stability.png").exists() && out.join("stability.csv").exists());
+}
+
+/// Speed drive (the driver held at its speed): m = I₂/r_b2², twice m_e for equal gears, so f_n
+/// drops by √2; `--run-up-s` adds the transient ramp.
+#[test]
+fn sweep_speed_drive_and_run_up() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let output = geardyn()
+            .args(["sweep", "--stiffness", "pe", "--rpm", "1000:9000:5"])
+            .args(extra)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        out
+    };
+    let torque = run("torque", &[]);
+    let speed = run("speed", &["--drive", "speed", "--run-up-s", "0.05"]);
+    let (a, b) = (read_summary(&torque), read_summary(&speed));
+    assert_eq!(b["drive"].as_str(), Some("speed"));
+    let ratio =
+        a["natural_frequency_hz"].as_f64().unwrap() / b["natural_frequency_hz"].as_f64().unwrap();
+    assert!((ratio - 2f64.sqrt()).abs() < 1e-9, "{ratio}");
+    assert!(speed.join("runup.png").exists());
+    let samples = csv::Reader::from_path(speed.join("runup.csv"))
+        .unwrap()
+        .records()
+        .count();
+    assert!(samples > 1000 && samples <= 200_001, "{samples}");
+    let bad = geardyn()
+        .args(["sweep", "--drive", "sideways", "--rpm", "1000:2000:2"])
+        .arg("--out")
+        .arg(dir.path().join("bad"))
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--drive"));
 }

@@ -23,6 +23,19 @@ fn model(stiffness: PeriodicTable, te_amplitude: f64, zeta: f64) -> MeshModel {
     m
 }
 
+/// The edge of an instability region between a stable and an unstable point, by bisection.
+fn stability_edge(unstable: &dyn Fn(f64) -> bool, mut stable: f64, mut inside: f64) -> f64 {
+    for _ in 0..50 {
+        let mid = 0.5 * (stable + inside);
+        if unstable(mid) {
+            inside = mid;
+        } else {
+            stable = mid;
+        }
+    }
+    0.5 * (stable + inside)
+}
+
 /// Driver speed [rad/s] whose mesh frequency is `omega_mesh` [rad/s].
 fn driver_speed(omega_mesh: f64) -> f64 {
     omega_mesh * PERIOD / (2.0 * PI)
@@ -101,17 +114,7 @@ fn floquet_boundaries_match_mathieu() {
     let unstable = |w: f64| floquet_max_multiplier(&m, driver_speed(w), 512) > 1.0 + 1e-7;
     assert!(unstable(2.0 * wn), "the centre of the tongue is unstable");
     assert!(!unstable(1.8 * wn) && !unstable(2.2 * wn));
-    let edge = |mut stable: f64, mut inside: f64| {
-        for _ in 0..50 {
-            let mid = 0.5 * (stable + inside);
-            if unstable(mid) {
-                inside = mid;
-            } else {
-                stable = mid;
-            }
-        }
-        0.5 * (stable + inside)
-    };
+    let edge = |stable: f64, inside: f64| stability_edge(&unstable, stable, inside);
     let lower = edge(1.8 * wn, 2.0 * wn);
     let upper = edge(2.2 * wn, 2.0 * wn);
     let mathieu = |sign: f64| {
@@ -302,17 +305,7 @@ fn damped_floquet_boundaries_match_hills_determinant() {
     );
     let wn = m.natural_frequency();
     let unstable = |ratio: f64| floquet_max_multiplier(&m, driver_speed(ratio * wn), 512) > 1.0;
-    let edge = |mut stable: f64, mut inside: f64| {
-        for _ in 0..50 {
-            let mid = 0.5 * (stable + inside);
-            if unstable(mid) {
-                inside = mid;
-            } else {
-                stable = mid;
-            }
-        }
-        0.5 * (stable + inside)
-    };
+    let edge = |stable: f64, inside: f64| stability_edge(&unstable, stable, inside);
     let (lower, upper) = (edge(1.9, 2.0), edge(2.1, 2.0));
     eprintln!("damped Mathieu ε = {eps}, ζ = {zeta}: Floquet {lower:.6} / {upper:.6}, Hill {hill_lower:.6} / {hill_upper:.6} (× ω_n)");
     assert!(

@@ -54,6 +54,19 @@ pub fn draw_png(png: &Path, size: (u32, u32), picture: &impl Drawing) -> Result<
     std::fs::rename(&tmp, png).map_err(plot_err(&what))
 }
 
+/// Size of the line charts and colour maps.
+pub const CHART_SIZE: (u32, u32) = (1200, 700);
+
+/// Writes `dir/stem.svg` and `dir/stem.png` of a chart at [`CHART_SIZE`].
+pub fn save_chart(dir: &Path, stem: &str, picture: &impl Drawing) -> Result<(), PlotError> {
+    draw_svg_and_png(
+        &dir.join(format!("{stem}.svg")),
+        &dir.join(format!("{stem}.png")),
+        CHART_SIZE,
+        picture,
+    )
+}
+
 /// Draws the same picture to an SVG and a PNG file (each written atomically).
 pub fn draw_svg_and_png(
     svg: &Path,
@@ -143,13 +156,7 @@ impl PairDrawing {
     ) -> Result<(), PlotError> {
         let inside = |p: &(f64, f64)| p.0 >= xr.0 && p.0 <= xr.1 && p.1 >= yr.0 && p.1 <= yr.1;
         let err = plot_err::<DrawingAreaErrorKind<DB::ErrorType>>("the meshing pair");
-        let mut chart = ChartBuilder::on(area)
-            .caption(caption, ("sans-serif", 16))
-            .margin(12)
-            .x_label_area_size(30)
-            .y_label_area_size(45)
-            .build_cartesian_2d(xr.0..xr.1, yr.0..yr.1)
-            .map_err(&err)?;
+        let mut chart = panel_chart(area, xr, yr, caption).map_err(&err)?;
         chart
             .configure_mesh()
             .light_line_style(WHITE.mix(0.0))
@@ -238,6 +245,27 @@ impl PairDrawing {
             .map_err(&err)?;
         Ok(())
     }
+}
+
+/// The Cartesian chart of one panel of a two-panel drawing, in mm.
+type PanelChart<'a, DB> = ChartContext<
+    'a,
+    DB,
+    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+>;
+
+fn panel_chart<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    xr: (f64, f64),
+    yr: (f64, f64),
+    caption: &str,
+) -> Result<PanelChart<'a, DB>, DrawingAreaErrorKind<DB::ErrorType>> {
+    ChartBuilder::on(area)
+        .caption(caption, ("sans-serif", 16))
+        .margin(12)
+        .x_label_area_size(30)
+        .y_label_area_size(45)
+        .build_cartesian_2d(xr.0..xr.1, yr.0..yr.1)
 }
 
 /// A left and a right panel.
@@ -383,13 +411,7 @@ impl MeshDrawing {
         caption: &str,
     ) -> Result<(), PlotError> {
         let err = plot_err::<DrawingAreaErrorKind<DB::ErrorType>>("the mesh");
-        let mut chart = ChartBuilder::on(area)
-            .caption(caption, ("sans-serif", 16))
-            .margin(12)
-            .x_label_area_size(30)
-            .y_label_area_size(45)
-            .build_cartesian_2d(xr.0..xr.1, yr.0..yr.1)
-            .map_err(&err)?;
+        let mut chart = panel_chart(area, xr, yr, caption).map_err(&err)?;
         chart.configure_mesh().disable_mesh().draw().map_err(&err)?;
         let inside = |p: &(f64, f64)| p.0 >= xr.0 && p.0 <= xr.1 && p.1 >= yr.0 && p.1 <= yr.1;
         let colours = [RGBColor(90, 90, 90), RGBColor(31, 90, 180)];

@@ -24,6 +24,7 @@ fn lumped(c: &mut Criterion) {
         damping: 0.0,
         force: 143.6 / pair.gears[1].base_radius,
         backlash: Some(50e-6),
+        bearings: None,
     };
     model.damping = model.damping_from_ratio(0.05);
     let rpms: Vec<f64> = (0..600)

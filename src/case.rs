@@ -83,6 +83,72 @@ pub struct CaseFile {
     pub mesh: MeshSection,
     #[serde(default)]
     pub fe: FeSection,
+    #[serde(default)]
+    pub lumped: LumpedSection,
+}
+
+/// The lumped parametric-vibration model (`geardyn sweep`, `geardyn stability`); the command
+/// line overrides stiffness source, drive and damping ratio.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LumpedSection {
+    /// Stiffness source: "ltca" (the case's FE, first relief variant), "pe" (potential energy),
+    /// "iso" (ISO 6336-1 c_γα, constant), or a CSV file (path relative to the case file) with
+    /// columns roll_angle_deg, mesh_stiffness_n_per_m and optionally unloaded_te_um.
+    #[serde(default = "default_stiffness_source")]
+    pub stiffness: String,
+    /// "torque" (both gears free, the relative coordinate) or "speed" (driver at the prescribed
+    /// speed, as in the explicit FE).
+    #[serde(default = "default_drive")]
+    pub drive: String,
+    /// Mesh damping ratio ζ: c = 2ζ√(k̄ m_e).
+    #[serde(default = "default_damping_ratio")]
+    pub damping_ratio: f64,
+    /// Rotary inertias of the gears with what turns with them [kg·mm²]; default: ρ b ∫r² dA of
+    /// the gear bodies.
+    pub inertia_kg_mm2: Option<[f64; 2]>,
+    /// Translation of each gear along the line of action on its bearings (3 DOFs instead of 1).
+    #[serde(default)]
+    pub bearings: bool,
+    /// Bearing (support) stiffness of each gear along the line of action [N/m].
+    #[serde(default = "default_bearing_stiffness")]
+    pub bearing_stiffness_n_per_m: [f64; 2],
+    /// Damping ratio of each gear on its bearings: c_i = 2ζ_b√(k_i m_i).
+    #[serde(default = "default_bearing_damping_ratio")]
+    pub bearing_damping_ratio: f64,
+    /// Translating mass of each gear [kg]; default: ρ b A of the gear bodies.
+    pub gear_mass_kg: Option<[f64; 2]>,
+}
+
+impl Default for LumpedSection {
+    fn default() -> Self {
+        Self {
+            stiffness: default_stiffness_source(),
+            drive: default_drive(),
+            damping_ratio: default_damping_ratio(),
+            inertia_kg_mm2: None,
+            bearings: false,
+            bearing_stiffness_n_per_m: default_bearing_stiffness(),
+            bearing_damping_ratio: default_bearing_damping_ratio(),
+            gear_mass_kg: None,
+        }
+    }
+}
+
+fn default_stiffness_source() -> String {
+    "ltca".into()
+}
+fn default_drive() -> String {
+    "torque".into()
+}
+fn default_damping_ratio() -> f64 {
+    0.05
+}
+fn default_bearing_stiffness() -> [f64; 2] {
+    [5e8, 5e8]
+}
+fn default_bearing_damping_ratio() -> f64 {
+    0.02
 }
 
 /// Element sizes of the gear meshes.
@@ -512,6 +578,43 @@ impl Case {
                 &format!("must be at most one module ({module_mm} mm)"),
             ));
         }
+
+        let lumped = &file.lumped;
+        if !(lumped.drive == "torque" || lumped.drive == "speed") {
+            return Err(invalid(
+                "lumped.drive",
+                format!("{:?}", lumped.drive),
+                "use \"torque\" or \"speed\"",
+            ));
+        }
+        if !(0.0..1.0).contains(&lumped.damping_ratio) {
+            return Err(invalid(
+                "lumped.damping_ratio",
+                lumped.damping_ratio.to_string(),
+                "must be in [0, 1), typically 0.02–0.1",
+            ));
+        }
+        if !(0.0..1.0).contains(&lumped.bearing_damping_ratio) {
+            return Err(invalid(
+                "lumped.bearing_damping_ratio",
+                lumped.bearing_damping_ratio.to_string(),
+                "must be in [0, 1)",
+            ));
+        }
+        let positive_pair = |name: &str, values: Option<[f64; 2]>| match values {
+            Some(v) if !v.iter().all(|x| *x > 0.0 && x.is_finite()) => Err(invalid(
+                name,
+                format!("{v:?}"),
+                "both values must be finite and > 0",
+            )),
+            _ => Ok(()),
+        };
+        positive_pair("lumped.inertia_kg_mm2", lumped.inertia_kg_mm2)?;
+        positive_pair("lumped.gear_mass_kg", lumped.gear_mass_kg)?;
+        positive_pair(
+            "lumped.bearing_stiffness_n_per_m",
+            Some(lumped.bearing_stiffness_n_per_m),
+        )?;
 
         Ok(Case {
             source: source.into(),

@@ -1,25 +1,38 @@
-//! Speed sweeps of the lumped mesh model (issue 5, in progress): periodic steady state at every
-//! driver speed, harmonics of the mesh frequency (rustfft), dynamic factor, separation and
-//! Floquet stability; up- and down-sweeps continue from the neighbouring speed so jumps show.
+//! Speed sweeps of the lumped mesh model: periodic steady state at every driver speed, spectrum
+//! of the DTE (rustfft) with the mesh harmonics and the strongest peaks, dynamic factor,
+//! separation and Floquet stability; up- and down-sweeps continue from the neighbouring speed so
+//! jumps show.
+//!
+//! Spectrum: a converged steady state repeats every mesh period, so one period holds its whole
+//! spectrum (lines at the mesh harmonics only). A point that did not converge (sub-harmonic,
+//! quasi-periodic or chaotic response) is integrated [`WINDOW_PERIODS`] periods further and that
+//! record is transformed, so lines between the mesh harmonics show with a resolution of
+//! f_mesh / [`WINDOW_PERIODS`]. Amplitudes are single-sided: 2|X_k|/N (whole periods, no window
+//! needed).
 
 use rayon::prelude::*;
 use rustfft::{num_complex::Complex, FftPlanner};
 
-use crate::lumped::{floquet_max_multiplier, steady_state, MeshModel};
+use crate::lumped::{floquet_max_multiplier, record_periods, steady_state, MeshModel, State};
 
 /// Least samples per mesh period (an integer number, so the FFT sees whole periods).
 pub const STEPS_PER_PERIOD: usize = 128;
 
-/// RK4 steps per mesh period at driver speed Ω₁: at least [`STEPS_PER_PERIOD`] and 32 per natural
-/// period, so low speeds (many natural periods per mesh period) stay resolved and stable
-/// (RK4 needs ω_n h < 2.8; 32 steps give ω_n h = 0.2).
+/// RK4 steps per mesh period at driver speed Ω₁: at least [`STEPS_PER_PERIOD`] and 32 per period
+/// of the highest natural frequency (at the largest mesh stiffness), so low speeds (many natural
+/// periods per mesh period) stay resolved and stable (RK4 needs ωh < 2.8; 32 steps give
+/// ωh = 0.2).
 pub fn steps_per_period(model: &MeshModel, driver_speed: f64) -> usize {
     let mesh_omega = 2.0 * std::f64::consts::PI * driver_speed / model.stiffness.period;
-    let ratio = model.natural_frequency() / mesh_omega;
+    let ratio = model.highest_frequency() / mesh_omega;
     STEPS_PER_PERIOD.max((32.0 * ratio).ceil() as usize)
 }
 /// Mesh harmonics reported.
 pub const HARMONICS: usize = 5;
+/// Strongest spectral peaks reported per speed.
+pub const PEAKS: usize = 3;
+/// Mesh periods in the spectrum of a point that did not reach a periodic steady state.
+pub const WINDOW_PERIODS: usize = 16;
 
 /// The response at one driver speed.
 #[derive(Debug, Clone, PartialEq)]
@@ -34,13 +47,51 @@ pub struct SweepPoint {
     pub separated: bool,
     /// Amplitudes of the DTE at mesh harmonics 1 … HARMONICS [m].
     pub harmonics: [f64; HARMONICS],
+    /// The strongest spectral lines of the DTE (DC excluded): (frequency [Hz], amplitude [m]),
+    /// strongest first.
+    pub peaks: Vec<(f64, f64)>,
     /// Largest Floquet multiplier of the linear model (> 1: parametrically unstable).
     pub floquet: f64,
     pub periods: usize,
     pub converged: bool,
 }
 
-fn analyse(model: &MeshModel, rpm: f64, start: (f64, f64)) -> (SweepPoint, (f64, f64)) {
+/// Single-sided amplitude spectrum of a record covering `periods` whole mesh periods:
+/// amplitudes 2|X_k|/N at k = 1 … N/2, line k at k/periods mesh orders.
+pub fn amplitude_spectrum(record: &[f64]) -> Vec<f64> {
+    let n = record.len();
+    let mut buffer: Vec<Complex<f64>> = record.iter().map(|x| Complex::new(*x, 0.0)).collect();
+    FftPlanner::new().plan_fft_forward(n).process(&mut buffer);
+    buffer[1..=n / 2]
+        .iter()
+        .map(|c| 2.0 * c.norm() / n as f64)
+        .collect()
+}
+
+/// The `count` largest local maxima of an amplitude spectrum: (line index from 1, amplitude).
+/// Lines below 1e-9 of the largest are rounding noise and are left out.
+pub fn strongest_lines(spectrum: &[f64], count: usize) -> Vec<(usize, f64)> {
+    let floor = 1e-9 * spectrum.iter().copied().fold(0.0, f64::max);
+    let at = |i: isize| {
+        if i < 0 {
+            0.0
+        } else {
+            spectrum.get(i as usize).copied().unwrap_or(0.0)
+        }
+    };
+    let mut lines: Vec<(usize, f64)> = (0..spectrum.len())
+        .filter(|&i| {
+            let a = spectrum[i];
+            a > floor && a > at(i as isize - 1) && a >= at(i as isize + 1)
+        })
+        .map(|i| (i + 1, spectrum[i]))
+        .collect();
+    lines.sort_by(|a, b| b.1.total_cmp(&a.1));
+    lines.truncate(count);
+    lines
+}
+
+fn analyse(model: &MeshModel, rpm: f64, start: State) -> (SweepPoint, State) {
     let speed = rpm * 2.0 * std::f64::consts::PI / 60.0;
     let tolerance = 1e-7;
     let steps = steps_per_period(model, speed);
@@ -60,41 +111,47 @@ fn analyse(model: &MeshModel, rpm: f64, start: (f64, f64)) -> (SweepPoint, (f64,
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
             (a.min(*x), b.max(*x))
         });
-    let mut buffer: Vec<Complex<f64>> = s
-        .displacement
-        .iter()
-        .map(|x| Complex::new(*x, 0.0))
+    let mesh_hz = speed / model.stiffness.period;
+    let (record, periods) = if s.converged {
+        (s.displacement.clone(), 1)
+    } else {
+        (
+            record_periods(model, speed, steps, s.start, WINDOW_PERIODS),
+            WINDOW_PERIODS,
+        )
+    };
+    let spectrum = amplitude_spectrum(&record);
+    let harmonics = std::array::from_fn(|h| spectrum[(h + 1) * periods - 1]);
+    let peaks = strongest_lines(&spectrum, PEAKS)
+        .into_iter()
+        .map(|(line, amplitude)| (line as f64 / periods as f64 * mesh_hz, amplitude))
         .collect();
-    FftPlanner::new()
-        .plan_fft_forward(buffer.len())
-        .process(&mut buffer);
-    let harmonics = std::array::from_fn(|h| 2.0 * buffer[h + 1].norm() / n);
     let max_force = s
         .mesh_force
         .iter()
         .copied()
         .fold(f64::NEG_INFINITY, f64::max);
-    let next = (s.displacement[0], s.velocity[0]);
     let point = SweepPoint {
         driver_speed_rpm: rpm,
-        mesh_frequency_hz: speed / model.stiffness.period,
+        mesh_frequency_hz: mesh_hz,
         dte_rms: rms,
         dte_peak_to_peak: hi - lo,
         dynamic_factor: max_force / model.force,
         separated: s.separated,
         harmonics,
+        peaks,
         floquet: floquet_max_multiplier(model, speed, steps),
         periods: s.periods,
         converged: s.converged,
     };
-    (point, next)
+    (point, s.start)
 }
 
 /// Up-sweep and down-sweep over `rpms` (ascending), run in parallel with each other; each
 /// continues from the previous speed's steady state.
 pub fn sweep(model: &MeshModel, rpms: &[f64]) -> (Vec<SweepPoint>, Vec<SweepPoint>) {
     let run = |order: Vec<f64>| {
-        let mut state = (model.force / model.stiffness.mean(), 0.0);
+        let mut state = model.static_state();
         let mut out = Vec::with_capacity(order.len());
         for rpm in order {
             let (point, next) = analyse(model, rpm, state);

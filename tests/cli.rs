@@ -473,3 +473,147 @@ fn sweep_speed_drive_and_run_up() {
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--drive"));
 }
+
+/// The stiffness file round trip: a sweep writes the stiffness it used as stiffness.csv; a sweep
+/// that reads it back (`--stiffness FILE.csv`, or `[lumped] stiffness` in a case file, relative
+/// to the case file) gets the same model. A malformed file is refused with the row named.
+#[test]
+fn sweep_reads_a_stiffness_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |name: &str, args: &[&str]| {
+        let out = dir.path().join(name);
+        let output = geardyn()
+            .arg("sweep")
+            .args(args)
+            .args(["--rpm", "1000:9000:5", "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        (out, output)
+    };
+    let (first, output) = run("pe", &["--stiffness", "pe"]);
+    assert!(output.status.success());
+    let table = first.join("stiffness.csv");
+    let (second, output) = run("csv", &["--stiffness", table.to_str().unwrap()]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let (a, b) = (read_summary(&first), read_summary(&second));
+    for key in ["mean_stiffness_n_per_m", "natural_frequency_hz"] {
+        let (x, y) = (a[key].as_f64().unwrap(), b[key].as_f64().unwrap());
+        assert!((x / y - 1.0).abs() < 1e-8, "{key}: {x} vs {y}");
+    }
+    let up = |dir: &Path| -> Vec<f64> {
+        csv::Reader::from_path(dir.join("sweep.csv"))
+            .unwrap()
+            .records()
+            .map(|r| r.unwrap()[2].parse().unwrap())
+            .collect()
+    };
+    let (ra, rb) = (up(&first), up(&second));
+    for (x, y) in ra.iter().zip(&rb) {
+        assert!((x / y - 1.0).abs() < 1e-5, "{ra:?} vs {rb:?}");
+    }
+    // The same file named in a case file, relative to it.
+    std::fs::copy(&table, dir.path().join("k.csv")).unwrap();
+    let case = write_case(
+        dir.path(),
+        &DEFAULT.replace("stiffness = \"ltca\"", "stiffness = \"k.csv\""),
+    );
+    let out = dir.path().join("from-case");
+    let output = geardyn()
+        .arg("sweep")
+        .arg(&case)
+        .args(["--rpm", "1000:9000:5", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(read_summary(&out)["stiffness_source"]
+        .as_str()
+        .unwrap()
+        .contains("k.csv"));
+    // Angles that go backwards.
+    let bad = dir.path().join("bad.csv");
+    std::fs::write(
+        &bad,
+        "roll_angle_deg,mesh_stiffness_n_per_m\n0,4e8\n5,3e8\n4,4e8\n",
+    )
+    .unwrap();
+    let (_, output) = run("bad", &["--stiffness", bad.to_str().unwrap()]);
+    assert!(!output.status.success());
+    let message = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        message.contains("increase") && message.contains("row 3"),
+        "{message}"
+    );
+}
+
+/// `[lumped] bearings = true` adds the bearing translations: three modes, the model is named in
+/// the summary; stiff bearings leave the mesh mode at the rigid-bearing f_n.
+#[test]
+fn sweep_with_bearing_translations() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = write_case(
+        dir.path(),
+        &DEFAULT
+            .replace("bearings = false", "bearings = true")
+            .replace("[5.0e8, 5.0e8]", "[1.0e13, 1.0e13]"),
+    );
+    let out = dir.path().join("bearings");
+    let output = geardyn()
+        .arg("sweep")
+        .arg(&case)
+        .args(["--stiffness", "pe", "--rpm", "1000:9000:5", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let summary = read_summary(&out);
+    assert!(summary["model"].as_str().unwrap().starts_with("3-DOF"));
+    let modes = summary["modes_hz"].as_array().unwrap();
+    assert_eq!(modes.len(), 3);
+    let f_n = summary["natural_frequency_hz"].as_f64().unwrap();
+    assert!(
+        (modes[0].as_f64().unwrap() / f_n - 1.0).abs() < 1e-3,
+        "{modes:?} vs {f_n}"
+    );
+}
+
+/// `geardyn validate integrators` writes the failure table of the lumped model's schemes.
+#[test]
+fn validate_integrators_writes_the_failure_table() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("integrators");
+    let output = geardyn()
+        .args(["validate", "integrators", "--stiffness", "iso", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let rows: Vec<csv::StringRecord> = csv::Reader::from_path(out.join("integrators.csv"))
+        .unwrap()
+        .records()
+        .map(|r| r.unwrap())
+        .collect();
+    assert_eq!(rows.len(), 3);
+    assert_eq!(&rows[2][0], "RK4");
+    assert!(read_summary(&out)["schemes"].as_array().unwrap().len() == 3);
+    let bad = geardyn().args(["validate", "everything"]).output().unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("integrators"));
+}

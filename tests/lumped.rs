@@ -18,6 +18,7 @@ fn model(stiffness: PeriodicTable, te_amplitude: f64, zeta: f64) -> MeshModel {
         damping: 0.0,
         force: 2670.0,
         backlash: None,
+        bearings: None,
     };
     m.damping = m.damping_from_ratio(zeta);
     m
@@ -386,9 +387,138 @@ fn rk4_across_separation_matches_the_adaptive_reference() {
     let rk4 = steady_state(&m, speed, steps, start, 0.0, 41);
     let (x, v) = (rk4.displacement[0], rk4.velocity[0]);
     assert!(rk4.separated, "the teeth separate in this case");
-    let ((xr, vr), accepted) = reference_periods(&m, speed, start, 40, 1e-10);
+    let (reference, accepted) = reference_periods(&m, speed, start, 40, 1e-10);
+    let (xr, vr) = (reference.q[0], reference.v[0]);
     let dx = (x - xr).abs() / static_deflection;
     let dv = (v - vr).abs() / (static_deflection * m.natural_frequency());
     eprintln!("RK4 ({steps} steps/period) vs DOPRI5 ({accepted} steps): dx {dx:e}, dv {dv:e} of the static scale");
     assert!(dx < 1e-3 && dv < 1e-3, "dx {dx:e}, dv {dv:e}");
+}
+
+/// The failure table: each scheme's stability limit and 1 % frequency-accuracy limit observed
+/// from its own one-step map agree with the textbook formulas to 1e-6; the observed orders on a
+/// smooth damped response are the formal ones (±0.3; central difference is first order with its
+/// lagging damping velocity); with tooth separation no scheme loses convergence (order ≥ 0.8),
+/// and at 32 steps per natural period RK4's error stays below 1e-4 of the static deflection on
+/// the smooth response and below 1e-2 across separation.
+#[test]
+fn integrator_failure_table_matches_theory() {
+    use geardyn::lumped::schemes::{failure_table, SCHEMES};
+    let static_deflection = 2670.0 / K_MEAN;
+    let mut smooth = model(
+        PeriodicTable::constant(PERIOD, K_MEAN),
+        0.2 * static_deflection,
+        0.05,
+    );
+    // A finely sampled TE: the table's linear interpolation has slope kinks that would cost
+    // RK4 its order just as separation does (they shrink as 1/N²).
+    smooth.unloaded_te = PeriodicTable::from_fn(PERIOD, 1 << 14, |t| {
+        0.2 * static_deflection * (2.0 * PI * t / PERIOD).cos()
+    });
+    let mut separating = model(
+        PeriodicTable::constant(PERIOD, K_MEAN),
+        2.0 * static_deflection,
+        0.05,
+    );
+    separating.backlash = Some(100e-6);
+    let speed = driver_speed(0.7 * smooth.natural_frequency());
+    let table = failure_table(&smooth, &separating, speed, 20);
+    assert_eq!(table.len(), SCHEMES.len());
+    for row in &table {
+        eprintln!("{row:?}");
+        match (row.predicted_limit, row.observed_limit) {
+            (Some(p), Some(o)) => assert!((o / p - 1.0).abs() < 1e-6, "{row:?}"),
+            (None, None) => {}
+            _ => panic!("stability limit predicted/observed disagree: {row:?}"),
+        }
+        assert!(
+            (row.observed_accuracy_limit / row.predicted_accuracy_limit - 1.0).abs() < 1e-6,
+            "{row:?}"
+        );
+        assert!(
+            (row.observed_order_smooth - row.formal_order).abs() < 0.3,
+            "{row:?}"
+        );
+        assert!(row.observed_order_separating > 0.8, "{row:?}");
+    }
+    let rk4 = table.iter().find(|r| r.scheme == "RK4").unwrap();
+    assert!(
+        rk4.error_smooth < 1e-4 && rk4.error_separating < 1e-2,
+        "{rk4:?}"
+    );
+}
+
+/// Bearing translations (3 DOFs): the natural frequencies solve det(K − ω²M) = 0; with rigid
+/// bearings (k_b → ∞) the mesh mode tends to √(k/m_e) and the Floquet multiplier and the steady
+/// response tend to those of the 1-DOF model.
+#[test]
+fn bearing_model_reduces_to_the_one_dof_model_on_stiff_bearings() {
+    use geardyn::lumped::Bearings;
+    let eps = 0.2;
+    let stiffness = PeriodicTable::from_fn(PERIOD, 512, |t| {
+        K_MEAN * (1.0 + eps * (2.0 * PI * t / PERIOD).cos())
+    });
+    let one = model(stiffness, 1e-6, 0.05);
+    let with = |kb: f64| MeshModel {
+        bearings: Some(Bearings {
+            mass: [1.8, 2.4],
+            stiffness: [kb, 0.7 * kb],
+            damping: [0.0, 0.0],
+        }),
+        ..one.clone()
+    };
+    // det(K − ω²M) = 0 at every computed frequency (relative to the product of the diagonals).
+    let soft = with(3e8);
+    let b = soft.bearings.clone().unwrap();
+    for w in soft.mode_frequencies(K_MEAN) {
+        let w2 = w * w;
+        let k = K_MEAN;
+        let a = [
+            [k - w2 * MASS, k, -k],
+            [k, k + b.stiffness[0] - w2 * b.mass[0], -k],
+            [-k, -k, k + b.stiffness[1] - w2 * b.mass[1]],
+        ];
+        let det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
+            - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+            + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+        let scale = a[0][0].abs().max(k) * a[1][1].abs().max(k) * a[2][2].abs().max(k);
+        assert!(det.abs() < 1e-9 * scale, "ω = {w}: det {det:e}");
+    }
+    // Stiff bearings: the 1-DOF limit.
+    let stiff = with(1e14);
+    let modes = stiff.mode_frequencies(K_MEAN);
+    assert!(
+        (modes[0] / one.natural_frequency() - 1.0).abs() < 1e-4,
+        "{modes:?}"
+    );
+    let w = 0.6 * one.natural_frequency();
+    let (s1, s3) = (
+        steady_state(&one, driver_speed(w), 512, one.static_state(), 1e-9, 4000),
+        steady_state(
+            &stiff,
+            driver_speed(w),
+            4096,
+            stiff.static_state(),
+            1e-9,
+            4000,
+        ),
+    );
+    assert!(s1.converged && s3.converged);
+    let rms = |x: &[f64]| {
+        let mean = x.iter().sum::<f64>() / x.len() as f64;
+        (x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / x.len() as f64).sqrt()
+    };
+    let (r1, r3) = (rms(&s1.displacement), rms(&s3.displacement));
+    assert!((r3 / r1 - 1.0).abs() < 1e-3, "rms {r1:e} vs {r3:e}");
+    // Undamped, inside the principal tongue (ε = 0.2 > 4ζ would be needed with damping).
+    let wp = 2.0 * one.natural_frequency();
+    let undamped = |m: &MeshModel| MeshModel {
+        damping: 0.0,
+        ..m.clone()
+    };
+    let (l1, l3) = (
+        floquet_max_multiplier(&undamped(&one), driver_speed(wp), 512),
+        floquet_max_multiplier(&undamped(&stiff), driver_speed(wp), 4096),
+    );
+    assert!(l1 > 1.0 && (l3 / l1 - 1.0).abs() < 1e-3, "{l1} vs {l3}");
 }

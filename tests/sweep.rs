@@ -18,6 +18,7 @@ fn model(te_amplitude: f64, backlash: Option<f64>) -> MeshModel {
         damping: 0.0,
         force: 2670.0,
         backlash,
+        bearings: None,
     };
     m.damping = m.damping_from_ratio(0.03);
     m
@@ -81,5 +82,42 @@ fn backlash_gives_a_jump_with_hysteresis() {
             p.converged || p.separated,
             "only separating responses may fail to settle: {p:?}"
         );
+    }
+}
+
+/// The spectrum of a record of whole mesh periods: a sub-harmonic (half the mesh frequency) and
+/// the third harmonic come out at their frequencies with their amplitudes, strongest first.
+#[test]
+fn spectrum_finds_sub_harmonics_and_harmonics() {
+    use geardyn::sweep::{amplitude_spectrum, strongest_lines, WINDOW_PERIODS};
+    let per_period = 128;
+    let n = per_period * WINDOW_PERIODS;
+    let record: Vec<f64> = (0..n)
+        .map(|i| {
+            let orders = i as f64 / per_period as f64; // time in mesh periods
+            3.0 + 2.0 * (PI * orders).cos() + 0.5 * (6.0 * PI * orders + 0.3).sin()
+        })
+        .collect();
+    let lines = strongest_lines(&amplitude_spectrum(&record), 3);
+    assert_eq!(lines.len(), 2, "{lines:?}");
+    let order = |line: usize| line as f64 / WINDOW_PERIODS as f64;
+    assert_eq!(order(lines[0].0), 0.5);
+    assert!((lines[0].1 - 2.0).abs() < 1e-12);
+    assert_eq!(order(lines[1].0), 3.0);
+    assert!((lines[1].1 - 0.5).abs() < 1e-12);
+}
+
+/// A converged linear response: the strongest peak of every sweep point is the mesh frequency
+/// (the TE excites only the first harmonic) with the FRF amplitude of the harmonic table.
+#[test]
+fn sweep_peaks_are_the_mesh_harmonics_of_a_periodic_response() {
+    let m = model(1e-6, None);
+    let rpms: Vec<f64> = (0..5).map(|i| rpm_of(&m, 0.5 + 0.2 * i as f64)).collect();
+    let (up, _) = sweep(&m, &rpms);
+    for p in &up {
+        assert!(p.converged);
+        let (hz, amplitude) = p.peaks[0];
+        assert!((hz / p.mesh_frequency_hz - 1.0).abs() < 1e-12, "{p:?}");
+        assert!((amplitude / p.harmonics[0] - 1.0).abs() < 1e-12, "{p:?}");
     }
 }

@@ -1,27 +1,38 @@
-//! Lumped parametric-vibration model of the mesh (issue 5, in progress): one degree of freedom
-//! along the line of action, driven by the periodic mesh stiffness k(θ) — the stiffness currency
-//! from the LTCA, the explicit FE, ISO 6336 or the potential-energy method.
+//! Lumped parametric-vibration model of the mesh: the relative rotation along the line of action
+//! (1 DOF), optionally with each gear's translation on its bearings along the line of action
+//! (3 DOFs), driven by the periodic mesh stiffness k(θ) — the stiffness currency from the LTCA,
+//! the explicit FE, ISO 6336, the potential-energy method or a user table.
 //!
-//! # Equation (1-DOF relative displacement along the line of action)
+//! # Equations
+//! p = r_b1θ₁ − r_b2θ₂ is the dynamic transmission error along the line of action; with rigid
+//! shafts the torsional 2-DOF reduces exactly to it (torque drive: m_e = I₁I₂/(I₁r_b2² + I₂r_b1²);
+//! driver at prescribed speed: m_e = I₂/r_b2²). y₁, y₂ are the bearing translations along the
+//! line of action (model (c)); δ = p + y₁ − y₂ is the mesh deflection.
 //! ```text
-//! m_e ẍ + c ẋ + k(θ) f(x − e(θ)) = F,       θ = Ω₁ t (driver roll angle), F = T / r_b2
-//! m_e = I₁ I₂ / (I₁ r_b2² + I₂ r_b1²),        c = 2 ζ √(k̄ m_e)
-//! f(δ) = δ           δ > 0         drive-side contact
-//!      = 0           −j ≤ δ ≤ 0   tooth separation (backlash j)
-//!      = δ + j       δ < −j        back-side contact
+//! m_e p̈ = F − W,   m₁ÿ₁ + c₁ẏ₁ + k₁y₁ = −W,   m₂ÿ₂ + c₂ẏ₂ + k₂y₂ = W,    F = T / r_b2
+//! W = k(θ) f(δ − e(θ)) + c δ̇,   θ = Ω₁ t (driver roll angle),   c = 2 ζ √(k̄ m_e)
+//! f(u) = u           u > 0         drive-side contact
+//!      = 0           −j ≤ u ≤ 0   tooth separation (backlash j)
+//!      = u + j       u < −j        back-side contact
 //! ```
-//! e(θ) is the unloaded transmission error (relief). Integration: classical Runge–Kutta 4 with an
-//! integer number of steps per mesh period, so every step lands on the same stiffness samples and
-//! the periodic steady state is detected from the state at period boundaries (Poincaré map); an
-//! adaptive Dormand–Prince 5(4) integration ([`reference_periods`]) is the reference it is
-//! checked against, also across the kinks of the backlash law.
+//! e(θ) is the unloaded transmission error (relief). The viscous mesh damper acts also while the
+//! teeth are apart (the usual lumped-model convention, Kahraman & Singh 1990); it is small.
+//! Integration: classical Runge–Kutta 4 with an integer number of steps per mesh period, so every
+//! step lands on the same stiffness samples and the periodic steady state is detected from the
+//! state at period boundaries (Poincaré map); an adaptive Dormand–Prince 5(4) integration
+//! ([`reference_periods`]) is the reference it is checked against, also across the kinks of the
+//! backlash law. [`schemes`] measures where fixed-step schemes fail.
 //!
 //! # Stability (Floquet)
-//! For the linear model (no separation) the monodromy matrix Φ over one mesh period T_m, from
-//! the two unit initial conditions of m ẍ + c ẋ + k(θ) x = 0, has eigenvalues λ (the Floquet
-//! multipliers); the motion is parametrically unstable when max |λ| > 1. For k = k̄(1 + ε cos Ω_m t)
-//! the first instability region lies around Ω_m = 2ω_n with edges Ω_m ≈ 2ω_n(1 ± ε/4) for small ε
+//! For the linear model (no separation, no TE, no load) the monodromy matrix Φ over one mesh
+//! period T_m, from the unit initial states, has eigenvalues λ (the Floquet multipliers); the
+//! motion is parametrically unstable when max |λ| > 1. For k = k̄(1 + ε cos Ω_m t) the first
+//! instability region lies around Ω_m = 2ω_n with edges Ω_m ≈ 2ω_n(1 ± ε/4) for small ε
 //! (Mathieu equation; Nayfeh & Mook, *Nonlinear Oscillations*, §5.2).
+
+pub mod schemes;
+
+use nalgebra::{DMatrix, SymmetricEigen};
 
 /// A periodic function of the driver roll angle sampled on one period (linear interpolation).
 #[derive(Debug, Clone, PartialEq)]
@@ -50,8 +61,56 @@ impl PeriodicTable {
         }
     }
 
+    /// Resamples an increasing, non-uniform set of samples (θᵢ, vᵢ) of one period onto a
+    /// uniform table of as many points, starting at θ₀, by periodic linear interpolation (the
+    /// last sample joins the first one period later). Errors name what is wrong.
+    pub fn from_samples(period: f64, angles: &[f64], values: &[f64]) -> Result<Self, String> {
+        let n = angles.len();
+        if n == 0 || n != values.len() {
+            return Err(format!(
+                "{n} angles and {} values: give one value per angle, at least one",
+                values.len()
+            ));
+        }
+        if let Some(i) = (1..n).find(|&i| !(angles[i] > angles[i - 1])) {
+            return Err(format!(
+                "angles must increase strictly: row {} ({}) follows {}",
+                i + 1,
+                angles[i],
+                angles[i - 1]
+            ));
+        }
+        if !(angles[n - 1] - angles[0] < period) {
+            return Err(format!(
+                "the angles span {} rad, not less than one period ({period} rad): give one mesh period without repeating its end",
+                angles[n - 1] - angles[0]
+            ));
+        }
+        let value_at = |theta: f64| {
+            let u = theta - angles[0];
+            let i = angles.partition_point(|a| *a - angles[0] <= u).max(1) - 1;
+            let (a0, v0) = (angles[i] - angles[0], values[i]);
+            let (a1, v1) = if i + 1 < n {
+                (angles[i + 1] - angles[0], values[i + 1])
+            } else {
+                (period, values[0])
+            };
+            v0 + (v1 - v0) * (u - a0) / (a1 - a0)
+        };
+        Ok(Self::from_fn(period, n, |theta| {
+            value_at(angles[0] + theta)
+        }))
+    }
+
     pub fn mean(&self) -> f64 {
         self.values.iter().sum::<f64>() / self.values.len() as f64
+    }
+
+    pub fn max(&self) -> f64 {
+        self.values
+            .iter()
+            .copied()
+            .fold(f64::NEG_INFINITY, f64::max)
     }
 
     /// Value at roll angle θ (any θ; periodic, linear between samples).
@@ -67,10 +126,24 @@ impl PeriodicTable {
     }
 }
 
-/// The 1-DOF mesh model.
+/// Translation of each gear along the line of action on its bearings (model (c)). The
+/// translations across the line of action are left out: a frictionless spur mesh force has no
+/// component there, so they are neither excited nor coupled (an exact reduction, not a
+/// simplification).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Bearings {
+    /// Translating mass of each gear (blank and its share of the shaft) [kg].
+    pub mass: [f64; 2],
+    /// Bearing stiffness along the line of action [N/m].
+    pub stiffness: [f64; 2],
+    /// Bearing damping [N·s/m].
+    pub damping: [f64; 2],
+}
+
+/// The lumped mesh model: 1 DOF (p), or 3 DOFs (p, y₁, y₂) with [`Bearings`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeshModel {
-    /// Effective mass m_e [kg].
+    /// Effective mass m_e of the relative rotation p = r_b1θ₁ − r_b2θ₂ [kg].
     pub effective_mass: f64,
     /// Mesh stiffness k(θ) [N/m].
     pub stiffness: PeriodicTable,
@@ -82,6 +155,64 @@ pub struct MeshModel {
     pub force: f64,
     /// Backlash j along the line of action [m]; `None`: no separation (linear contact).
     pub backlash: Option<f64>,
+    /// Bearing translations; `None`: rigid bearings.
+    pub bearings: Option<Bearings>,
+}
+
+/// State of the lumped model: positions q = (p, y₁, y₂) [m] and their velocities [m/s]. Without
+/// bearings y₁ = y₂ = 0 throughout.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct State {
+    pub q: [f64; 3],
+    pub v: [f64; 3],
+}
+
+impl From<(f64, f64)> for State {
+    /// (p, ṗ) with the gears centred on rigid bearings.
+    fn from((p, v): (f64, f64)) -> Self {
+        State {
+            q: [p, 0.0, 0.0],
+            v: [v, 0.0, 0.0],
+        }
+    }
+}
+
+impl State {
+    /// self + h·d, component-wise.
+    fn add_scaled(&self, h: f64, d: &State) -> State {
+        State {
+            q: std::array::from_fn(|i| self.q[i] + h * d.q[i]),
+            v: std::array::from_fn(|i| self.v[i] + h * d.v[i]),
+        }
+    }
+
+    /// Mesh deflection along the line of action δ = p + y₁ − y₂ [m].
+    pub fn mesh_deflection(&self) -> f64 {
+        self.q[0] + self.q[1] - self.q[2]
+    }
+
+    fn mesh_deflection_rate(&self) -> f64 {
+        self.v[0] + self.v[1] - self.v[2]
+    }
+
+    /// Component `i` of the flattened state (q₀ q₁ q₂ v₀ v₁ v₂).
+    fn component(&self, i: usize) -> f64 {
+        if i < 3 {
+            self.q[i]
+        } else {
+            self.v[i - 3]
+        }
+    }
+
+    fn unit(i: usize) -> State {
+        let mut s = State::default();
+        if i < 3 {
+            s.q[i] = 1.0;
+        } else {
+            s.v[i - 3] = 1.0;
+        }
+        s
+    }
 }
 
 impl MeshModel {
@@ -90,14 +221,56 @@ impl MeshModel {
         2.0 * ratio * (self.stiffness.mean() * self.effective_mass).sqrt()
     }
 
-    /// Natural frequency of the mean stiffness, ω_n = √(k̄/m_e) [rad/s].
+    /// Natural frequency of the mean stiffness on rigid bearings, ω_n = √(k̄/m_e) [rad/s].
     pub fn natural_frequency(&self) -> f64 {
         (self.stiffness.mean() / self.effective_mass).sqrt()
     }
 
-    /// Elastic mesh force k(θ) f(x − e(θ)) (≥ 0 on the drive side).
-    pub fn mesh_force(&self, theta: f64, x: f64) -> f64 {
-        let delta = x - self.unloaded_te.at(theta);
+    /// Indices of the flattened state that move: (p, ṗ), or all six with bearings.
+    fn active_components(&self) -> Vec<usize> {
+        match self.bearings {
+            None => vec![0, 3],
+            Some(_) => (0..6).collect(),
+        }
+    }
+
+    /// Undamped natural frequencies [rad/s] of the linear model at mesh stiffness k, ascending:
+    /// eigenvalues of M^{-1/2} K M^{-1/2}, K = K_bearings + k g gᵀ, g = (1, 1, −1).
+    pub fn mode_frequencies(&self, mesh_stiffness: f64) -> Vec<f64> {
+        let Some(b) = &self.bearings else {
+            return vec![(mesh_stiffness / self.effective_mass).sqrt()];
+        };
+        let g = [1.0, 1.0, -1.0];
+        let mass = [self.effective_mass, b.mass[0], b.mass[1]];
+        let k = DMatrix::from_fn(3, 3, |i, j| {
+            let bearing = match i {
+                1 | 2 if i == j => b.stiffness[i - 1],
+                _ => 0.0,
+            };
+            (bearing + mesh_stiffness * g[i] * g[j]) / (mass[i] * mass[j]).sqrt()
+        });
+        let mut w: Vec<f64> = SymmetricEigen::new(k)
+            .eigenvalues
+            .iter()
+            .map(|l| l.max(0.0).sqrt())
+            .collect();
+        w.sort_by(f64::total_cmp);
+        w
+    }
+
+    /// The highest natural frequency the integration must resolve: at the largest mesh
+    /// stiffness (adding stiffness never lowers an eigenvalue, so this bounds every contact
+    /// state, separation included).
+    pub fn highest_frequency(&self) -> f64 {
+        *self
+            .mode_frequencies(self.stiffness.max())
+            .last()
+            .expect("at least one mode")
+    }
+
+    /// Elastic mesh force k(θ) f(δ − e(θ)) at mesh deflection δ (≥ 0 on the drive side).
+    pub fn mesh_force(&self, theta: f64, deflection: f64) -> f64 {
+        let delta = deflection - self.unloaded_te.at(theta);
         let k = self.stiffness.at(theta);
         match self.backlash {
             None => k * delta,
@@ -107,9 +280,66 @@ impl MeshModel {
         }
     }
 
-    /// Acceleration ẍ at roll angle θ.
-    fn acceleration(&self, theta: f64, x: f64, v: f64) -> f64 {
-        (self.force - self.damping * v - self.mesh_force(theta, x)) / self.effective_mass
+    /// The static state under F at the mean stiffness (TE and backlash left out): δ = F/k̄,
+    /// y₁ = −F/k_b1, y₂ = F/k_b2.
+    pub fn static_state(&self) -> State {
+        let delta = self.force / self.stiffness.mean();
+        match &self.bearings {
+            None => State::from((delta, 0.0)),
+            Some(b) => {
+                let (y1, y2) = (-self.force / b.stiffness[0], self.force / b.stiffness[1]);
+                State {
+                    q: [delta - y1 + y2, y1, y2],
+                    v: [0.0; 3],
+                }
+            }
+        }
+    }
+
+    /// Time derivative of the state at roll angle θ:
+    /// ```text
+    /// m_e p̈ = F − W,   m₁ÿ₁ + c₁ẏ₁ + k₁y₁ = −W,   m₂ÿ₂ + c₂ẏ₂ + k₂y₂ = W,
+    /// W = k(θ) f(δ − e(θ)) + c δ̇,   δ = p + y₁ − y₂
+    /// ```
+    /// (W is the mesh force on the driven gear along the line of action; the driver takes −W.)
+    pub fn derivative(&self, theta: f64, s: &State) -> State {
+        let w =
+            self.mesh_force(theta, s.mesh_deflection()) + self.damping * s.mesh_deflection_rate();
+        let mut d = State {
+            q: s.v,
+            v: [(self.force - w) / self.effective_mass, 0.0, 0.0],
+        };
+        if let Some(b) = &self.bearings {
+            d.v[1] = (-w - b.damping[0] * s.v[1] - b.stiffness[0] * s.q[1]) / b.mass[0];
+            d.v[2] = (w - b.damping[1] * s.v[2] - b.stiffness[1] * s.q[2]) / b.mass[1];
+        }
+        d
+    }
+
+    /// The linear model of the Floquet analysis: no load, no TE, no separation.
+    fn linearized(&self) -> MeshModel {
+        MeshModel {
+            backlash: None,
+            force: 0.0,
+            unloaded_te: PeriodicTable::constant(self.stiffness.period, 0.0),
+            ..self.clone()
+        }
+    }
+}
+
+/// Classical Runge–Kutta step of length h from time t, for ṡ = f(t, s).
+pub fn rk4_step(f: impl Fn(f64, &State) -> State, t: f64, s: &State, h: f64) -> State {
+    let k1 = f(t, s);
+    let k2 = f(t + 0.5 * h, &s.add_scaled(0.5 * h, &k1));
+    let k3 = f(t + 0.5 * h, &s.add_scaled(0.5 * h, &k2));
+    let k4 = f(t + h, &s.add_scaled(h, &k3));
+    State {
+        q: std::array::from_fn(|i| {
+            s.q[i] + h / 6.0 * (k1.q[i] + 2.0 * k2.q[i] + 2.0 * k3.q[i] + k4.q[i])
+        }),
+        v: std::array::from_fn(|i| {
+            s.v[i] + h / 6.0 * (k1.v[i] + 2.0 * k2.v[i] + 2.0 * k3.v[i] + k4.v[i])
+        }),
     }
 }
 
@@ -119,7 +349,10 @@ pub struct SteadyState {
     /// Mesh periods integrated until the state repeated.
     pub periods: usize,
     pub converged: bool,
-    /// Samples over one mesh period: displacement [m], velocity [m/s], mesh force [N].
+    /// The state at the start of the recorded period (θ = 0).
+    pub start: State,
+    /// Samples over one mesh period: DTE p along the line of action [m], its rate [m/s], the
+    /// elastic mesh force [N].
     pub displacement: Vec<f64>,
     pub velocity: Vec<f64>,
     pub mesh_force: Vec<f64>,
@@ -127,42 +360,50 @@ pub struct SteadyState {
     pub separated: bool,
 }
 
-/// Integrates at driver speed Ω₁ (rad/s) from (x₀, v₀) until the state at period boundaries
+/// Integrates at driver speed Ω₁ (rad/s) from `initial` until the state at period boundaries
 /// repeats to `tolerance` (relative to the static deflection), at most `max_periods`.
 pub fn steady_state(
     model: &MeshModel,
     driver_speed: f64,
     steps_per_period: usize,
-    initial: (f64, f64),
+    initial: impl Into<State>,
     tolerance: f64,
     max_periods: usize,
 ) -> SteadyState {
     let static_deflection = (model.force / model.stiffness.mean()).abs().max(1e-30);
-    let (mut x, mut v) = initial;
+    let mut state = initial.into();
     let mut out = SteadyState {
         periods: 0,
         converged: false,
+        start: state,
         displacement: vec![0.0; steps_per_period],
         velocity: vec![0.0; steps_per_period],
         mesh_force: vec![0.0; steps_per_period],
         separated: false,
     };
-    let omega_scale = model.natural_frequency().max(driver_speed);
+    let omega_scale = model.highest_frequency().max(driver_speed);
     for period in 1..=max_periods {
-        let (x_start, v_start) = (x, v);
-        (x, v) = integrate_period(
+        let start = state;
+        state = integrate_period(
             model,
             driver_speed,
             steps_per_period,
-            (x, v),
-            |j, theta, x, v| {
-                out.displacement[j] = x;
-                out.velocity[j] = v;
-                out.mesh_force[j] = model.mesh_force(theta, x);
+            start,
+            |j, theta, s| {
+                out.displacement[j] = s.q[0];
+                out.velocity[j] = s.v[0];
+                out.mesh_force[j] = model.mesh_force(theta, s.mesh_deflection());
             },
         );
         out.periods = period;
-        let change = (x - x_start).abs().max((v - v_start).abs() / omega_scale);
+        out.start = start;
+        let change = (0..3)
+            .map(|i| {
+                (state.q[i] - start.q[i])
+                    .abs()
+                    .max((state.v[i] - start.v[i]).abs() / omega_scale)
+            })
+            .fold(0.0, f64::max);
         if change < tolerance * static_deflection {
             out.converged = true;
             break;
@@ -172,96 +413,88 @@ pub fn steady_state(
     out
 }
 
+/// DTE p over `periods` whole mesh periods from `start` (θ = 0), `steps_per_period` samples
+/// each: the record a spectrum of a non-periodic (sub-harmonic, quasi-periodic) response needs.
+pub fn record_periods(
+    model: &MeshModel,
+    driver_speed: f64,
+    steps_per_period: usize,
+    start: State,
+    periods: usize,
+) -> Vec<f64> {
+    let mut record = Vec::with_capacity(periods * steps_per_period);
+    let mut state = start;
+    for _ in 0..periods {
+        state = integrate_period(model, driver_speed, steps_per_period, state, |_, _, s| {
+            record.push(s.q[0])
+        });
+    }
+    record
+}
+
 /// Floquet multipliers' largest modulus of the linear model (no separation, no TE) at driver
-/// speed Ω₁: eigenvalues of the 2×2 monodromy matrix over one mesh period.
+/// speed Ω₁: eigenvalues of the monodromy matrix over one mesh period (2×2 on rigid bearings,
+/// 6×6 with bearing translations), columns from the unit initial states.
 pub fn floquet_max_multiplier(
     model: &MeshModel,
     driver_speed: f64,
     steps_per_period: usize,
 ) -> f64 {
-    let linear = MeshModel {
-        backlash: None,
-        force: 0.0,
-        unloaded_te: PeriodicTable::constant(model.stiffness.period, 0.0),
-        ..model.clone()
-    };
-    let columns: Vec<(f64, f64)> = [(1.0, 0.0), (0.0, 1.0)]
-        .iter()
-        .map(|&start| {
-            integrate_period(
-                &linear,
-                driver_speed,
-                steps_per_period,
-                start,
-                |_, _, _, _| {},
-            )
-        })
-        .collect();
-    let (a, b, c, d) = (columns[0].0, columns[1].0, columns[0].1, columns[1].1);
-    let trace = a + d;
-    let det = a * d - b * c;
-    let disc = trace * trace / 4.0 - det;
-    if disc >= 0.0 {
-        let r = disc.sqrt();
-        (trace / 2.0 + r).abs().max((trace / 2.0 - r).abs())
-    } else {
-        det.abs().sqrt()
+    let linear = model.linearized();
+    let active = model.active_components();
+    let n = active.len();
+    let mut monodromy = DMatrix::zeros(n, n);
+    for (column, &i) in active.iter().enumerate() {
+        let end = integrate_period(
+            &linear,
+            driver_speed,
+            steps_per_period,
+            State::unit(i),
+            |_, _, _| {},
+        );
+        for (row, &j) in active.iter().enumerate() {
+            monodromy[(row, column)] = end.component(j);
+        }
     }
+    monodromy
+        .complex_eigenvalues()
+        .iter()
+        .map(|l| l.norm())
+        .fold(0.0, f64::max)
 }
 
-/// RK4 over one mesh period in `steps` equal steps from (x, v) at θ = 0; `sample` sees the
+/// RK4 over one mesh period in `steps` equal steps from `start` at θ = 0; `sample` sees the
 /// state at the start of every step. Returns the state after the period.
 fn integrate_period(
     model: &MeshModel,
     driver_speed: f64,
     steps: usize,
-    start: (f64, f64),
-    mut sample: impl FnMut(usize, f64, f64, f64),
-) -> (f64, f64) {
+    start: State,
+    mut sample: impl FnMut(usize, f64, &State),
+) -> State {
     let h = model.stiffness.period / driver_speed / steps as f64;
-    let (mut x, mut v) = start;
+    let mut state = start;
+    let derivative = |t: f64, s: &State| model.derivative(driver_speed * t, s);
     for j in 0..steps {
-        let theta = j as f64 * model.stiffness.period / steps as f64;
-        sample(j, theta, x, v);
-        (x, v) = rk4_step(model, driver_speed, h, theta, x, v);
+        let t = j as f64 * h;
+        sample(j, driver_speed * t, &state);
+        state = rk4_step(derivative, t, &state, h);
     }
-    (x, v)
-}
-
-/// One classical Runge–Kutta step of length h from roll angle θ₀.
-fn rk4_step(
-    model: &MeshModel,
-    driver_speed: f64,
-    h: f64,
-    theta0: f64,
-    x: f64,
-    v: f64,
-) -> (f64, f64) {
-    let dtheta = driver_speed * h;
-    let a1 = model.acceleration(theta0, x, v);
-    let (x2, v2) = (x + 0.5 * h * v, v + 0.5 * h * a1);
-    let a2 = model.acceleration(theta0 + 0.5 * dtheta, x2, v2);
-    let (x3, v3) = (x + 0.5 * h * v2, v + 0.5 * h * a2);
-    let a3 = model.acceleration(theta0 + 0.5 * dtheta, x3, v3);
-    let (x4, v4) = (x + h * v3, v + h * a3);
-    let a4 = model.acceleration(theta0 + dtheta, x4, v4);
-    (
-        x + h / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + v4),
-        v + h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4),
-    )
+    state
 }
 
 /// A run-up (or run-down): the driver speed ramps linearly from `from` to `to` [rad/s] over
-/// `duration` [s]; θ(t) = Ω₀t + ½αt². Fixed RK4 steps of at most 1/32 of the natural period and
-/// 1/64 of the shortest mesh period; at most `max_samples` evenly spaced steps are recorded.
+/// `duration` [s]; θ(t) = Ω₀t + ½αt². Fixed RK4 steps of at most 1/32 of the shortest natural
+/// period and 1/64 of the shortest mesh period; at most `max_samples` evenly spaced steps are
+/// recorded.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct RunUp {
     pub time: Vec<f64>,
     /// Driver speed [rad/s].
     pub driver_speed: Vec<f64>,
-    /// Displacement along the line of action [m].
+    /// DTE p along the line of action [m].
     pub displacement: Vec<f64>,
-    /// Mesh force [N].
+    /// Elastic mesh force [N].
     pub mesh_force: Vec<f64>,
     pub steps: usize,
 }
@@ -269,14 +502,14 @@ pub struct RunUp {
 pub fn run_up(model: &MeshModel, from: f64, to: f64, duration: f64, max_samples: usize) -> RunUp {
     let alpha = (to - from) / duration;
     let fastest_mesh_period = model.stiffness.period / from.abs().max(to.abs()).max(1e-12);
-    let natural_period = 2.0 * std::f64::consts::PI / model.natural_frequency();
+    let natural_period = 2.0 * std::f64::consts::PI / model.highest_frequency();
     let h_max = (natural_period / 32.0).min(fastest_mesh_period / 64.0);
     let steps = (duration / h_max).ceil() as usize;
     let h = duration / steps as f64;
     let decimate = steps.div_ceil(max_samples.max(1)).max(1);
     let theta = |t: f64| from * t + 0.5 * alpha * t * t;
-    let accel = |t: f64, x: f64, v: f64| model.acceleration(theta(t), x, v);
-    let (mut x, mut v) = (model.force / model.stiffness.mean(), 0.0);
+    let derivative = |t: f64, s: &State| model.derivative(theta(t), s);
+    let mut state = model.static_state();
     let mut out = RunUp {
         steps,
         ..RunUp::default()
@@ -286,21 +519,14 @@ pub fn run_up(model: &MeshModel, from: f64, to: f64, duration: f64, max_samples:
         if i % decimate == 0 {
             out.time.push(t);
             out.driver_speed.push(from + alpha * t);
-            out.displacement.push(x);
-            out.mesh_force.push(model.mesh_force(theta(t), x));
+            out.displacement.push(state.q[0]);
+            out.mesh_force
+                .push(model.mesh_force(theta(t), state.mesh_deflection()));
         }
         if i == steps {
             break;
         }
-        let a1 = accel(t, x, v);
-        let (x2, v2) = (x + 0.5 * h * v, v + 0.5 * h * a1);
-        let a2 = accel(t + 0.5 * h, x2, v2);
-        let (x3, v3) = (x + 0.5 * h * v2, v + 0.5 * h * a2);
-        let a3 = accel(t + 0.5 * h, x3, v3);
-        let (x4, v4) = (x + h * v3, v + h * a3);
-        let a4 = accel(t + h, x4, v4);
-        x += h / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + v4);
-        v += h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
+        state = rk4_step(derivative, t, &state, h);
     }
     out
 }
@@ -312,10 +538,10 @@ pub fn run_up(model: &MeshModel, from: f64, to: f64, duration: f64, max_samples:
 pub fn reference_periods(
     model: &MeshModel,
     driver_speed: f64,
-    start: (f64, f64),
+    start: impl Into<State>,
     periods: usize,
     tolerance: f64,
-) -> ((f64, f64), usize) {
+) -> (State, usize) {
     const C: [f64; 7] = [0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0];
     const A: [[f64; 6]; 7] = [
         [0.0; 6],
@@ -366,33 +592,34 @@ pub fn reference_periods(
         1.0 / 40.0,
     ];
     let end = periods as f64 * model.stiffness.period / driver_speed;
-    let rhs = |t: f64, y: [f64; 2]| [y[1], model.acceleration(driver_speed * t, y[0], y[1])];
+    let rhs = |t: f64, s: &State| model.derivative(driver_speed * t, s);
     let scale_x = (model.force / model.stiffness.mean()).abs().max(1e-12);
-    let scale_v = scale_x * model.natural_frequency();
-    let (mut t, mut y) = (0.0, [start.0, start.1]);
-    let mut h = 0.01 * 2.0 * std::f64::consts::PI / model.natural_frequency();
+    let scale_v = scale_x * model.highest_frequency();
+    let (mut t, mut y) = (0.0, start.into());
+    let mut h = 0.01 * 2.0 * std::f64::consts::PI / model.highest_frequency();
     let mut accepted = 0;
     while t < end {
         h = h.min(end - t);
-        let mut k = [[0.0; 2]; 7];
+        let mut k = [State::default(); 7];
         for s in 0..7 {
             let mut ys = y;
             for (j, kj) in k.iter().enumerate().take(s) {
-                ys[0] += h * A[s][j] * kj[0];
-                ys[1] += h * A[s][j] * kj[1];
+                ys = ys.add_scaled(h * A[s][j], kj);
             }
-            k[s] = rhs(t + C[s] * h, ys);
+            k[s] = rhs(t + C[s] * h, &ys);
         }
-        let (mut y5, mut err) = (y, [0.0; 2]);
+        let (mut y5, mut err) = (y, State::default());
         for s in 0..7 {
-            for d in 0..2 {
-                y5[d] += h * B5[s] * k[s][d];
-                err[d] += h * (B5[s] - B4[s]) * k[s][d];
-            }
+            y5 = y5.add_scaled(h * B5[s], &k[s]);
+            err = err.add_scaled(h * (B5[s] - B4[s]), &k[s]);
         }
-        let e = (err[0] / (scale_x * tolerance))
-            .abs()
-            .max((err[1] / (scale_v * tolerance)).abs());
+        let e = (0..3)
+            .map(|i| {
+                (err.q[i] / (scale_x * tolerance))
+                    .abs()
+                    .max((err.v[i] / (scale_v * tolerance)).abs())
+            })
+            .fold(0.0, f64::max);
         if e <= 1.0 {
             t += h;
             y = y5;
@@ -400,5 +627,5 @@ pub fn reference_periods(
         }
         h *= (0.9 * e.max(1e-10).powf(-0.2)).clamp(0.2, 5.0);
     }
-    ((y[0], y[1]), accepted)
+    (y, accepted)
 }

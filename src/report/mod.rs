@@ -6,6 +6,7 @@
 pub mod geometry;
 pub mod ltca;
 pub mod plot;
+pub mod stiffness_csv;
 pub mod vtk;
 
 use std::io::Write;

@@ -104,6 +104,8 @@ pub struct LumpedSection {
     /// Mesh damping ratio ζ: c = 2ζ√(k̄ m_e).
     #[serde(default = "default_damping_ratio")]
     pub damping_ratio: f64,
+    /// Mesh damping as a coefficient c [N·s/m] instead of a ratio (overrides `damping_ratio`).
+    pub mesh_damping_n_s_per_m: Option<f64>,
     /// Rotary inertias of the gears with what turns with them [kg·mm²]; default: ρ b ∫r² dA of
     /// the gear bodies.
     pub inertia_kg_mm2: Option<[f64; 2]>,
@@ -126,6 +128,7 @@ impl Default for LumpedSection {
             stiffness: default_stiffness_source(),
             drive: default_drive(),
             damping_ratio: default_damping_ratio(),
+            mesh_damping_n_s_per_m: None,
             inertia_kg_mm2: None,
             bearings: false,
             bearing_stiffness_n_per_m: default_bearing_stiffness(),
@@ -593,6 +596,15 @@ impl Case {
                 lumped.damping_ratio.to_string(),
                 "must be in [0, 1), typically 0.02–0.1",
             ));
+        }
+        if let Some(c) = lumped.mesh_damping_n_s_per_m {
+            if !(c >= 0.0 && c.is_finite()) {
+                return Err(invalid(
+                    "lumped.mesh_damping_n_s_per_m",
+                    c.to_string(),
+                    "must be a finite number ≥ 0",
+                ));
+            }
         }
         if !(0.0..1.0).contains(&lumped.bearing_damping_ratio) {
             return Err(invalid(

@@ -789,6 +789,11 @@ fn lumped_setup(args: &CommonArgs, rpm: &str, options: &LumpedArgs) -> Result<Lu
         backlash,
         bearings,
     };
+    // A coefficient in the case wins over the case's ratio; --damping-ratio wins over both.
+    let damping_ratio = match (options.damping_ratio, settings.mesh_damping_n_s_per_m) {
+        (None, Some(c)) => c / model.damping_from_ratio(1.0),
+        _ => damping_ratio,
+    };
     model.damping = model.damping_from_ratio(damping_ratio);
     let fn_hz = model.natural_frequency() / (2.0 * std::f64::consts::PI);
     let model_note = match &model.bearings {

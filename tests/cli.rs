@@ -556,7 +556,8 @@ fn sweep_reads_a_stiffness_csv() {
 }
 
 /// `[lumped] bearings = true` adds the bearing translations: three modes, the model is named in
-/// the summary; stiff bearings leave the mesh mode at the rigid-bearing f_n.
+/// the summary; stiff bearings leave the mesh mode at the rigid-bearing f_n. A mesh damping
+/// coefficient in the case becomes the ratio c / (2√(k̄ m_e)).
 #[test]
 fn sweep_with_bearing_translations() {
     let dir = tempfile::tempdir().unwrap();
@@ -564,7 +565,8 @@ fn sweep_with_bearing_translations() {
         dir.path(),
         &DEFAULT
             .replace("bearings = false", "bearings = true")
-            .replace("[5.0e8, 5.0e8]", "[1.0e13, 1.0e13]"),
+            .replace("[5.0e8, 5.0e8]", "[1.0e13, 1.0e13]")
+            .replace("# mesh_damping_n_s_per_m", "mesh_damping_n_s_per_m"),
     );
     let out = dir.path().join("bearings");
     let output = geardyn()

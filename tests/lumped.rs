@@ -1,7 +1,7 @@
 //! The 1-DOF mesh model against analytic solutions: the forced response of a constant-stiffness
 //! mesh (FRF), the Mathieu instability tongue from Floquet theory, and brute-force integration.
 
-use geardyn::lumped::{floquet_max_multiplier, steady_state, MeshModel, PeriodicTable};
+use geardyn::lumped::{floquet_max_multiplier, steady_state, MeshModel, PeriodicTable, State};
 use std::f64::consts::PI;
 
 const PERIOD: f64 = 2.0 * PI / 36.0; // one base pitch of the paper's driver, in roll angle
@@ -521,4 +521,55 @@ fn bearing_model_reduces_to_the_one_dof_model_on_stiff_bearings() {
         floquet_max_multiplier(&undamped(&stiff), driver_speed(wp), 4096),
     );
     assert!(l1 > 1.0 && (l3 / l1 - 1.0).abs() < 1e-3, "{l1} vs {l3}");
+}
+
+/// Separation is detected exactly when the mesh force would turn negative: at a TE amplitude
+/// 1 % below the one where the linear model's minimum mesh force reaches zero, the model with
+/// backlash, started on the linear steady state, never separates and stays on it; 1 % above, it
+/// separates.
+#[test]
+fn separation_starts_where_the_linear_force_reaches_zero() {
+    let unit = model(PeriodicTable::constant(PERIOD, K_MEAN), 1e-6, 0.05);
+    let speed = driver_speed(0.8 * unit.natural_frequency());
+    let min_force_from = |m: &MeshModel, start: State| {
+        let s = steady_state(m, speed, 512, start, 1e-10, 5000);
+        assert!(s.converged);
+        (
+            s.mesh_force.iter().copied().fold(f64::INFINITY, f64::min),
+            s,
+        )
+    };
+    let min_force = |m: &MeshModel| min_force_from(m, m.static_state());
+    // The linear dynamic force is F − G·e at its minimum, so the threshold is e* = F / G.
+    let (f_unit, _) = min_force(&unit);
+    let threshold = 1e-6 * unit.force / (unit.force - f_unit);
+    for (factor, separates) in [(0.99, false), (1.01, true)] {
+        let linear = model(
+            PeriodicTable::constant(PERIOD, K_MEAN),
+            factor * threshold,
+            0.05,
+        );
+        let with_backlash = MeshModel {
+            backlash: Some(1e-3),
+            ..linear.clone()
+        };
+        let (f_lin, lin) = min_force(&linear);
+        // Started on the linear steady state: near resonance a separating branch may coexist
+        // (hysteresis), and a start far from it could land there.
+        let (_, s) = min_force_from(&with_backlash, lin.start);
+        assert_eq!(
+            s.separated, separates,
+            "factor {factor}: min linear force {f_lin}"
+        );
+        assert_eq!(f_lin < 0.0, separates);
+        if !separates {
+            let diff = lin
+                .displacement
+                .iter()
+                .zip(&s.displacement)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            assert!(diff < 1e-9 * threshold, "{diff:e}");
+        }
+    }
 }

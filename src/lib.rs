@@ -25,5 +25,6 @@ pub mod lumped;
 pub mod mesh;
 pub mod report;
 pub mod samples;
+pub mod signal;
 pub mod stiffness;
 pub mod sweep;

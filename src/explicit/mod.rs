@@ -3,4 +3,5 @@
 //! the meshing-pair scenes come next.
 
 pub mod body;
+pub mod pair;
 pub mod solver;

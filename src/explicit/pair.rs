@@ -1,0 +1,684 @@
+//! The meshing pair for explicit dynamics: two corotational Q8 bodies on rigid hubs, penalty
+//! contact with Coulomb friction between every pair of flanks that can touch, central-difference
+//! integration of the whole system, and its energy balance.
+//!
+//! # Hubs (seed paper §4: the bore nodes carry the drive and the load)
+//! * Driver: every bore node follows the prescribed rotation θ₁(t) about its centre,
+//!   x = c₁ + R(ψ₁ + θ₁(t)) X; the speed ramps linearly from rest to Ω over t_r:
+//!   θ̇₁ = Ω min(t/t_r, 1).
+//! * Driven: the bore nodes are slaved to a rigid hub rotating by φ(t) about c₂; the hub carries
+//!   the bore nodes' inertia I_h = Σ mᵢ|Xᵢ|² and the load torque T(t) = T min(t/t_r, 1) against
+//!   the rotation: I_h φ̈ = Σ (xᵢ − c₂) × fᵢ + T(t), fᵢ the net force on bore node i. The rest
+//!   of the driven gear's inertia is in its FE nodes.
+//! Bearings are rigid (centres fixed).
+//!
+//! # Contact (node-to-segment, two-pass, penalty; [`crate::contact`])
+//! For every tooth pair that can engage in the scene, both the drive flanks (tooth-local left
+//! flanks of both gears) and the back flanks (right flanks) are contact pairs; each flank's
+//! nodes are slaves against the other flank's quadratic edges and vice versa. A slave node that
+//! penetrates (g < 0) gets F_n = k_n(−g) along the master normal and a Coulomb friction force
+//! along the master tangent by return mapping; the reaction goes to the master edge's three
+//! nodes by the quadratic shape functions. The penalty of a master edge is
+//! k_n = f_p · max diag K_e of its element (2D: K_e ∝ E·B whatever the size) — `penalty_factor`
+//! f_p; the stick stiffness is k_t = k_n.
+//! Search: per step a flank pair is skipped when the bounding boxes of its two flanks are
+//! apart by more than a quarter module; otherwise each slave node is tested against the chords
+//! of the master edges and projected (Newton) on the nearest one.
+//!
+//! # Energy balance
+//! E_kin + E_strain + E_damping + E_contact − W_ext = 0, with E_contact the work done by the
+//! contact forces (penalty springs and friction), W_ext the work of the driver's hub (reactions
+//! on the prescribed bore nodes) and of the load torque; work terms by the trapezoid rule.
+
+use nalgebra::{Point2, Rotation2, Vector2};
+
+use crate::contact::{project_on_quadratic_edge, ContactLaw, FrictionState};
+use crate::explicit::body::{ExplicitBody, ExplicitMaterial};
+use crate::fe::FeError;
+use crate::geometry::{GearPair, Placement, Side};
+use crate::mesh::GearMesh;
+
+/// One flank of one gear as a contact surface.
+#[derive(Debug, Clone)]
+pub struct Flank {
+    pub gear: usize,
+    pub tooth: usize,
+    pub side: Side,
+    /// Nodes, form point to tip corner.
+    pub nodes: Vec<usize>,
+    /// Quadratic edges (corner, mid-side, corner), ordered counter-clockwise around the body so
+    /// the edge normal points out of it.
+    pub edges: Vec<[usize; 3]>,
+    /// Normal penalty stiffness of each edge [N/m].
+    pub penalty: Vec<f64>,
+}
+
+/// Two flanks that can touch: `flanks[0]` on gear 1, `flanks[1]` on gear 2.
+#[derive(Debug, Clone)]
+pub struct FlankPair {
+    pub flanks: [usize; 2],
+    /// Index of the tooth pair (gear-1 tooth, gear-2 tooth) in [`ExplicitPair::tooth_pairs`].
+    pub tooth_pair: usize,
+    /// Drive flanks (true) or back flanks.
+    pub drive: bool,
+}
+
+/// Friction history of one slave node of a flank pair.
+#[derive(Debug, Clone, Copy, Default)]
+struct SlaveState {
+    friction: FrictionState,
+}
+
+/// The assembled pair.
+pub struct ExplicitPair {
+    pub pair: GearPair,
+    pub meshes: [GearMesh; 2],
+    pub bodies: [ExplicitBody; 2],
+    pub placement: [Placement; 2],
+    /// Whether each DOF integrates freely (false: bore DOFs, slaved to the hub).
+    pub free: [Vec<bool>; 2],
+    /// Driven hub inertia I_h = Σ_bore mᵢ|Xᵢ|² [kg·m²].
+    pub hub_inertia: f64,
+    pub flanks: Vec<Flank>,
+    pub flank_pairs: Vec<FlankPair>,
+    /// Tooth pairs (gear-1 tooth, gear-2 tooth) in contact pairs.
+    pub tooth_pairs: Vec<(usize, usize)>,
+    pub friction: f64,
+    pub penalty_factor: f64,
+    /// Flank DOFs of each gear: where contact forces can act.
+    contact_dofs: [Vec<usize>; 2],
+}
+
+/// Loads and drive of a run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Drive {
+    /// Driver speed Ω [rad/s] after the ramp.
+    pub driver_speed: f64,
+    /// Load torque T on the driven gear [N·m] after the ramp.
+    pub load_torque: f64,
+    /// Ramp time t_r of speed and torque [s].
+    pub ramp_time: f64,
+}
+
+impl Drive {
+    /// Driver rotation θ₁, speed and acceleration at time t.
+    pub fn driver_motion(&self, t: f64) -> (f64, f64, f64) {
+        let (w, tr) = (self.driver_speed, self.ramp_time);
+        if t < tr {
+            (0.5 * w * t * t / tr, w * t / tr, w / tr)
+        } else {
+            (w * (t - 0.5 * tr), w, 0.0)
+        }
+    }
+
+    pub fn load_torque_at(&self, t: f64) -> f64 {
+        if self.ramp_time > 0.0 && t < self.ramp_time {
+            self.load_torque * t / self.ramp_time
+        } else {
+            self.load_torque
+        }
+    }
+}
+
+/// The state of the pair.
+#[derive(Debug, Clone)]
+pub struct PairState {
+    pub time: f64,
+    pub x: [Vec<f64>; 2],
+    pub v: [Vec<f64>; 2],
+    pub a: [Vec<f64>; 2],
+    /// Driven hub rotation φ from its placement [rad] (negative: the driven gear turns
+    /// clockwise), rate and acceleration.
+    pub hub: [f64; 3],
+}
+
+/// Energy account [J].
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct PairEnergy {
+    pub kinetic: f64,
+    pub strain: f64,
+    pub damping: f64,
+    pub contact: f64,
+    pub external_work: f64,
+}
+
+impl PairEnergy {
+    /// kinetic + strain + damping + contact − external work: zero for an exact integrator.
+    pub fn balance(&self) -> f64 {
+        self.kinetic + self.strain + self.damping + self.contact - self.external_work
+    }
+}
+
+/// Contact output of one step.
+#[derive(Debug, Clone, Default)]
+pub struct ContactOutput {
+    /// Resultant contact force on the driven gear (global frame) [N].
+    pub force_on_driven: Vector2<f64>,
+    /// Magnitude of the contact force on the driven gear per flank pair [N].
+    pub pair_forces: Vec<f64>,
+    /// Slave nodes in contact.
+    pub active: usize,
+    /// Deepest penetration [m].
+    pub max_penetration: f64,
+}
+
+impl ExplicitPair {
+    /// Builds the bodies (tooth-local reference frames, shared element prototypes), hubs and
+    /// contact surfaces. `tooth_pairs` are the (gear-1, gear-2) teeth that can engage; both must
+    /// be fine teeth of the meshes.
+    pub fn new(
+        pair: &GearPair,
+        meshes: [GearMesh; 2],
+        material: ExplicitMaterial,
+        tooth_pairs: Vec<(usize, usize)>,
+        friction: f64,
+        penalty_factor: f64,
+    ) -> Result<Self, FeError> {
+        let body = |g: usize| {
+            let mut m = material;
+            m.thickness = pair.gears[g].spec.face_width;
+            ExplicitBody::with_symmetry(
+                &meshes[g].nodes,
+                &meshes[g].elements,
+                m,
+                Some(pair.gears[g].teeth() as usize),
+            )
+        };
+        let bodies = [body(0)?, body(1)?];
+        let placement = pair.mesh_placement();
+        let free: [Vec<bool>; 2] = std::array::from_fn(|g| {
+            let mut free = vec![true; 2 * meshes[g].nodes.len()];
+            for &n in &meshes[g].bore_nodes {
+                free[2 * n] = false;
+                free[2 * n + 1] = false;
+            }
+            free
+        });
+        let hub_inertia = meshes[1]
+            .bore_nodes
+            .iter()
+            .map(|&n| bodies[1].mass[n] * meshes[1].nodes[n].coords.norm_squared())
+            .sum();
+        let mut flanks = Vec::new();
+        let mut flank_pairs = Vec::new();
+        for (index, &(t1, t2)) in tooth_pairs.iter().enumerate() {
+            for (side, drive) in [(Side::Left, true), (Side::Right, false)] {
+                let a = flanks.len();
+                for (g, tooth) in [(0, t1), (1, t2)] {
+                    let teeth = pair.gears[g].teeth() as usize;
+                    flanks.push(make_flank(
+                        &meshes[g],
+                        &bodies[g],
+                        (g, teeth, tooth),
+                        side,
+                        penalty_factor,
+                    ));
+                }
+                flank_pairs.push(FlankPair {
+                    flanks: [a, a + 1],
+                    tooth_pair: index,
+                    drive,
+                });
+            }
+        }
+        let contact_dofs = std::array::from_fn(|g| {
+            let mut nodes: Vec<usize> = flanks
+                .iter()
+                .filter(|f| f.gear == g)
+                .flat_map(|f| f.nodes.iter().copied())
+                .collect();
+            nodes.sort_unstable();
+            nodes.dedup();
+            nodes.iter().flat_map(|&n| [2 * n, 2 * n + 1]).collect()
+        });
+        Ok(ExplicitPair {
+            pair: pair.clone(),
+            meshes,
+            bodies,
+            placement,
+            free,
+            hub_inertia,
+            flanks,
+            flank_pairs,
+            tooth_pairs,
+            friction,
+            penalty_factor,
+            contact_dofs,
+        })
+    }
+
+    pub fn elements(&self) -> usize {
+        self.bodies.iter().map(|b| b.elements.len()).sum()
+    }
+
+    /// The driven gear's kinematic hub rotation for driver rotation θ₁: −(z₁/z₂) θ₁.
+    pub fn kinematic_hub_rotation(&self, driver_rotation: f64) -> f64 {
+        -(self.pair.gears[0].teeth() as f64) / self.pair.gears[1].teeth() as f64 * driver_rotation
+    }
+
+    /// Rest state in the placed, unloaded position.
+    pub fn initial_state(&self) -> PairState {
+        let x = std::array::from_fn(|g| {
+            self.meshes[g]
+                .nodes
+                .iter()
+                .flat_map(|p| {
+                    let q = self.placement[g].to_global(p);
+                    [q.x, q.y]
+                })
+                .collect::<Vec<f64>>()
+        });
+        let zeros = |g: usize| vec![0.0; 2 * self.meshes[g].nodes.len()];
+        PairState {
+            time: 0.0,
+            x,
+            v: [zeros(0), zeros(1)],
+            a: [zeros(0), zeros(1)],
+            hub: [0.0; 3],
+        }
+    }
+
+    /// Sets the bore nodes of gear `g` on a rigid rotation `angle` (from the placement) with
+    /// rate `rate` and angular acceleration `accel`; returns nothing, writes x, v, a.
+    fn place_bore(&self, g: usize, state: &mut PairState, angle: f64, rate: f64, accel: f64) {
+        let placement = &self.placement[g];
+        let rotation = Rotation2::new(placement.rotation + angle);
+        for &n in &self.meshes[g].bore_nodes {
+            let r = rotation * self.meshes[g].nodes[n].coords;
+            let x = placement.centre + r;
+            state.x[g][2 * n] = x.x;
+            state.x[g][2 * n + 1] = x.y;
+            // v = ω ẑ × r, a = α ẑ × r − ω² r
+            state.v[g][2 * n] = -rate * r.y;
+            state.v[g][2 * n + 1] = rate * r.x;
+            state.a[g][2 * n] = -accel * r.y - rate * rate * r.x;
+            state.a[g][2 * n + 1] = accel * r.x - rate * rate * r.y;
+        }
+    }
+
+    /// Contact forces at the state's positions into `force` (added), with the friction history
+    /// and slip from the velocities over `dt`.
+    fn contact_forces(
+        &self,
+        state: &PairState,
+        dt: f64,
+        history: &mut [Vec<SlaveState>],
+        force: &mut [Vec<f64>; 2],
+    ) -> ContactOutput {
+        let mut out = ContactOutput {
+            pair_forces: vec![0.0; self.flank_pairs.len()],
+            ..ContactOutput::default()
+        };
+        let reject = 0.25 * self.pair.gears[0].module();
+        for (index, fp) in self.flank_pairs.iter().enumerate() {
+            let boxes = fp.flanks.map(|f| {
+                let flank = &self.flanks[f];
+                let x = &state.x[flank.gear];
+                flank.nodes.iter().fold(
+                    [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY],
+                    |b, &n| {
+                        [
+                            b[0].min(x[2 * n]),
+                            b[1].min(x[2 * n + 1]),
+                            b[2].max(x[2 * n]),
+                            b[3].max(x[2 * n + 1]),
+                        ]
+                    },
+                )
+            });
+            let apart = (boxes[0][0] - boxes[1][2])
+                .max(boxes[1][0] - boxes[0][2])
+                .max(boxes[0][1] - boxes[1][3])
+                .max(boxes[1][1] - boxes[0][3]);
+            if apart > reject {
+                for pass in 0..2 {
+                    history[2 * index + pass]
+                        .iter_mut()
+                        .for_each(|s| *s = SlaveState::default());
+                }
+                continue;
+            }
+            let mut on_driven = Vector2::zeros();
+            for pass in 0..2 {
+                let (slave, master) = (
+                    &self.flanks[fp.flanks[pass]],
+                    &self.flanks[fp.flanks[1 - pass]],
+                );
+                let (sg, mg) = (slave.gear, master.gear);
+                let slots = &mut history[2 * index + pass];
+                for (k, &node) in slave.nodes.iter().enumerate() {
+                    let p = Point2::new(state.x[sg][2 * node], state.x[sg][2 * node + 1]);
+                    // Nearest master chord.
+                    let mut best = (f64::INFINITY, 0);
+                    for (e, edge) in master.edges.iter().enumerate() {
+                        let a = Point2::new(state.x[mg][2 * edge[0]], state.x[mg][2 * edge[0] + 1]);
+                        let b = Point2::new(state.x[mg][2 * edge[2]], state.x[mg][2 * edge[2] + 1]);
+                        let ab = b - a;
+                        let t = ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0);
+                        let d = (p - (a + ab * t)).norm_squared();
+                        if d < best.0 {
+                            best = (d, e);
+                        }
+                    }
+                    let edge = master.edges[best.1];
+                    let nodes = edge.map(|n| Point2::new(state.x[mg][2 * n], state.x[mg][2 * n + 1]));
+                    let proj = project_on_quadratic_edge(&p, &nodes);
+                    // Off the ends of the flank the projection clamps: no contact there.
+                    let at_end = (best.1 == 0 && proj.parameter <= -1.0)
+                        || (best.1 == master.edges.len() - 1 && proj.parameter >= 1.0);
+                    if proj.gap >= 0.0 || at_end || proj.gap < -reject {
+                        slots[k] = SlaveState::default();
+                        continue;
+                    }
+                    let law = ContactLaw {
+                        normal_stiffness: master.penalty[best.1],
+                        tangential_stiffness: master.penalty[best.1],
+                        friction: self.friction,
+                    };
+                    let master_velocity = edge.iter().zip(proj.weights).fold(
+                        Vector2::zeros(),
+                        |acc, (&n, w)| acc + Vector2::new(state.v[mg][2 * n], state.v[mg][2 * n + 1]) * w,
+                    );
+                    let relative =
+                        Vector2::new(state.v[sg][2 * node], state.v[sg][2 * node + 1]) - master_velocity;
+                    let slip = relative.dot(&proj.tangent) * dt;
+                    let (fn_, ft) = law.forces(proj.gap, slip, &mut slots[k].friction);
+                    let f = proj.normal * fn_ + proj.tangent * ft;
+                    force[sg][2 * node] += f.x;
+                    force[sg][2 * node + 1] += f.y;
+                    for (&n, w) in edge.iter().zip(proj.weights) {
+                        force[mg][2 * n] -= w * f.x;
+                        force[mg][2 * n + 1] -= w * f.y;
+                    }
+                    on_driven += if sg == 1 { f } else { -f };
+                    out.active += 1;
+                    out.max_penetration = out.max_penetration.max(-proj.gap);
+                }
+            }
+            out.force_on_driven += on_driven;
+            out.pair_forces[index] = on_driven.norm();
+        }
+        out
+    }
+
+    /// Empty friction history for [`ExplicitPair::contact_forces`].
+    fn new_history(&self) -> Vec<Vec<SlaveState>> {
+        self.flank_pairs
+            .iter()
+            .flat_map(|fp| {
+                [0, 1].map(|pass| vec![SlaveState::default(); self.flanks[fp.flanks[pass]].nodes.len()])
+            })
+            .collect()
+    }
+
+    /// Stable step bound of the contact springs: 2/ω with ω² = k_n (1/m_slave + 1/m_master),
+    /// m_master the smallest mass of the edge's nodes, over every flank node and edge.
+    pub fn contact_critical_step(&self) -> f64 {
+        let mut omega2: f64 = 0.0;
+        for fp in &self.flank_pairs {
+            for pass in 0..2 {
+                let (slave, master) = (
+                    &self.flanks[fp.flanks[pass]],
+                    &self.flanks[fp.flanks[1 - pass]],
+                );
+                let slave_mass = slave
+                    .nodes
+                    .iter()
+                    .map(|&n| self.bodies[slave.gear].mass[n])
+                    .fold(f64::INFINITY, f64::min);
+                for (edge, k) in master.edges.iter().zip(&master.penalty) {
+                    let master_mass = edge
+                        .iter()
+                        .map(|&n| self.bodies[master.gear].mass[n])
+                        .fold(f64::INFINITY, f64::min);
+                    omega2 = omega2.max(k * (1.0 / slave_mass + 1.0 / master_mass));
+                }
+            }
+        }
+        2.0 / omega2.sqrt()
+    }
+}
+
+/// The contact surface of one flank: edges oriented with the outward normal, penalty per edge.
+fn make_flank(
+    mesh: &GearMesh,
+    body: &ExplicitBody,
+    (gear, teeth, tooth): (usize, usize, usize),
+    side: Side,
+    penalty_factor: f64,
+) -> Flank {
+    let nodes = mesh.flank(tooth, side).nodes.clone();
+    let mut edges: Vec<[usize; 3]> = nodes
+        .windows(3)
+        .step_by(2)
+        .map(|w| [w[0], w[1], w[2]])
+        .collect();
+    // Orientation: the normal (t_y, −t_x) of a counter-clockwise edge points away from the
+    // tooth's centre line; test the middle edge in the tooth-local frame.
+    let middle = edges[edges.len() / 2];
+    let (a, b) = (mesh.nodes[middle[0]], mesh.nodes[middle[2]]);
+    let t = b - a;
+    let normal = Vector2::new(t.y, -t.x);
+    let pitch = 2.0 * std::f64::consts::PI / teeth as f64;
+    let axis = Rotation2::new(tooth as f64 * pitch) * Vector2::new(0.0, 1.0);
+    let mid = a.coords + t * 0.5;
+    let away = mid - axis * mid.dot(&axis);
+    if normal.dot(&away) < 0.0 {
+        edges.reverse();
+        for e in &mut edges {
+            e.reverse();
+        }
+    }
+    // Penalty from the stiffness of the element that owns each edge.
+    let penalty = edges
+        .iter()
+        .map(|edge| {
+            let owner = mesh
+                .elements
+                .iter()
+                .position(|e| edge.iter().all(|n| e.contains(n)))
+                .expect("a flank edge belongs to an element");
+            let k = body.element_stiffness(owner);
+            let max_diag = (0..16).map(|i| k[(i, i)]).fold(0.0, f64::max);
+            penalty_factor * max_diag
+        })
+        .collect();
+    Flank {
+        gear,
+        tooth,
+        side,
+        nodes,
+        edges,
+        penalty,
+    }
+}
+
+/// A central-difference integrator of the pair.
+pub struct PairIntegrator<'a> {
+    pub model: &'a ExplicitPair,
+    pub drive: Drive,
+    pub dt: f64,
+    /// Stiffness-proportional damping coefficient β [s] (f_d = β K v on the deformation rate).
+    pub beta_k: f64,
+    pub energy: PairEnergy,
+    pub steps: usize,
+    pub last_contact: ContactOutput,
+    force: [Vec<f64>; 2],
+    contact_force: [Vec<f64>; 2],
+    previous_contact: [Vec<f64>; 2],
+    history: Vec<Vec<SlaveState>>,
+    /// Driver hub reaction on the bore DOFs at the last step.
+    driver_reaction: Vec<f64>,
+}
+
+impl<'a> PairIntegrator<'a> {
+    pub fn new(model: &'a ExplicitPair, drive: Drive, dt: f64, beta_k: f64) -> Self {
+        let zeros = |g: usize| vec![0.0; 2 * model.meshes[g].nodes.len()];
+        PairIntegrator {
+            model,
+            drive,
+            dt,
+            beta_k,
+            energy: PairEnergy::default(),
+            steps: 0,
+            last_contact: ContactOutput::default(),
+            force: [zeros(0), zeros(1)],
+            contact_force: [zeros(0), zeros(1)],
+            previous_contact: [zeros(0), zeros(1)],
+            history: model.new_history(),
+            driver_reaction: vec![0.0; 2 * model.meshes[0].bore_nodes.len()],
+        }
+    }
+
+    /// Net forces at the state; accelerations of free DOFs and of the driven hub; driver
+    /// reactions. Returns the strain energy and damping power.
+    fn forces_and_accelerations(&mut self, state: &mut PairState) -> (f64, f64) {
+        let model = self.model;
+        for g in 0..2 {
+            self.force[g].iter_mut().for_each(|f| *f = 0.0);
+        }
+        let beta = self.beta_k;
+        let (f0, f1) = self.force.split_at_mut(1);
+        let (o0, o1) = rayon::join(
+            || model.bodies[0].internal_forces(&state.x[0], &state.v[0], beta, &mut f0[0]),
+            || model.bodies[1].internal_forces(&state.x[1], &state.v[1], beta, &mut f1[0]),
+        );
+        for g in 0..2 {
+            std::mem::swap(&mut self.previous_contact[g], &mut self.contact_force[g]);
+            for &d in &model.contact_dofs[g] {
+                self.contact_force[g][d] = 0.0;
+            }
+        }
+        self.last_contact =
+            model.contact_forces(state, self.dt, &mut self.history, &mut self.contact_force);
+        for g in 0..2 {
+            for &d in &model.contact_dofs[g] {
+                self.force[g][d] += self.contact_force[g][d];
+            }
+        }
+        // Driven hub: moment of the net forces on its bore nodes plus the load torque.
+        let c2 = model.placement[1].centre;
+        let mut moment = self.drive.load_torque_at(state.time);
+        for &n in &model.meshes[1].bore_nodes {
+            let (rx, ry) = (state.x[1][2 * n] - c2.x, state.x[1][2 * n + 1] - c2.y);
+            moment += rx * self.force[1][2 * n + 1] - ry * self.force[1][2 * n];
+        }
+        state.hub[2] = moment / model.hub_inertia;
+        for g in 0..2 {
+            for d in 0..state.a[g].len() {
+                if model.free[g][d] {
+                    state.a[g][d] = self.force[g][d] / model.bodies[g].mass[d / 2];
+                }
+            }
+        }
+        // Driver reactions: what the hub must apply so the bore nodes follow their path.
+        for (i, &n) in model.meshes[0].bore_nodes.iter().enumerate() {
+            let m = model.bodies[0].mass[n];
+            for c in 0..2 {
+                self.driver_reaction[2 * i + c] =
+                    m * state.a[0][2 * n + c] - self.force[0][2 * n + c];
+            }
+        }
+        (o0.strain_energy + o1.strain_energy, o0.damping_power + o1.damping_power)
+    }
+
+    /// Hub placement of both gears at the state's time; then forces and accelerations.
+    pub fn initialize(&mut self, state: &mut PairState) {
+        let (theta, rate, accel) = self.drive.driver_motion(state.time);
+        self.model.place_bore(0, state, theta, rate, accel);
+        let [phi, phi_rate, _] = state.hub;
+        self.model.place_bore(1, state, phi, phi_rate, 0.0);
+        let (strain, _) = self.forces_and_accelerations(state);
+        self.energy.strain = strain;
+        self.energy.kinetic = self.kinetic(state);
+    }
+
+    fn kinetic(&self, state: &PairState) -> f64 {
+        (0..2)
+            .map(|g| {
+                state.v[g]
+                    .iter()
+                    .enumerate()
+                    .map(|(d, v)| 0.5 * self.model.bodies[g].mass[d / 2] * v * v)
+                    .sum::<f64>()
+            })
+            .sum()
+    }
+
+    /// One central-difference step.
+    pub fn step(&mut self, state: &mut PairState) -> Result<(), String> {
+        let model = self.model;
+        let dt = self.dt;
+        let old_x: [Vec<f64>; 2] = [
+            model.contact_dofs[0].iter().map(|&d| state.x[0][d]).collect(),
+            model.contact_dofs[1].iter().map(|&d| state.x[1][d]).collect(),
+        ];
+        let old_bore: Vec<f64> = model.meshes[0]
+            .bore_nodes
+            .iter()
+            .flat_map(|&n| [state.x[0][2 * n], state.x[0][2 * n + 1]])
+            .collect();
+        let old_reaction = self.driver_reaction.clone();
+        let (old_phi, old_torque) = (state.hub[0], self.drive.load_torque_at(state.time));
+        for g in 0..2 {
+            for d in 0..state.x[g].len() {
+                if model.free[g][d] {
+                    state.v[g][d] += 0.5 * dt * state.a[g][d];
+                    state.x[g][d] += dt * state.v[g][d];
+                }
+            }
+        }
+        state.time += dt;
+        let (theta, rate, accel) = self.drive.driver_motion(state.time);
+        model.place_bore(0, state, theta, rate, accel);
+        state.hub[1] += 0.5 * dt * state.hub[2];
+        state.hub[0] += dt * state.hub[1];
+        let [phi, phi_rate, phi_accel] = state.hub;
+        model.place_bore(1, state, phi, phi_rate, phi_accel);
+        let (strain, damping_power) = self.forces_and_accelerations(state);
+        for g in 0..2 {
+            for d in 0..state.v[g].len() {
+                if model.free[g][d] {
+                    state.v[g][d] += 0.5 * dt * state.a[g][d];
+                }
+            }
+        }
+        state.hub[1] += 0.5 * dt * state.hub[2];
+        let [phi, phi_rate, phi_accel] = state.hub;
+        model.place_bore(1, state, phi, phi_rate, phi_accel);
+        // Work: driver reactions, load torque, contact forces (trapezoid).
+        let mut work = 0.0;
+        for (i, &n) in model.meshes[0].bore_nodes.iter().enumerate() {
+            for c in 0..2 {
+                let dx = state.x[0][2 * n + c] - old_bore[2 * i + c];
+                work += 0.5 * (old_reaction[2 * i + c] + self.driver_reaction[2 * i + c]) * dx;
+            }
+        }
+        work += 0.5 * (old_torque + self.drive.load_torque_at(state.time)) * (state.hub[0] - old_phi);
+        let mut contact = 0.0;
+        for g in 0..2 {
+            for (k, &d) in model.contact_dofs[g].iter().enumerate() {
+                let dx = state.x[g][d] - old_x[g][k];
+                contact -= 0.5 * (self.previous_contact[g][d] + self.contact_force[g][d]) * dx;
+            }
+        }
+        self.steps += 1;
+        self.energy.external_work += work;
+        self.energy.contact += contact;
+        self.energy.damping += damping_power * dt;
+        self.energy.strain = strain;
+        self.energy.kinetic = self.kinetic(state);
+        let total = self.energy.kinetic + self.energy.strain;
+        if !total.is_finite() || !state.hub[0].is_finite() {
+            return Err("the energy is not finite (NaN or infinity)".into());
+        }
+        let scale = self.energy.external_work.abs() + self.energy.damping + 1e-9;
+        if self.steps > 100 && total > 100.0 * scale {
+            return Err(format!(
+                "the kinetic + strain energy grew to {total:.3e} J, {:.1e} times the work put in",
+                total / scale
+            ));
+        }
+        Ok(())
+    }
+}

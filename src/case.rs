@@ -85,6 +85,8 @@ pub struct CaseFile {
     pub fe: FeSection,
     #[serde(default)]
     pub lumped: LumpedSection,
+    #[serde(default, rename = "scene")]
+    pub scenes: Vec<SceneSection>,
 }
 
 /// The lumped parametric-vibration model (`geardyn sweep`, `geardyn stability`); the command
@@ -183,14 +185,71 @@ pub struct FeSection {
     /// "stress".
     #[serde(default = "default_plane")]
     pub plane: PlaneState,
+    /// Explicit time step Δt = step_factor · Δt_cr (the paper's β, eq. 29).
+    #[serde(default = "default_step_factor")]
+    pub step_factor: f64,
+    /// Contact penalty k_n = penalty_factor · max diag K_e of the master element.
+    #[serde(default = "default_penalty_factor")]
+    pub penalty_factor: f64,
+    /// Stiffness-proportional damping, given as the damping ratio at the highest frequency of
+    /// the mesh: β_K = 2ζ/ω_max. It damps numerical noise at the element scale; at the mesh
+    /// frequencies (kHz) the damping is ζ·ω/ω_max, a few parts per million.
+    #[serde(default = "default_high_frequency_damping")]
+    pub high_frequency_damping_ratio: f64,
+    /// Interval of the recorded time histories [µs].
+    #[serde(default = "default_output_interval")]
+    pub output_interval_us: f64,
+    /// Element size on the engaging flanks for the explicit runs [mm]; default: mesh.fine_element_mm.
+    pub explicit_fine_element_mm: Option<f64>,
 }
 
 impl Default for FeSection {
     fn default() -> Self {
         Self {
             plane: default_plane(),
+            step_factor: default_step_factor(),
+            penalty_factor: default_penalty_factor(),
+            high_frequency_damping_ratio: default_high_frequency_damping(),
+            output_interval_us: default_output_interval(),
+            explicit_fine_element_mm: None,
         }
     }
+}
+
+fn default_step_factor() -> f64 {
+    0.9
+}
+fn default_penalty_factor() -> f64 {
+    1.0
+}
+fn default_high_frequency_damping() -> f64 {
+    0.05
+}
+fn default_output_interval() -> f64 {
+    10.0
+}
+
+/// An explicit FE scene: one run of the meshing pair (`geardyn fe --scene NAME`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneSection {
+    pub name: String,
+    /// Operating point (speed and torque) by name.
+    pub operating_point: String,
+    /// Relief variant by name.
+    #[serde(default = "default_relief_name")]
+    pub relief: String,
+    /// Coulomb friction coefficient μ.
+    #[serde(default)]
+    pub friction: f64,
+    /// Simulated time [s].
+    pub duration_s: f64,
+    /// Ramp of driver speed and load torque from zero [s].
+    pub ramp_s: f64,
+}
+
+fn default_relief_name() -> String {
+    "none".into()
 }
 
 /// The basic rack of the generating cutter.
@@ -394,6 +453,21 @@ pub struct Case {
     pub operating_points: Vec<OperatingPoint>,
     pub relief_variants: Vec<ReliefVariant>,
     pub friction_coefficients: Vec<f64>,
+    pub scenes: Vec<Scene>,
+}
+
+/// A checked explicit FE scene, SI.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Scene {
+    pub name: String,
+    /// Driver speed Ω [rad/s] after the ramp.
+    pub driver_speed: f64,
+    /// Load torque on the driven gear [N·m] after the ramp.
+    pub torque: f64,
+    pub relief: String,
+    pub friction: f64,
+    pub duration: f64,
+    pub ramp_time: f64,
 }
 
 impl Case {
@@ -628,8 +702,121 @@ impl Case {
             Some(lumped.bearing_stiffness_n_per_m),
         )?;
 
+        let fe = &file.fe;
+        if !(fe.step_factor > 0.0 && fe.step_factor <= 1.5) {
+            return Err(invalid(
+                "fe.step_factor",
+                fe.step_factor.to_string(),
+                "must be in (0, 1.5]; values above 1 are unstable and only useful to see the failure (default 0.9)",
+            ));
+        }
+        if !(fe.penalty_factor > 0.0 && fe.penalty_factor.is_finite()) {
+            return Err(invalid(
+                "fe.penalty_factor",
+                fe.penalty_factor.to_string(),
+                "must be a finite number > 0 (default 1)",
+            ));
+        }
+        if !(0.0..=0.5).contains(&fe.high_frequency_damping_ratio) {
+            return Err(invalid(
+                "fe.high_frequency_damping_ratio",
+                fe.high_frequency_damping_ratio.to_string(),
+                "must be in [0, 0.5] (default 0.05)",
+            ));
+        }
+        if !(fe.output_interval_us > 0.0 && fe.output_interval_us.is_finite()) {
+            return Err(invalid(
+                "fe.output_interval_us",
+                fe.output_interval_us.to_string(),
+                "must be a finite number > 0",
+            ));
+        }
+        if let Some(size) = fe.explicit_fine_element_mm {
+            if !(size >= 0.005 * module_mm && size <= coarse) {
+                return Err(invalid(
+                    "fe.explicit_fine_element_mm",
+                    size.to_string(),
+                    &format!(
+                        "must be in [0.005·m, coarse_element_mm] = [{:.4}, {coarse}] mm",
+                        0.005 * module_mm
+                    ),
+                ));
+            }
+        }
+        let mut scenes = Vec::new();
+        for (i, sc) in file.scenes.iter().enumerate() {
+            let key = |field: &str| format!("scene[{i}] (\"{}\").{field}", sc.name);
+            if file.scenes[..i].iter().any(|o| o.name == sc.name) {
+                return Err(invalid(
+                    &key("name"),
+                    format!("{:?}", sc.name),
+                    "names must be unique",
+                ));
+            }
+            let Some(op) = operating_points
+                .iter()
+                .find(|o| o.name == sc.operating_point)
+            else {
+                return Err(invalid(
+                    &key("operating_point"),
+                    format!("{:?}", sc.operating_point),
+                    &format!(
+                        "name one of the operating points: {:?}",
+                        operating_points
+                            .iter()
+                            .map(|o| o.name.as_str())
+                            .collect::<Vec<_>>()
+                    ),
+                ));
+            };
+            if !relief_variants.iter().any(|v| v.name == sc.relief) {
+                return Err(invalid(
+                    &key("relief"),
+                    format!("{:?}", sc.relief),
+                    &format!(
+                        "name one of the relief variants: {:?}",
+                        relief_variants
+                            .iter()
+                            .map(|v| v.name.as_str())
+                            .collect::<Vec<_>>()
+                    ),
+                ));
+            }
+            if !(sc.friction >= 0.0 && sc.friction < 1.0) {
+                return Err(invalid(
+                    &key("friction"),
+                    sc.friction.to_string(),
+                    "must be in [0, 1)",
+                ));
+            }
+            if !(sc.duration_s > 0.0 && sc.duration_s.is_finite()) {
+                return Err(invalid(
+                    &key("duration_s"),
+                    sc.duration_s.to_string(),
+                    "must be a finite number > 0",
+                ));
+            }
+            if !(sc.ramp_s >= 0.0 && sc.ramp_s < sc.duration_s) {
+                return Err(invalid(
+                    &key("ramp_s"),
+                    sc.ramp_s.to_string(),
+                    "must be ≥ 0 and shorter than duration_s",
+                ));
+            }
+            scenes.push(Scene {
+                name: sc.name.clone(),
+                driver_speed: op.driver_speed,
+                torque: op.torque,
+                relief: sc.relief.clone(),
+                friction: sc.friction,
+                duration: sc.duration_s,
+                ramp_time: sc.ramp_s,
+            });
+        }
+
         Ok(Case {
             source: source.into(),
+            scenes,
             text: text.into(),
             friction_coefficients: file.contact.friction_coefficients.clone(),
             file,
@@ -652,6 +839,11 @@ impl Case {
             coarse_size: self.file.mesh.coarse_element_mm * 1e-3,
             fine_teeth,
         }
+    }
+
+    /// A scene by name.
+    pub fn scene(&self, name: &str) -> Option<&Scene> {
+        self.scenes.iter().find(|s| s.name == name)
     }
 
     /// A relief variant by name.

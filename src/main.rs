@@ -87,6 +87,17 @@ enum Command {
         #[command(flatten)]
         model: LumpedArgs,
     },
+    /// Explicit dynamic contact FE of the meshing pair (central difference, penalty contact with
+    /// Coulomb friction, corotational bodies on rigid hubs): a scene of the case, or a speed and
+    /// a duration. Writes history.csv (DTE, speeds, contact forces, db5 impacts, energy),
+    /// dte_spectrum.csv, stiffness.csv (k from the DTE, readable by sweep --stiffness), plots
+    /// and summary.json; a diverged run keeps what it computed and says why.
+    Fe {
+        #[command(flatten)]
+        common: CommonArgs,
+        #[command(flatten)]
+        options: FeArgs,
+    },
     /// Validation studies too wide for the test suite; each writes a table (CSV and Markdown) and
     /// summary.json. Studies: integrators — where each fixed-step scheme of the lumped model
     /// fails (stability and 1 % frequency-accuracy limits in ωh, predicted vs observed; order of
@@ -137,6 +148,41 @@ struct LumpedArgs {
     bearings: bool,
 }
 
+/// Options of `geardyn fe`.
+#[derive(Args, Clone, Default)]
+struct FeArgs {
+    /// A scene of the case ([[scene]]), e.g. low-unmodified; the options below override it.
+    #[arg(long, value_name = "NAME")]
+    scene: Option<String>,
+    /// Driver speed [rpm] (without --scene: required).
+    #[arg(long, value_name = "RPM")]
+    speed_rpm: Option<f64>,
+    /// Simulated time [s] (without --scene: required); shortens or lengthens a scene.
+    #[arg(long, value_name = "SECONDS")]
+    duration_s: Option<f64>,
+    /// Load torque on the driven gear [N·m]; default: the scene's, or the first operating point.
+    #[arg(long, value_name = "T")]
+    torque_nm: Option<f64>,
+    /// Relief variant; default: the scene's, or the first variant.
+    #[arg(long, value_name = "NAME")]
+    relief: Option<String>,
+    /// Coulomb friction coefficient; default: the scene's, or 0.
+    #[arg(long, value_name = "MU")]
+    friction: Option<f64>,
+    /// Ramp time of speed and torque [s]; default: the scene's, or min(0.01, duration/10).
+    #[arg(long, value_name = "SECONDS")]
+    ramp_s: Option<f64>,
+    /// Time step over the critical step (fe.step_factor, default 0.9); above 1 the run diverges.
+    #[arg(long, value_name = "BETA")]
+    step_factor: Option<f64>,
+    /// Contact penalty over the master element's largest diagonal stiffness (fe.penalty_factor).
+    #[arg(long, value_name = "F")]
+    penalty_factor: Option<f64>,
+    /// Flank element size of the explicit mesh [mm] (fe.explicit_fine_element_mm).
+    #[arg(long, value_name = "MM")]
+    fine_element_mm: Option<f64>,
+}
+
 #[derive(Args)]
 struct CommonArgs {
     /// Case file (TOML). Default: the embedded paper36 case.
@@ -165,6 +211,7 @@ fn main() -> ExitCode {
             run_up_s,
         } => sweep(&common, &rpm, &model, run_up_s),
         Command::Stability { common, rpm, model } => stability(&common, &rpm, &model),
+        Command::Fe { common, options } => fe(&common, &options),
         Command::Validate {
             study,
             common,
@@ -1337,6 +1384,309 @@ fn validate(study: &str, args: &CommonArgs, options: &LumpedArgs) -> Result<()> 
     });
     report::write_json(&dir.join("summary.json"), &summary).context("cannot write summary.json")?;
     print!("{markdown}");
+    println!("wrote {}", dir.display());
+    Ok(())
+}
+
+fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
+    use geardyn::explicit::scene::{analyse_dte, prepare, run, FeSettings};
+    use geardyn::report::fe as rep;
+    use indicatif::{ProgressBar, ProgressStyle};
+    let started = std::time::Instant::now();
+    let case = load_case(args.case.as_deref())?;
+    let rpm_to_speed = |rpm: f64| rpm * std::f64::consts::TAU / 60.0;
+    let mut scene = match &options.scene {
+        Some(name) => case
+            .scene(name)
+            .with_context(|| {
+                format!(
+                    "no scene {name:?} in the case; its scenes are: {:?}",
+                    case.scenes
+                        .iter()
+                        .map(|s| s.name.as_str())
+                        .collect::<Vec<_>>()
+                )
+            })?
+            .clone(),
+        None => {
+            let (Some(rpm), Some(duration)) = (options.speed_rpm, options.duration_s) else {
+                anyhow::bail!(
+                    "give --scene NAME (one of {:?}) or both --speed-rpm and --duration-s",
+                    case.scenes
+                        .iter()
+                        .map(|s| s.name.as_str())
+                        .collect::<Vec<_>>()
+                );
+            };
+            geardyn::case::Scene {
+                name: format!("{rpm}rpm"),
+                driver_speed: rpm_to_speed(rpm),
+                torque: load_torque(&case, None)?,
+                relief: case
+                    .relief_variants
+                    .first()
+                    .context("the case has no relief variant")?
+                    .name
+                    .clone(),
+                friction: 0.0,
+                duration,
+                ramp_time: (0.1 * duration).min(0.01),
+            }
+        }
+    };
+    if let Some(rpm) = options.speed_rpm {
+        if !(rpm > 0.0 && rpm.is_finite()) {
+            anyhow::bail!("--speed-rpm {rpm} is invalid: give a driver speed > 0");
+        }
+        scene.driver_speed = rpm_to_speed(rpm);
+    }
+    if let Some(duration) = options.duration_s {
+        if !(duration > 0.0 && duration.is_finite()) {
+            anyhow::bail!("--duration-s {duration} is invalid: give a simulated time > 0");
+        }
+        scene.duration = duration;
+        scene.ramp_time = scene.ramp_time.min(0.5 * duration);
+    }
+    if let Some(ramp) = options.ramp_s {
+        if !(ramp >= 0.0 && ramp < scene.duration) {
+            anyhow::bail!(
+                "--ramp-s {ramp} is invalid: give 0 ≤ ramp < the duration ({} s)",
+                scene.duration
+            );
+        }
+        scene.ramp_time = ramp;
+    }
+    if let Some(torque) = options.torque_nm {
+        scene.torque = load_torque(&case, Some(torque))?;
+    }
+    if let Some(relief) = &options.relief {
+        case.relief_variant(relief)
+            .with_context(|| format!("no relief variant {relief:?} in the case"))?;
+        scene.relief = relief.clone();
+    }
+    if let Some(mu) = options.friction {
+        if !(0.0..1.0).contains(&mu) {
+            anyhow::bail!("--friction {mu} is invalid: give a Coulomb coefficient in [0, 1)");
+        }
+        scene.friction = mu;
+    }
+    let mut settings = FeSettings::from_case(&case);
+    if let Some(beta) = options.step_factor {
+        if !(beta > 0.0 && beta.is_finite()) {
+            anyhow::bail!(
+                "--step-factor {beta} is invalid: give a value > 0 (0.9 is safe; above 1 diverges)"
+            );
+        }
+        settings.step_factor = beta;
+    }
+    if let Some(f) = options.penalty_factor {
+        if !(f > 0.0 && f.is_finite()) {
+            anyhow::bail!("--penalty-factor {f} is invalid: give a value > 0 (default 1)");
+        }
+        settings.penalty_factor = f;
+    }
+    if let Some(mm) = options.fine_element_mm {
+        let coarse = case.file.mesh.coarse_element_mm;
+        if !(mm > 0.0 && mm <= coarse) {
+            anyhow::bail!("--fine-element-mm {mm} is invalid: give a size in (0, coarse_element_mm = {coarse}]");
+        }
+        settings.fine_size = mm * 1e-3;
+    }
+    let dir = output_dir(args.out.as_deref(), &format!("fe-{}", scene.name), &case)?;
+    report::write_atomic(&dir.join("case.toml"), case.text.as_bytes())
+        .context("cannot write case.toml")?;
+    eprintln!(
+        "scene {}: {:.1} rpm, {} N·m, relief {}, mu {}, {} s (ramp {} s); meshing and measuring the critical step ...",
+        scene.name,
+        scene.driver_speed * 60.0 / std::f64::consts::TAU,
+        scene.torque,
+        scene.relief,
+        scene.friction,
+        scene.duration,
+        scene.ramp_time
+    );
+    let prepared = prepare(&case, &scene, &settings)?;
+    let total_steps = (scene.duration / prepared.dt).ceil();
+    println!(
+        "{} elements ({} tooth pairs, flank elements {:.2} mm); dt_cr = {:.4e} s (bodies {:.4e} / {:.4e}, contact {:.4e}; paper's L/c {:.4e}), dt = {:.4e} s, {} steps",
+        prepared.model.elements(),
+        prepared.model.tooth_pairs.len(),
+        settings.fine_size * 1e3,
+        prepared.dt_critical,
+        prepared.dt_bodies[0],
+        prepared.dt_bodies[1],
+        prepared.dt_contact,
+        prepared.dt_paper,
+        prepared.dt,
+        total_steps
+    );
+    let bar = ProgressBar::new(1000);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "explicit FE [{bar:40}] {percent}% elapsed {elapsed}, ETA {eta}",
+        )
+        .expect("valid template"),
+    );
+    let outcome = run(
+        &prepared,
+        scene.duration,
+        settings.output_interval,
+        &mut |f| bar.set_position((f * 1000.0) as u64),
+    );
+    bar.finish_and_clear();
+    let history = &outcome.history;
+    let analysis = analyse_dte(history, &prepared.model, scene.torque, scene.ramp_time);
+    let derived = rep::derive(history);
+    let spectrum = rep::dte_spectrum(history, scene.ramp_time);
+    let mesh_hz = scene.driver_speed / case.pair.gears[0].angular_pitch();
+    let peaks = rep::spectrum_peaks(&spectrum, 0.5 * mesh_hz, 8);
+    let pair_names: Vec<String> = prepared
+        .model
+        .flank_pairs
+        .iter()
+        .map(|fp| fp.name())
+        .collect();
+    rep::write_history(&dir.join("history.csv"), history, &derived, &pair_names)
+        .context("cannot write history.csv")?;
+    report::write_csv(
+        &dir.join("dte_spectrum.csv"),
+        &["frequency_hz", "amplitude_rad"],
+        spectrum
+            .iter()
+            .map(|(f, a)| vec![format!("{f:.4}"), format!("{a:.6e}")]),
+    )
+    .context("cannot write dte_spectrum.csv")?;
+    if let Some(a) = &analysis {
+        let angles: Vec<f64> = a.stiffness.iter().map(|p| p.0).collect();
+        let values: Vec<f64> = a.stiffness.iter().map(|p| p.1).collect();
+        report::stiffness_csv::write_stiffness_csv(
+            &dir.join("stiffness.csv"),
+            &angles,
+            &values,
+            &vec![0.0; angles.len()],
+        )
+        .context("cannot write stiffness.csv")?;
+    }
+    let title = format!("{}: {}", case.name(), scene.name);
+    rep::plot_run(
+        &dir,
+        &title,
+        history,
+        &derived,
+        &spectrum,
+        analysis.as_ref(),
+        &pair_names,
+    )?;
+    // LTCA on the same flank element size, over the positions the statistics window covers.
+    let ltca = {
+        let mut ltca_case = case.clone();
+        ltca_case.file.mesh.fine_element_mm = settings.fine_size * 1e3;
+        let variant = case.relief_variant(&scene.relief).expect("checked above");
+        let model = ltca_model(&ltca_case, &variant.modifications)?;
+        let results = model.run(64, scene.torque, &|_| {})?;
+        analysis.as_ref().map(|a| {
+            let pitch = case.pair.gears[0].angular_pitch();
+            let start = history
+                .time
+                .iter()
+                .position(|t| *t >= a.window.0)
+                .unwrap_or(0);
+            let covered: Vec<f64> = history.driver_rotation[start..]
+                .iter()
+                .map(|theta| {
+                    let u = (theta / pitch).rem_euclid(1.0) * 64.0;
+                    let i = (u.floor() as usize).min(63);
+                    let f = u - i as f64;
+                    results[i].ste * (1.0 - f) + results[(i + 1) % 64].ste * f
+                })
+                .collect();
+            let mean = covered.iter().sum::<f64>() / covered.len() as f64;
+            let k_mean = results.iter().map(|r| r.mesh_stiffness).sum::<f64>() / 64.0;
+            (mean, k_mean)
+        })
+    };
+    let final_energy = outcome.final_energy;
+    let max_work = history
+        .energy
+        .iter()
+        .map(|e| e.external_work.abs())
+        .fold(0.0, f64::max);
+    let max_balance = history
+        .energy
+        .iter()
+        .map(|e| e.balance().abs())
+        .fold(0.0, f64::max);
+    let energy_error_rel = if max_work > 0.0 {
+        max_balance / max_work
+    } else {
+        0.0
+    };
+    let ns_per_element_step =
+        outcome.wall_s * 1e9 / (outcome.steps.max(1) as f64 * prepared.model.elements() as f64);
+    let get = |f: &dyn Fn(&geardyn::explicit::scene::DteAnalysis) -> f64| analysis.as_ref().map(f);
+    let mut summary = serde_json::json!({
+        "case": case.name(),
+        "scene": scene,
+        "dte_mean_rad": get(&|a| a.dte_mean_rad),
+        "dte_max_rad": get(&|a| a.dte_max_rad),
+        "dte_min_rad": get(&|a| a.dte_min_rad),
+        "dte_peak_to_peak_rad": get(&|a| a.dte_peak_to_peak_rad),
+        "mesh_stiffness_mean_n_per_m": get(&|a| a.mesh_stiffness_mean_n_per_m),
+        "mesh_stiffness_from_mean_dte_n_per_m": get(&|a| a.mesh_stiffness_from_mean_dte_n_per_m),
+        "stiffness_pitch_coverage": get(&|a| a.pitch_coverage),
+        "stats_window_s": analysis.as_ref().map(|a| [a.window.0, a.window.1]),
+        "ltca_ste_mean_rad_same_positions": ltca.map(|l| l.0),
+        "ltca_mesh_stiffness_mean_n_per_m": ltca.map(|l| l.1),
+        "dte_over_ltca_mean": match (analysis.as_ref(), ltca) {
+            (Some(a), Some((ste, _))) => Some(a.dte_mean_rad / ste),
+            _ => None,
+        },
+        "mesh_frequency_hz": mesh_hz,
+        "dte_spectrum_peaks": peaks.iter().map(|(f, a)| serde_json::json!({"frequency_hz": f, "amplitude_rad": a})).collect::<Vec<_>>(),
+        "contact_force_max_n": history.force_total.iter().copied().fold(0.0, f64::max),
+        "impact_d1_max_n": derived.force_detail.iter().map(|v| v.abs()).fold(0.0, f64::max),
+        "energy": final_energy,
+        "energy_error_rel": energy_error_rel,
+        "steps": outcome.steps,
+        "ns_per_element_step": ns_per_element_step,
+        "wall_s": outcome.wall_s,
+        "total_wall_s": started.elapsed().as_secs_f64(),
+        "threads": rayon::current_num_threads(),
+        "diverged": outcome.diverged,
+        "model": format!(
+            "2D {} ({} plane), corotational 8-node quadrilaterals, lumped mass; rigid hubs, rigid bearings; driver at prescribed speed, driven hub with load torque; segment-to-segment penalty contact (two-pass, 4 Gauss points per edge) with Coulomb friction on drive and back flanks of {} tooth pairs; fine flank elements {:.2} mm only on the teeth that engage during the scene",
+            if case.file.fe.plane == geardyn::fe::PlaneState::Strain { "plane strain" } else { "plane stress" },
+            case.pair.gears[0].spec.face_width * 1e3,
+            prepared.model.tooth_pairs.len(),
+            settings.fine_size * 1e3
+        ),
+    });
+    if let Some(map) = summary.as_object_mut() {
+        map.extend(
+            rep::step_summary(&prepared)
+                .as_object()
+                .cloned()
+                .unwrap_or_default(),
+        );
+        map.insert("penalty_factor".into(), settings.penalty_factor.into());
+        map.insert("step_factor".into(), settings.step_factor.into());
+    }
+    report::write_json(&dir.join("summary.json"), &summary).context("cannot write summary.json")?;
+    if let Some(message) = &outcome.diverged {
+        anyhow::bail!("{message}; partial results in {}", dir.display());
+    }
+    println!(
+        "{} steps in {:.1} s ({:.1} ns per element-step on {} threads); DTE mean {:.4e} rad (LTCA at the same positions {:.4e}), peak-to-peak {:.4e} rad; k mean {:.4e} N/m; energy error {:.2e} of the work",
+        outcome.steps,
+        outcome.wall_s,
+        ns_per_element_step,
+        rayon::current_num_threads(),
+        summary["dte_mean_rad"].as_f64().unwrap_or(f64::NAN),
+        summary["ltca_ste_mean_rad_same_positions"].as_f64().unwrap_or(f64::NAN),
+        summary["dte_peak_to_peak_rad"].as_f64().unwrap_or(f64::NAN),
+        summary["mesh_stiffness_mean_n_per_m"].as_f64().unwrap_or(f64::NAN),
+        energy_error_rel
+    );
     println!("wrote {}", dir.display());
     Ok(())
 }

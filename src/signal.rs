@@ -160,7 +160,9 @@ mod tests {
         let h = DB5_LOW;
         assert!((h.iter().sum::<f64>() - std::f64::consts::SQRT_2).abs() < 1e-12);
         assert!((h.iter().map(|v| v * v).sum::<f64>() - 1.0).abs() < 1e-12);
-        let x: Vec<f64> = (0..64).map(|k| (0.3 * k as f64).sin() + 0.01 * k as f64).collect();
+        let x: Vec<f64> = (0..64)
+            .map(|k| (0.3 * k as f64).sin() + 0.01 * k as f64)
+            .collect();
         let (a, d) = dwt_db5(&x);
         let energy: f64 = a.iter().chain(&d).map(|v| v * v).sum();
         assert!((energy / x.iter().map(|v| v * v).sum::<f64>() - 1.0).abs() < 1e-12);
@@ -178,20 +180,30 @@ mod tests {
             .map(|k| 3.0 + 2.0 * (2.0 * std::f64::consts::PI * 500.0 * k as f64 * dt).sin())
             .collect();
         let s = hann_amplitude_spectrum(&x, dt);
-        let peak = s.iter().copied().fold((0.0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
-        assert!((peak.0 - 500.0).abs() < 1e-9 && (peak.1 - 2.0).abs() < 1e-9, "{peak:?}");
+        let peak = s
+            .iter()
+            .copied()
+            .fold((0.0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+        assert!(
+            (peak.0 - 500.0).abs() < 1e-9 && (peak.1 - 2.0).abs() < 1e-9,
+            "{peak:?}"
+        );
     }
 
     #[test]
     fn denoising_keeps_a_smooth_signal_and_drops_noise() {
         let n = 1024;
-        let smooth: Vec<f64> = (0..n).map(|k| (2.0 * std::f64::consts::PI * k as f64 / 256.0).sin()).collect();
+        let smooth: Vec<f64> = (0..n)
+            .map(|k| (2.0 * std::f64::consts::PI * k as f64 / 256.0).sin())
+            .collect();
         // Deterministic pseudo-noise (LCG), amplitude 0.1.
         let mut seed = 12345_u64;
         let noisy: Vec<f64> = smooth
             .iter()
             .map(|s| {
-                seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                seed = seed
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
                 s + 0.1 * ((seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 2.0
             })
             .collect();

@@ -16,7 +16,7 @@
 
 use nalgebra::{Matrix2, Point2, Vector2};
 
-use crate::fe::q8::{self, ElementMatrix, ElementVector};
+use crate::fe::q8::{self, ElementMatrix};
 use crate::fe::{elasticity_matrix, FeError, PlaneState};
 
 /// Material data of an explicit body.
@@ -33,6 +33,10 @@ pub struct ExplicitMaterial {
 /// centroid, all in the prototype's reference frame.
 pub struct Prototype {
     pub stiffness: ElementMatrix,
+    /// The same matrix as plain rows, for the time-loop kernel (K_e is symmetric, so rows are
+    /// columns: nalgebra stores column-major, and this copy keeps the kernel free of its
+    /// generic product).
+    rows: [[f64; 16]; 16],
     /// ∂N/∂X at the element centre (prototype frame), for the deformation gradient.
     centre_gradients: [Vector2<f64>; 8],
     /// Reference node positions minus the centroid of the 8 nodes (prototype frame).
@@ -135,8 +139,10 @@ impl ExplicitBody {
             };
             let id = *index.entry(key).or_insert_with(|| {
                 let centroid = local.iter().fold(Vector2::zeros(), |a, p| a + p.coords) / 8.0;
+                let stiffness = q8::stiffness(&local, &d, material.thickness);
                 prototypes.push(Prototype {
-                    stiffness: q8::stiffness(&local, &d, material.thickness),
+                    rows: std::array::from_fn(|i| std::array::from_fn(|j| stiffness[(i, j)])),
+                    stiffness,
                     centre_gradients: centre_gradient(&local),
                     offsets: local.map(|p| p.coords - centroid),
                 });
@@ -241,16 +247,15 @@ impl ExplicitBody {
             }
             let (xc, yc) = (xc / 8.0, yc / 8.0);
             let (a, b) = (f11 + f22, f21 - f12);
-            let norm = a.hypot(b);
-            let (c, s) = (a / norm, b / norm);
-            let mut u_loc = ElementVector::zeros();
+            let inv_norm = 1.0 / (a * a + b * b).sqrt();
+            let (c, s) = (a * inv_norm, b * inv_norm);
+            let mut u_loc = [0.0; 16];
             for k in 0..8 {
                 let (dx, dy) = (xs[2 * k] - xc, xs[2 * k + 1] - yc);
                 u_loc[2 * k] = c * dx + s * dy - proto.offsets[k].x;
                 u_loc[2 * k + 1] = -s * dx + c * dy - proto.offsets[k].y;
             }
-            let mut f_loc = proto.stiffness * u_loc;
-            out.strain_energy += 0.5 * u_loc.dot(&f_loc);
+            let mut f_loc;
             if beta_k > 0.0 {
                 let (mut vcx, mut vcy) = (0.0, 0.0);
                 for &n in e {
@@ -258,15 +263,22 @@ impl ExplicitBody {
                     vcy += v[2 * n + 1];
                 }
                 let (vcx, vcy) = (vcx / 8.0, vcy / 8.0);
-                let mut v_loc = ElementVector::zeros();
+                let mut v_loc = [0.0; 16];
                 for (k, &n) in e.iter().enumerate() {
                     let (wx, wy) = (v[2 * n] - vcx, v[2 * n + 1] - vcy);
                     v_loc[2 * k] = c * wx + s * wy;
                     v_loc[2 * k + 1] = -s * wx + c * wy;
                 }
-                let f_damp = proto.stiffness * v_loc * beta_k;
-                out.damping_power += v_loc.dot(&f_damp);
-                f_loc += f_damp;
+                let (ku, kv) = (mat_vec(&proto.rows, &u_loc), mat_vec(&proto.rows, &v_loc));
+                out.strain_energy += 0.5 * dot(&u_loc, &ku);
+                out.damping_power += beta_k * dot(&v_loc, &kv);
+                f_loc = ku;
+                for i in 0..16 {
+                    f_loc[i] += beta_k * kv[i];
+                }
+            } else {
+                f_loc = mat_vec(&proto.rows, &u_loc);
+                out.strain_energy += 0.5 * dot(&u_loc, &f_loc);
             }
             for (k, &n) in e.iter().enumerate() {
                 let (fx, fy) = (f_loc[2 * k], f_loc[2 * k + 1]);
@@ -276,6 +288,24 @@ impl ExplicitBody {
         }
         out
     }
+}
+
+/// K u for a symmetric 16×16 matrix given by rows (= columns): f = Σ_j u_j K[j], sixteen
+/// fixed-length axpys the compiler vectorizes.
+#[inline(always)]
+fn mat_vec(rows: &[[f64; 16]; 16], u: &[f64; 16]) -> [f64; 16] {
+    let mut f = [0.0; 16];
+    for (column, &uj) in rows.iter().zip(u) {
+        for (fi, kij) in f.iter_mut().zip(column) {
+            *fi += kij * uj;
+        }
+    }
+    f
+}
+
+#[inline(always)]
+fn dot(a: &[f64; 16], b: &[f64; 16]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// ∂N/∂X at the element centre (ξ = η = 0).

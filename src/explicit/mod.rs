@@ -4,4 +4,5 @@
 
 pub mod body;
 pub mod pair;
+pub mod scene;
 pub mod solver;

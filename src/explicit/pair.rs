@@ -10,19 +10,23 @@
 //!   the bore nodes' inertia I_h = Σ mᵢ|Xᵢ|² and the load torque T(t) = T min(t/t_r, 1) against
 //!   the rotation: I_h φ̈ = Σ (xᵢ − c₂) × fᵢ + T(t), fᵢ the net force on bore node i. The rest
 //!   of the driven gear's inertia is in its FE nodes.
+//!
 //! Bearings are rigid (centres fixed).
 //!
-//! # Contact (node-to-segment, two-pass, penalty; [`crate::contact`])
+//! # Contact (segment-to-segment by Gauss points, two-pass, penalty; [`crate::contact`])
 //! For every tooth pair that can engage in the scene, both the drive flanks (tooth-local left
-//! flanks of both gears) and the back flanks (right flanks) are contact pairs; each flank's
-//! nodes are slaves against the other flank's quadratic edges and vice versa. A slave node that
-//! penetrates (g < 0) gets F_n = k_n(−g) along the master normal and a Coulomb friction force
-//! along the master tangent by return mapping; the reaction goes to the master edge's three
-//! nodes by the quadratic shape functions. The penalty of a master edge is
-//! k_n = f_p · max diag K_e of its element (2D: K_e ∝ E·B whatever the size) — `penalty_factor`
-//! f_p; the stick stiffness is k_t = k_n.
+//! flanks of both gears) and the back flanks (right flanks) are contact pairs. Each flank's
+//! quadratic edges carry 4 Gauss points that are slaves against the other flank's quadratic
+//! edges, and vice versa. A Gauss point that penetrates (g < 0) gets F_n = k_n(−g) along the
+//! master normal and a Coulomb friction force along the master tangent by return mapping; the
+//! force goes to the slave edge's three nodes by their shape functions at the point, the
+//! reaction to the master edge's nodes by theirs at the projection — so the load moves
+//! continuously along the flank as the contact point does, instead of jumping from node to node.
+//! The penalty of a master edge is k_e = f_p · max diag K_e of its element (2D: K_e ∝ E·B
+//! whatever the size), spread over the edge length: a Gauss point representing slave length
+//! w·|x′| gets k_n = (k_e/L_e)·w|x′| — `penalty_factor` f_p; the stick stiffness is k_t = k_n.
 //! Search: per step a flank pair is skipped when the bounding boxes of its two flanks are
-//! apart by more than a quarter module; otherwise each slave node is tested against the chords
+//! apart by more than a quarter module; otherwise each Gauss point is tested against the chords
 //! of the master edges and projected (Newton) on the nearest one.
 //!
 //! # Energy balance
@@ -49,21 +53,49 @@ pub struct Flank {
     /// Quadratic edges (corner, mid-side, corner), ordered counter-clockwise around the body so
     /// the edge normal points out of it.
     pub edges: Vec<[usize; 3]>,
-    /// Normal penalty stiffness of each edge [N/m].
+    /// Normal penalty stiffness of each edge as a master [N/m], and per unit slave length
+    /// [N/m²] (the edge stiffness over the edge length).
     pub penalty: Vec<f64>,
+    pub line_penalty: Vec<f64>,
 }
 
 /// Two flanks that can touch: `flanks[0]` on gear 1, `flanks[1]` on gear 2.
 #[derive(Debug, Clone)]
 pub struct FlankPair {
     pub flanks: [usize; 2],
-    /// Index of the tooth pair (gear-1 tooth, gear-2 tooth) in [`ExplicitPair::tooth_pairs`].
-    pub tooth_pair: usize,
-    /// Drive flanks (true) or back flanks.
+    /// The teeth (gear 1, gear 2) the flanks belong to.
+    pub teeth: (usize, usize),
+    /// Drive flanks (true: tooth-local left flanks) or back flanks (right flanks).
     pub drive: bool,
 }
 
-/// Friction history of one slave node of a flank pair.
+impl FlankPair {
+    /// A name for outputs: drive_<t1>_<t2> or back_<t1>_<t2>.
+    pub fn name(&self) -> String {
+        format!(
+            "{}_{}_{}",
+            if self.drive { "drive" } else { "back" },
+            self.teeth.0,
+            self.teeth.1
+        )
+    }
+}
+
+/// Gauss–Legendre points and weights on a slave edge, s ∈ [−1, 1] (4 points: the contact point
+/// of two convex flanks is resolved to about a fifth of an edge).
+const GAUSS_EDGE: [(f64, f64); 4] = [
+    (-0.861_136_311_594_052_6, 0.347_854_845_137_453_85),
+    (-0.339_981_043_584_856_26, 0.652_145_154_862_546_1),
+    (0.339_981_043_584_856_26, 0.652_145_154_862_546_1),
+    (0.861_136_311_594_052_6, 0.347_854_845_137_453_85),
+];
+
+/// Quadratic edge shape functions at s: corner, mid-side, corner.
+fn edge_shape(s: f64) -> [f64; 3] {
+    [0.5 * s * (s - 1.0), 1.0 - s * s, 0.5 * s * (s + 1.0)]
+}
+
+/// Friction history of one slave Gauss point of a flank pair.
 #[derive(Debug, Clone, Copy, Default)]
 struct SlaveState {
     friction: FrictionState,
@@ -89,6 +121,16 @@ pub struct ExplicitPair {
     contact_dofs: [Vec<usize>; 2],
 }
 
+/// Shape of the ramps from rest.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Ramp {
+    /// r(t) = t/t_r (the seed paper's): the acceleration jumps at 0 and t_r.
+    Linear,
+    /// r(t) = (1 − cos(πt/t_r))/2: no jump in acceleration, so the ramp excites the mesh mode
+    /// far less (used for quasi-static comparisons).
+    Cosine,
+}
+
 /// Loads and drive of a run.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Drive {
@@ -98,25 +140,41 @@ pub struct Drive {
     pub load_torque: f64,
     /// Ramp time t_r of speed and torque [s].
     pub ramp_time: f64,
+    pub ramp: Ramp,
 }
 
 impl Drive {
-    /// Driver rotation θ₁, speed and acceleration at time t.
-    pub fn driver_motion(&self, t: f64) -> (f64, f64, f64) {
-        let (w, tr) = (self.driver_speed, self.ramp_time);
-        if t < tr {
-            (0.5 * w * t * t / tr, w * t / tr, w / tr)
-        } else {
-            (w * (t - 0.5 * tr), w, 0.0)
+    /// Ramp factor r(t) ∈ [0, 1], its integral ∫₀ᵗ r and its derivative.
+    fn ramp(&self, t: f64) -> (f64, f64, f64) {
+        let tr = self.ramp_time;
+        if t >= tr {
+            let integral = match self.ramp {
+                Ramp::Linear | Ramp::Cosine => t - 0.5 * tr,
+            };
+            return (1.0, integral, 0.0);
+        }
+        match self.ramp {
+            Ramp::Linear => (t / tr, 0.5 * t * t / tr, 1.0 / tr),
+            Ramp::Cosine => {
+                let w = std::f64::consts::PI / tr;
+                (
+                    0.5 * (1.0 - (w * t).cos()),
+                    0.5 * (t - (w * t).sin() / w),
+                    0.5 * w * (w * t).sin(),
+                )
+            }
         }
     }
 
+    /// Driver rotation θ₁, speed and acceleration at time t.
+    pub fn driver_motion(&self, t: f64) -> (f64, f64, f64) {
+        let (r, integral, rate) = self.ramp(t);
+        let w = self.driver_speed;
+        (w * integral, w * r, w * rate)
+    }
+
     pub fn load_torque_at(&self, t: f64) -> f64 {
-        if self.ramp_time > 0.0 && t < self.ramp_time {
-            self.load_torque * t / self.ramp_time
-        } else {
-            self.load_torque
-        }
+        self.load_torque * self.ramp(t).0
     }
 }
 
@@ -201,25 +259,43 @@ impl ExplicitPair {
             .sum();
         let mut flanks = Vec::new();
         let mut flank_pairs = Vec::new();
-        for (index, &(t1, t2)) in tooth_pairs.iter().enumerate() {
-            for (side, drive) in [(Side::Left, true), (Side::Right, false)] {
-                let a = flanks.len();
-                for (g, tooth) in [(0, t1), (1, t2)] {
-                    let teeth = pair.gears[g].teeth() as usize;
-                    flanks.push(make_flank(
-                        &meshes[g],
-                        &bodies[g],
-                        (g, teeth, tooth),
-                        side,
-                        penalty_factor,
-                    ));
-                }
-                flank_pairs.push(FlankPair {
-                    flanks: [a, a + 1],
-                    tooth_pair: index,
-                    drive,
-                });
+        let z2 = pair.gears[1].teeth() as usize;
+        let mut add_pair = |t1: usize, t2: usize, side: Side, drive: bool| {
+            let a = flanks.len();
+            for (g, tooth) in [(0, t1), (1, t2)] {
+                let teeth = pair.gears[g].teeth() as usize;
+                flanks.push(make_flank(
+                    &meshes[g],
+                    &bodies[g],
+                    (g, teeth, tooth),
+                    side,
+                    penalty_factor,
+                ));
             }
+            flank_pairs.push(FlankPair {
+                flanks: [a, a + 1],
+                teeth: (t1, t2),
+                drive,
+            });
+        };
+        for &(t1, t2) in &tooth_pairs {
+            add_pair(t1, t2, Side::Left, true);
+            // The back flank of gear-1 tooth t1 faces the back flank of the gear-2 tooth on the
+            // other side of the tooth space: t2 ± 1, whichever is nearer in the placed pair.
+            let middle = |g: usize, tooth: usize| {
+                let nodes = &meshes[g].flank(tooth, Side::Right).nodes;
+                placement[g].to_global(&meshes[g].nodes[nodes[nodes.len() / 2]])
+            };
+            let own = middle(0, t1);
+            let back = [(t2 + 1) % z2, (t2 + z2 - 1) % z2]
+                .into_iter()
+                .min_by(|a, b| {
+                    (middle(1, *a) - own)
+                        .norm()
+                        .total_cmp(&(middle(1, *b) - own).norm())
+                })
+                .expect("two candidates");
+            add_pair(t1, back, Side::Right, false);
         }
         let contact_dofs = std::array::from_fn(|g| {
             let mut nodes: Vec<usize> = flanks
@@ -315,7 +391,12 @@ impl ExplicitPair {
                 let flank = &self.flanks[f];
                 let x = &state.x[flank.gear];
                 flank.nodes.iter().fold(
-                    [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY],
+                    [
+                        f64::INFINITY,
+                        f64::INFINITY,
+                        f64::NEG_INFINITY,
+                        f64::NEG_INFINITY,
+                    ],
                     |b, &n| {
                         [
                             b[0].min(x[2 * n]),
@@ -346,53 +427,80 @@ impl ExplicitPair {
                 );
                 let (sg, mg) = (slave.gear, master.gear);
                 let slots = &mut history[2 * index + pass];
-                for (k, &node) in slave.nodes.iter().enumerate() {
-                    let p = Point2::new(state.x[sg][2 * node], state.x[sg][2 * node + 1]);
-                    // Nearest master chord.
-                    let mut best = (f64::INFINITY, 0);
-                    for (e, edge) in master.edges.iter().enumerate() {
-                        let a = Point2::new(state.x[mg][2 * edge[0]], state.x[mg][2 * edge[0] + 1]);
-                        let b = Point2::new(state.x[mg][2 * edge[2]], state.x[mg][2 * edge[2] + 1]);
-                        let ab = b - a;
-                        let t = ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0);
-                        let d = (p - (a + ab * t)).norm_squared();
-                        if d < best.0 {
-                            best = (d, e);
+                let point =
+                    |g: usize, n: usize| Point2::new(state.x[g][2 * n], state.x[g][2 * n + 1]);
+                let velocity =
+                    |g: usize, n: usize| Vector2::new(state.v[g][2 * n], state.v[g][2 * n + 1]);
+                for (se, slave_edge) in slave.edges.iter().enumerate() {
+                    let ends = [
+                        point(sg, slave_edge[0]),
+                        point(sg, slave_edge[1]),
+                        point(sg, slave_edge[2]),
+                    ];
+                    for (q, &(s_gauss, w_gauss)) in GAUSS_EDGE.iter().enumerate() {
+                        let shape = edge_shape(s_gauss);
+                        let p = Point2::from(
+                            ends[0].coords * shape[0]
+                                + ends[1].coords * shape[1]
+                                + ends[2].coords * shape[2],
+                        );
+                        let slot = &mut slots[se * GAUSS_EDGE.len() + q];
+                        // Nearest master chord.
+                        let mut best = (f64::INFINITY, 0);
+                        for (e, edge) in master.edges.iter().enumerate() {
+                            let (a, b) = (point(mg, edge[0]), point(mg, edge[2]));
+                            let ab = b - a;
+                            let t = ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0);
+                            let d = (p - (a + ab * t)).norm_squared();
+                            if d < best.0 {
+                                best = (d, e);
+                            }
                         }
+                        let edge = master.edges[best.1];
+                        let proj = project_on_quadratic_edge(&p, &edge.map(|n| point(mg, n)));
+                        // Off the ends of the master flank the projection clamps: no contact
+                        // there (corner contact is the other pass's).
+                        let at_end = (best.1 == 0 && proj.parameter <= -1.0)
+                            || (best.1 == master.edges.len() - 1 && proj.parameter >= 1.0);
+                        if proj.gap >= 0.0 || at_end || proj.gap < -reject {
+                            *slot = SlaveState::default();
+                            continue;
+                        }
+                        // Penalty of this Gauss point: the master edge's line stiffness times
+                        // the slave length it represents.
+                        let tangent_slave = ends[0].coords * (s_gauss - 0.5)
+                            - ends[1].coords * (2.0 * s_gauss)
+                            + ends[2].coords * (s_gauss + 0.5);
+                        let length = w_gauss * tangent_slave.norm();
+                        let stiffness = master.line_penalty[best.1] * length;
+                        let law = ContactLaw {
+                            normal_stiffness: stiffness,
+                            tangential_stiffness: stiffness,
+                            friction: self.friction,
+                        };
+                        let slave_velocity = slave_edge
+                            .iter()
+                            .zip(shape)
+                            .fold(Vector2::zeros(), |acc, (&n, w)| acc + velocity(sg, n) * w);
+                        let master_velocity = edge
+                            .iter()
+                            .zip(proj.weights)
+                            .fold(Vector2::zeros(), |acc, (&n, w)| acc + velocity(mg, n) * w);
+                        let slip = (slave_velocity - master_velocity).dot(&proj.tangent) * dt;
+                        let (fn_, ft) = law.forces(proj.gap, slip, &mut slot.friction);
+                        let f = proj.normal * fn_ + proj.tangent * ft;
+                        for (&n, w) in slave_edge.iter().zip(shape) {
+                            force[sg][2 * n] += w * f.x;
+                            force[sg][2 * n + 1] += w * f.y;
+                        }
+                        for (&n, w) in edge.iter().zip(proj.weights) {
+                            force[mg][2 * n] -= w * f.x;
+                            force[mg][2 * n + 1] -= w * f.y;
+                        }
+                        on_driven += if sg == 1 { f } else { -f };
+                        out.active += 1;
+                        out.max_penetration = out.max_penetration.max(-proj.gap);
                     }
-                    let edge = master.edges[best.1];
-                    let nodes = edge.map(|n| Point2::new(state.x[mg][2 * n], state.x[mg][2 * n + 1]));
-                    let proj = project_on_quadratic_edge(&p, &nodes);
-                    // Off the ends of the flank the projection clamps: no contact there.
-                    let at_end = (best.1 == 0 && proj.parameter <= -1.0)
-                        || (best.1 == master.edges.len() - 1 && proj.parameter >= 1.0);
-                    if proj.gap >= 0.0 || at_end || proj.gap < -reject {
-                        slots[k] = SlaveState::default();
-                        continue;
-                    }
-                    let law = ContactLaw {
-                        normal_stiffness: master.penalty[best.1],
-                        tangential_stiffness: master.penalty[best.1],
-                        friction: self.friction,
-                    };
-                    let master_velocity = edge.iter().zip(proj.weights).fold(
-                        Vector2::zeros(),
-                        |acc, (&n, w)| acc + Vector2::new(state.v[mg][2 * n], state.v[mg][2 * n + 1]) * w,
-                    );
-                    let relative =
-                        Vector2::new(state.v[sg][2 * node], state.v[sg][2 * node + 1]) - master_velocity;
-                    let slip = relative.dot(&proj.tangent) * dt;
-                    let (fn_, ft) = law.forces(proj.gap, slip, &mut slots[k].friction);
-                    let f = proj.normal * fn_ + proj.tangent * ft;
-                    force[sg][2 * node] += f.x;
-                    force[sg][2 * node + 1] += f.y;
-                    for (&n, w) in edge.iter().zip(proj.weights) {
-                        force[mg][2 * n] -= w * f.x;
-                        force[mg][2 * n + 1] -= w * f.y;
-                    }
-                    on_driven += if sg == 1 { f } else { -f };
-                    out.active += 1;
-                    out.max_penetration = out.max_penetration.max(-proj.gap);
                 }
             }
             out.force_on_driven += on_driven;
@@ -406,7 +514,10 @@ impl ExplicitPair {
         self.flank_pairs
             .iter()
             .flat_map(|fp| {
-                [0, 1].map(|pass| vec![SlaveState::default(); self.flanks[fp.flanks[pass]].nodes.len()])
+                [0, 1].map(|pass| {
+                    let points = self.flanks[fp.flanks[pass]].edges.len() * GAUSS_EDGE.len();
+                    vec![SlaveState::default(); points]
+                })
             })
             .collect()
     }
@@ -483,6 +594,11 @@ fn make_flank(
             penalty_factor * max_diag
         })
         .collect();
+    let line_penalty = edges
+        .iter()
+        .zip(&penalty)
+        .map(|(edge, k)| k / (mesh.nodes[edge[2]] - mesh.nodes[edge[0]]).norm())
+        .collect();
     Flank {
         gear,
         tooth,
@@ -490,6 +606,7 @@ fn make_flank(
         nodes,
         edges,
         penalty,
+        line_penalty,
     }
 }
 
@@ -507,8 +624,12 @@ pub struct PairIntegrator<'a> {
     contact_force: [Vec<f64>; 2],
     previous_contact: [Vec<f64>; 2],
     history: Vec<Vec<SlaveState>>,
-    /// Driver hub reaction on the bore DOFs at the last step.
+    /// Driver hub reaction on the bore DOFs at the last step, and at the step before.
     driver_reaction: Vec<f64>,
+    old_reaction: Vec<f64>,
+    /// Positions of the contact DOFs and of the driver's bore DOFs at the start of the step.
+    old_contact_x: [Vec<f64>; 2],
+    old_bore_x: Vec<f64>,
 }
 
 impl<'a> PairIntegrator<'a> {
@@ -527,6 +648,12 @@ impl<'a> PairIntegrator<'a> {
             previous_contact: [zeros(0), zeros(1)],
             history: model.new_history(),
             driver_reaction: vec![0.0; 2 * model.meshes[0].bore_nodes.len()],
+            old_reaction: vec![0.0; 2 * model.meshes[0].bore_nodes.len()],
+            old_contact_x: [
+                vec![0.0; model.contact_dofs[0].len()],
+                vec![0.0; model.contact_dofs[1].len()],
+            ],
+            old_bore_x: vec![0.0; 2 * model.meshes[0].bore_nodes.len()],
         }
     }
 
@@ -579,7 +706,10 @@ impl<'a> PairIntegrator<'a> {
                     m * state.a[0][2 * n + c] - self.force[0][2 * n + c];
             }
         }
-        (o0.strain_energy + o1.strain_energy, o0.damping_power + o1.damping_power)
+        (
+            o0.strain_energy + o1.strain_energy,
+            o0.damping_power + o1.damping_power,
+        )
     }
 
     /// Hub placement of both gears at the state's time; then forces and accelerations.
@@ -605,20 +735,23 @@ impl<'a> PairIntegrator<'a> {
             .sum()
     }
 
-    /// One central-difference step.
+    /// One central-difference step (no allocation). The energy account's kinetic and strain
+    /// parts are state functions, updated by [`PairIntegrator::update_energy`] when asked; the
+    /// work terms accumulate every step. A non-finite hub state is reported as divergence here;
+    /// energy growth is checked in `update_energy`.
     pub fn step(&mut self, state: &mut PairState) -> Result<(), String> {
         let model = self.model;
         let dt = self.dt;
-        let old_x: [Vec<f64>; 2] = [
-            model.contact_dofs[0].iter().map(|&d| state.x[0][d]).collect(),
-            model.contact_dofs[1].iter().map(|&d| state.x[1][d]).collect(),
-        ];
-        let old_bore: Vec<f64> = model.meshes[0]
-            .bore_nodes
-            .iter()
-            .flat_map(|&n| [state.x[0][2 * n], state.x[0][2 * n + 1]])
-            .collect();
-        let old_reaction = self.driver_reaction.clone();
+        for g in 0..2 {
+            for (k, &d) in model.contact_dofs[g].iter().enumerate() {
+                self.old_contact_x[g][k] = state.x[g][d];
+            }
+        }
+        for (i, &n) in model.meshes[0].bore_nodes.iter().enumerate() {
+            self.old_bore_x[2 * i] = state.x[0][2 * n];
+            self.old_bore_x[2 * i + 1] = state.x[0][2 * n + 1];
+        }
+        self.old_reaction.copy_from_slice(&self.driver_reaction);
         let (old_phi, old_torque) = (state.hub[0], self.drive.load_torque_at(state.time));
         for g in 0..2 {
             for d in 0..state.x[g].len() {
@@ -650,15 +783,16 @@ impl<'a> PairIntegrator<'a> {
         let mut work = 0.0;
         for (i, &n) in model.meshes[0].bore_nodes.iter().enumerate() {
             for c in 0..2 {
-                let dx = state.x[0][2 * n + c] - old_bore[2 * i + c];
-                work += 0.5 * (old_reaction[2 * i + c] + self.driver_reaction[2 * i + c]) * dx;
+                let dx = state.x[0][2 * n + c] - self.old_bore_x[2 * i + c];
+                work += 0.5 * (self.old_reaction[2 * i + c] + self.driver_reaction[2 * i + c]) * dx;
             }
         }
-        work += 0.5 * (old_torque + self.drive.load_torque_at(state.time)) * (state.hub[0] - old_phi);
+        work +=
+            0.5 * (old_torque + self.drive.load_torque_at(state.time)) * (state.hub[0] - old_phi);
         let mut contact = 0.0;
         for g in 0..2 {
             for (k, &d) in model.contact_dofs[g].iter().enumerate() {
-                let dx = state.x[g][d] - old_x[g][k];
+                let dx = state.x[g][d] - self.old_contact_x[g][k];
                 contact -= 0.5 * (self.previous_contact[g][d] + self.contact_force[g][d]) * dx;
             }
         }
@@ -667,9 +801,17 @@ impl<'a> PairIntegrator<'a> {
         self.energy.contact += contact;
         self.energy.damping += damping_power * dt;
         self.energy.strain = strain;
+        if !(state.hub[0].is_finite() && strain.is_finite()) {
+            return Err("the state is not finite (NaN or infinity)".into());
+        }
+        Ok(())
+    }
+
+    /// Updates the kinetic energy and checks the energy for growth beyond the work put in.
+    pub fn update_energy(&mut self, state: &PairState) -> Result<(), String> {
         self.energy.kinetic = self.kinetic(state);
         let total = self.energy.kinetic + self.energy.strain;
-        if !total.is_finite() || !state.hub[0].is_finite() {
+        if !total.is_finite() {
             return Err("the energy is not finite (NaN or infinity)".into());
         }
         let scale = self.energy.external_work.abs() + self.energy.damping + 1e-9;

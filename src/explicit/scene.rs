@@ -1,0 +1,386 @@
+//! An explicit FE scene of the meshing pair: what to mesh fine, the stable time step, the run
+//! with its recorded time histories, and the analysis of the DTE (statistics, spectrum, the
+//! mesh stiffness from the DTE, impacts).
+//!
+//! # Model no more than the scene needs
+//! Only the teeth that engage while the driver turns through the scene get fine flanks:
+//! starting with tooth 0 of each gear at the pitch point, gear-1 teeth 1, 0, z₁−1, …, z₁−n
+//! (n = the base pitches the driver turns) and their partners (−k mod z₂) on gear 2 — the rest
+//! of each gear is meshed coarse. Contact pairs are those tooth pairs, drive and back flanks.
+//!
+//! # Time step (seed paper eqs. 28–31, and the eigenvalue it approximates)
+//! Δt_cr = min(2/ω_max of each body with its bore fixed, by power iteration on M⁻¹K;
+//! 2/√(k_n(1/m_s + 1/m_m)) of the stiffest contact spring), reduced for the stiffness damping
+//! ζ_max = β_K ω_max/2 to Δt_cr(√(1 + ζ_max²) − ζ_max); Δt = step_factor·Δt_cr. The paper's
+//! L/c_w and the element-eigenvalue bound are reported beside it.
+//!
+//! # Mesh stiffness from the DTE (seed paper eq. 37)
+//! k(θ) = T / (θ_DTE R_b2²) with θ_DTE the angular DTE of the driven gear, binned over one base
+//! pitch of driver roll angle in the statistics window (after the ramp). With relief the DTE
+//! contains the unloaded TE, so this k is the paper's "apparent" stiffness.
+
+use std::time::Instant;
+
+use crate::case::{Case, Scene};
+use crate::explicit::body::ExplicitMaterial;
+use crate::explicit::pair::{Drive, ExplicitPair, PairEnergy, PairIntegrator};
+use crate::explicit::solver::critical_step;
+use crate::fe::FeError;
+use crate::mesh::mesh_gear;
+
+/// Settings of an explicit run (from the case's `[fe]` section).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FeSettings {
+    pub step_factor: f64,
+    pub penalty_factor: f64,
+    pub high_frequency_damping_ratio: f64,
+    /// Recorded sample interval [s].
+    pub output_interval: f64,
+    /// Flank element size [m] and coarse size [m].
+    pub fine_size: f64,
+    pub coarse_size: f64,
+}
+
+impl FeSettings {
+    pub fn from_case(case: &Case) -> Self {
+        let fe = &case.file.fe;
+        FeSettings {
+            step_factor: fe.step_factor,
+            penalty_factor: fe.penalty_factor,
+            high_frequency_damping_ratio: fe.high_frequency_damping_ratio,
+            output_interval: fe.output_interval_us * 1e-6,
+            fine_size: fe
+                .explicit_fine_element_mm
+                .unwrap_or(case.file.mesh.fine_element_mm)
+                * 1e-3,
+            coarse_size: case.file.mesh.coarse_element_mm * 1e-3,
+        }
+    }
+}
+
+/// The teeth each gear needs fine and the tooth pairs in contact, for a driver rotation.
+pub fn scene_teeth(case: &Case, driver_rotation: f64) -> ([Vec<usize>; 2], Vec<(usize, usize)>) {
+    let pair = &case.pair;
+    let (z1, z2) = (
+        pair.gears[0].teeth() as usize,
+        pair.gears[1].teeth() as usize,
+    );
+    let pitches = (driver_rotation / pair.gears[0].angular_pitch())
+        .ceil()
+        .max(0.0) as usize;
+    let mut teeth1: Vec<usize> = vec![1 % z1, 0];
+    for k in 1..=(pitches + 1) {
+        let t = (z1 - k % z1) % z1;
+        if !teeth1.contains(&t) {
+            teeth1.push(t);
+        }
+        if teeth1.len() == z1 {
+            break;
+        }
+    }
+    let tooth_pairs: Vec<(usize, usize)> =
+        teeth1.iter().map(|&t| (t, (z2 - t % z2) % z2)).collect();
+    let mut fine1 = teeth1.clone();
+    fine1.sort_unstable();
+    // Gear 2 also needs the back-flank partners: the teeth on either side of each partner.
+    let mut fine2: Vec<usize> = tooth_pairs
+        .iter()
+        .flat_map(|p| [p.1, (p.1 + 1) % z2, (p.1 + z2 - 1) % z2])
+        .collect();
+    fine2.sort_unstable();
+    fine2.dedup();
+    ([fine1, fine2], tooth_pairs)
+}
+
+/// A scene ready to run: the pair model and its time step.
+pub struct PreparedScene {
+    pub model: ExplicitPair,
+    pub drive: Drive,
+    /// Critical step of each body (bore fixed, power iteration) and of the contact springs [s].
+    pub dt_bodies: [f64; 2],
+    pub dt_contact: f64,
+    /// Critical step after the damping reduction [s].
+    pub dt_critical: f64,
+    pub dt: f64,
+    /// The paper's L/c_w (eq. 28) and the element-eigenvalue bound, for comparison [s].
+    pub dt_paper: f64,
+    pub dt_element_bound: f64,
+    /// Stiffness-proportional damping coefficient [s].
+    pub beta_k: f64,
+    pub mesh_wall_s: f64,
+    pub setup_wall_s: f64,
+}
+
+/// Meshes and assembles the pair for `scene`, measures its critical step.
+pub fn prepare(
+    case: &Case,
+    scene: &Scene,
+    settings: &FeSettings,
+) -> Result<PreparedScene, FeError> {
+    let started = Instant::now();
+    let drive = Drive {
+        driver_speed: scene.driver_speed,
+        load_torque: scene.torque,
+        ramp_time: scene.ramp_time,
+        ramp: crate::explicit::pair::Ramp::Linear,
+    };
+    let (rotation, _, _) = drive.driver_motion(scene.duration);
+    let (fine, tooth_pairs) = scene_teeth(case, rotation);
+    let variant = case
+        .relief_variant(&scene.relief)
+        .expect("the case checked the scene's relief");
+    let spec = |g: usize| crate::mesh::MeshSpec {
+        fine_size: settings.fine_size,
+        coarse_size: settings.coarse_size,
+        fine_teeth: fine[g].clone(),
+    };
+    let meshes = [
+        mesh_gear(&case.pair.gears[0], &variant.modifications[0], &spec(0)),
+        mesh_gear(&case.pair.gears[1], &variant.modifications[1], &spec(1)),
+    ];
+    let mesh_wall_s = started.elapsed().as_secs_f64();
+    let material = ExplicitMaterial {
+        youngs_modulus: case.material.youngs_modulus,
+        poisson_ratio: case.material.poisson_ratio,
+        density: case.material.density,
+        plane: case.file.fe.plane,
+        thickness: case.pair.gears[0].spec.face_width,
+    };
+    let model = ExplicitPair::new(
+        &case.pair,
+        meshes,
+        material,
+        tooth_pairs,
+        scene.friction,
+        settings.penalty_factor,
+    )?;
+    let dt_bodies: [f64; 2] = std::array::from_fn(|g| {
+        let fixed: Vec<bool> = model.free[g].iter().map(|f| !f).collect();
+        critical_step(&model.bodies[g], &fixed, 200)
+    });
+    let dt_contact = model.contact_critical_step();
+    let dt_undamped = dt_bodies[0].min(dt_bodies[1]).min(dt_contact);
+    let omega_max = 2.0 / dt_undamped;
+    let zeta = settings.high_frequency_damping_ratio;
+    let beta_k = 2.0 * zeta / omega_max;
+    let dt_critical = dt_undamped * ((1.0 + zeta * zeta).sqrt() - zeta);
+    let dt_paper = model.bodies[0]
+        .paper_critical_step()
+        .min(model.bodies[1].paper_critical_step());
+    let dt_element_bound = model.bodies[0]
+        .element_eigen_critical_step()
+        .min(model.bodies[1].element_eigen_critical_step());
+    Ok(PreparedScene {
+        dt: settings.step_factor * dt_critical,
+        model,
+        drive,
+        dt_bodies,
+        dt_contact,
+        dt_critical,
+        dt_paper,
+        dt_element_bound,
+        beta_k,
+        mesh_wall_s,
+        setup_wall_s: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// Recorded time histories of a run (one sample per output interval).
+#[derive(Debug, Clone, Default)]
+pub struct History {
+    pub time: Vec<f64>,
+    /// Driver rotation θ₁ [rad].
+    pub driver_rotation: Vec<f64>,
+    /// Angular DTE of the driven gear: its rotation minus the kinematic one (positive: lags) [rad].
+    pub dte: Vec<f64>,
+    /// Driven-gear speed (magnitude) and its kinematic value (z₁/z₂)θ̇₁ [rad/s].
+    pub driven_speed: Vec<f64>,
+    pub theoretical_speed: Vec<f64>,
+    /// Contact force on the driven gear: radial (along the centre line, from gear 1 to gear 2)
+    /// and circumferential (perpendicular, the load-transmitting direction) components and the
+    /// resultant [N] (the paper's F_y, F_x and F_C, eqs. 32–33).
+    pub force_radial: Vec<f64>,
+    pub force_circumferential: Vec<f64>,
+    pub force_total: Vec<f64>,
+    /// Contact force magnitude per flank pair [N] (index as `ExplicitPair::flank_pairs`).
+    pub pair_forces: Vec<Vec<f64>>,
+    pub energy: Vec<PairEnergy>,
+    pub active_contacts: Vec<usize>,
+    pub max_penetration: Vec<f64>,
+}
+
+/// How a run ended.
+#[derive(Debug, Clone)]
+pub struct RunOutcome {
+    pub history: History,
+    pub steps: usize,
+    pub wall_s: f64,
+    /// Why the run stopped early, if it did.
+    pub diverged: Option<String>,
+    pub final_energy: PairEnergy,
+}
+
+/// Integrates the scene for `duration` seconds; `progress` sees the fraction done (called about
+/// every 0.5 % of the run). On divergence the history up to the last good sample is kept.
+pub fn run(
+    prepared: &PreparedScene,
+    duration: f64,
+    output_interval: f64,
+    progress: &mut dyn FnMut(f64),
+) -> RunOutcome {
+    let model = &prepared.model;
+    let mut integrator = PairIntegrator::new(model, prepared.drive, prepared.dt, prepared.beta_k);
+    let mut state = model.initial_state();
+    integrator.initialize(&mut state);
+    let total_steps = (duration / prepared.dt).ceil() as usize;
+    let every = ((output_interval / prepared.dt).round() as usize).max(1);
+    let report_every = (total_steps / 200).max(1);
+    let mut history = History {
+        pair_forces: vec![Vec::new(); model.flank_pairs.len()],
+        ..History::default()
+    };
+    let ratio = model.pair.gears[0].teeth() as f64 / model.pair.gears[1].teeth() as f64;
+    let started = Instant::now();
+    let mut diverged = None;
+    let mut record = |integrator: &PairIntegrator, state: &crate::explicit::pair::PairState| {
+        let (theta, rate, _) = prepared.drive.driver_motion(state.time);
+        history.time.push(state.time);
+        history.driver_rotation.push(theta);
+        history
+            .dte
+            .push(state.hub[0] - model.kinematic_hub_rotation(theta));
+        history.driven_speed.push(-state.hub[1]);
+        history.theoretical_speed.push(ratio * rate);
+        let f = integrator.last_contact.force_on_driven;
+        history.force_radial.push(f.x);
+        history.force_circumferential.push(f.y);
+        history.force_total.push(f.norm());
+        for (k, series) in history.pair_forces.iter_mut().enumerate() {
+            series.push(
+                integrator
+                    .last_contact
+                    .pair_forces
+                    .get(k)
+                    .copied()
+                    .unwrap_or(0.0),
+            );
+        }
+        history.energy.push(integrator.energy);
+        history.active_contacts.push(integrator.last_contact.active);
+        history
+            .max_penetration
+            .push(integrator.last_contact.max_penetration);
+    };
+    record(&integrator, &state);
+    for step in 1..=total_steps {
+        let recording = step % every == 0 || step == total_steps;
+        let result = integrator.step(&mut state).and_then(|()| {
+            if recording {
+                integrator.update_energy(&state)
+            } else {
+                Ok(())
+            }
+        });
+        if let Err(cause) = result {
+            diverged = Some(format!(
+                "the explicit run diverged at t = {:.6e} s (step {step}): {cause}. The time step {:.4e} s is \
+                 above the stable step {:.4e} s; use fe.step_factor below 1 (default 0.9). The results up to \
+                 t = {:.6e} s are kept",
+                state.time,
+                prepared.dt,
+                prepared.dt_critical,
+                history.time.last().copied().unwrap_or(0.0)
+            ));
+            break;
+        }
+        if recording {
+            record(&integrator, &state);
+        }
+        if step % report_every == 0 {
+            progress(step as f64 / total_steps as f64);
+        }
+    }
+    RunOutcome {
+        history,
+        steps: integrator.steps,
+        wall_s: started.elapsed().as_secs_f64(),
+        diverged,
+        final_energy: integrator.energy,
+    }
+}
+
+/// Statistics of the DTE over the window after the ramp, the stiffness from it, and spectra.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct DteAnalysis {
+    /// Statistics window [s].
+    pub window: (f64, f64),
+    pub dte_mean_rad: f64,
+    pub dte_min_rad: f64,
+    pub dte_max_rad: f64,
+    pub dte_peak_to_peak_rad: f64,
+    /// k(θ) = T/(θ_DTE R_b2²) binned over one base pitch: (driver roll angle [rad], k [N/m]),
+    /// empty bins left out.
+    pub stiffness: Vec<(f64, f64)>,
+    /// Mean of the table, and T/(mean θ_DTE R_b2²) (the paper's k0).
+    pub mesh_stiffness_mean_n_per_m: f64,
+    pub mesh_stiffness_from_mean_dte_n_per_m: f64,
+    /// Fraction of one base pitch the window covers.
+    pub pitch_coverage: f64,
+}
+
+/// Analyses the DTE of `history` in the window [t_from, end].
+pub fn analyse_dte(
+    history: &History,
+    model: &ExplicitPair,
+    torque: f64,
+    t_from: f64,
+) -> Option<DteAnalysis> {
+    let start = history.time.iter().position(|t| *t >= t_from)?;
+    let window = &history.dte[start..];
+    if window.len() < 2 {
+        return None;
+    }
+    let n = window.len() as f64;
+    let mean = window.iter().sum::<f64>() / n;
+    let (min, max) = window
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(*v), b.max(*v))
+        });
+    let pair = &model.pair;
+    let rb2 = pair.gears[1].base_radius;
+    let pitch = pair.gears[0].angular_pitch();
+    let bins = 64;
+    let mut sums = vec![(0.0, 0usize); bins];
+    for (i, dte) in window.iter().enumerate() {
+        let theta = history.driver_rotation[start + i];
+        let bin = (((theta / pitch).rem_euclid(1.0)) * bins as f64) as usize % bins;
+        sums[bin].0 += torque / (dte * rb2 * rb2);
+        sums[bin].1 += 1;
+    }
+    let roll_pitch = pair.roll_angle_at(1, pair.contact_points.pitch);
+    let stiffness: Vec<(f64, f64)> = sums
+        .iter()
+        .enumerate()
+        .filter(|(_, (_, c))| *c > 0)
+        .map(|(b, (s, c))| {
+            (
+                roll_pitch + (b as f64 + 0.5) / bins as f64 * pitch,
+                s / *c as f64,
+            )
+        })
+        .collect();
+    let covered = stiffness.len() as f64 / bins as f64;
+    let k_mean = stiffness.iter().map(|p| p.1).sum::<f64>() / stiffness.len().max(1) as f64;
+    Some(DteAnalysis {
+        window: (history.time[start], *history.time.last()?),
+        dte_mean_rad: mean,
+        dte_min_rad: min,
+        dte_max_rad: max,
+        dte_peak_to_peak_rad: max - min,
+        stiffness,
+        mesh_stiffness_mean_n_per_m: k_mean,
+        mesh_stiffness_from_mean_dte_n_per_m: torque / (mean * rb2 * rb2),
+        pitch_coverage: covered,
+    })
+}

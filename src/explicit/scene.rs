@@ -123,8 +123,10 @@ pub fn prepare(
         load_torque: scene.torque,
         ramp_time: scene.ramp_time,
         ramp: crate::explicit::pair::Ramp::Linear,
+        start_rotation: 0.0,
     };
     let (rotation, _, _) = drive.driver_motion(scene.duration);
+    let rotation = rotation - drive.start_rotation;
     let (fine, tooth_pairs) = scene_teeth(case, rotation);
     let variant = case
         .relief_variant(&scene.relief)
@@ -230,7 +232,7 @@ pub fn run(
 ) -> RunOutcome {
     let model = &prepared.model;
     let mut integrator = PairIntegrator::new(model, prepared.drive, prepared.dt, prepared.beta_k);
-    let mut state = model.initial_state();
+    let mut state = model.initial_state(prepared.drive.start_rotation);
     integrator.initialize(&mut state);
     let total_steps = (duration / prepared.dt).ceil() as usize;
     let every = ((output_interval / prepared.dt).round() as usize).max(1);

@@ -10,6 +10,17 @@ fn geardyn() -> Command {
     Command::cargo_bin("geardyn").unwrap()
 }
 
+/// Runs a command that must succeed; its stderr is the failure message.
+fn run_ok(command: &mut Command) -> std::process::Output {
+    let output = command.output().unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    output
+}
+
 /// The `summary.json` of an output folder.
 fn read_summary(dir: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap()
@@ -25,16 +36,7 @@ fn write_case(dir: &Path, text: &str) -> std::path::PathBuf {
 fn geometry_on_the_embedded_case_writes_summary_drawings_and_csv() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("geo");
-    let output = geardyn()
-        .args(["geometry", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
-    );
+    let output = run_ok(geardyn().args(["geometry", "--out"]).arg(&out));
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert!(stdout.contains("contact ratio"), "{stdout}");
 
@@ -200,15 +202,10 @@ fn case_command_prints_the_embedded_default() {
 fn mesh_writes_vtk_and_png_for_both_gears() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("mesh");
-    let output = geardyn()
-        .args(["mesh", "--relief", "tip20-root10", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
+    run_ok(
+        &mut geardyn()
+            .args(["mesh", "--relief", "tip20-root10", "--out"])
+            .arg(&out),
     );
     for gear in [1, 2] {
         let vtk = std::fs::read_to_string(out.join(format!("mesh_gear{gear}.vtk"))).unwrap();
@@ -249,17 +246,12 @@ fn ltca_writes_csv_plots_and_summary() {
         &DEFAULT.replace("fine_element_mm = 0.2", "fine_element_mm = 0.5"),
     );
     let out = dir.path().join("ltca");
-    let output = geardyn()
-        .args(["ltca"])
-        .arg(&case)
-        .args(["--positions", "8", "--relief", "none", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
+    run_ok(
+        &mut geardyn()
+            .args(["ltca"])
+            .arg(&case)
+            .args(["--positions", "8", "--relief", "none", "--out"])
+            .arg(&out),
     );
     let summary = read_summary(&out);
     for key in [
@@ -306,18 +298,7 @@ fn run_writes_every_stage() {
         &DEFAULT.replace("fine_element_mm = 0.2", "fine_element_mm = 0.6"),
     );
     let out = dir.path().join("run");
-    let output = geardyn()
-        .arg("run")
-        .arg(&case)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
-    );
+    run_ok(geardyn().arg("run").arg(&case).arg("--out").arg(&out));
     for file in [
         "geometry/summary.json",
         "mesh/mesh_gear1.vtk",
@@ -332,22 +313,17 @@ fn run_writes_every_stage() {
 fn sweep_writes_curves_and_summary() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("sweep");
-    let output = geardyn()
-        .args([
-            "sweep",
-            "--stiffness",
-            "pe",
-            "--rpm",
-            "1000:9000:40",
-            "--out",
-        ])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
+    run_ok(
+        &mut geardyn()
+            .args([
+                "sweep",
+                "--stiffness",
+                "pe",
+                "--rpm",
+                "1000:9000:40",
+                "--out",
+            ])
+            .arg(&out),
     );
     let summary = read_summary(&out);
     for key in [
@@ -394,24 +370,19 @@ fn sweep_writes_curves_and_summary() {
 fn stability_map_finds_the_principal_parametric_region() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("stability");
-    let output = geardyn()
-        .args([
-            "stability",
-            "--stiffness",
-            "pe",
-            "--rpm",
-            "2000:20000:400",
-            "--damping-ratio",
-            "0.005",
-            "--out",
-        ])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
+    run_ok(
+        &mut geardyn()
+            .args([
+                "stability",
+                "--stiffness",
+                "pe",
+                "--rpm",
+                "2000:20000:400",
+                "--damping-ratio",
+                "0.005",
+                "--out",
+            ])
+            .arg(&out),
     );
     let summary = read_summary(&out);
     let centre = summary["parametric_region_centres_rpm"][0]
@@ -437,17 +408,12 @@ fn sweep_speed_drive_and_run_up() {
     let dir = tempfile::tempdir().unwrap();
     let run = |name: &str, extra: &[&str]| {
         let out = dir.path().join(name);
-        let output = geardyn()
-            .args(["sweep", "--stiffness", "pe", "--rpm", "1000:9000:5"])
-            .args(extra)
-            .arg("--out")
-            .arg(&out)
-            .output()
-            .unwrap();
-        assert!(
-            output.status.success(),
-            "{}",
-            String::from_utf8_lossy(&output.stderr)
+        run_ok(
+            &mut geardyn()
+                .args(["sweep", "--stiffness", "pe", "--rpm", "1000:9000:5"])
+                .args(extra)
+                .arg("--out")
+                .arg(&out),
         );
         out
     };
@@ -523,17 +489,12 @@ fn sweep_reads_a_stiffness_csv() {
         &DEFAULT.replace("stiffness = \"ltca\"", "stiffness = \"k.csv\""),
     );
     let out = dir.path().join("from-case");
-    let output = geardyn()
-        .arg("sweep")
-        .arg(&case)
-        .args(["--rpm", "1000:9000:5", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
+    run_ok(
+        &mut geardyn()
+            .arg("sweep")
+            .arg(&case)
+            .args(["--rpm", "1000:9000:5", "--out"])
+            .arg(&out),
     );
     assert!(read_summary(&out)["stiffness_source"]
         .as_str()
@@ -569,17 +530,12 @@ fn sweep_with_bearing_translations() {
             .replace("# mesh_damping_n_s_per_m", "mesh_damping_n_s_per_m"),
     );
     let out = dir.path().join("bearings");
-    let output = geardyn()
-        .arg("sweep")
-        .arg(&case)
-        .args(["--stiffness", "pe", "--rpm", "1000:9000:5", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
+    run_ok(
+        &mut geardyn()
+            .arg("sweep")
+            .arg(&case)
+            .args(["--stiffness", "pe", "--rpm", "1000:9000:5", "--out"])
+            .arg(&out),
     );
     let summary = read_summary(&out);
     assert!(summary["model"].as_str().unwrap().starts_with("3-DOF"));
@@ -597,15 +553,10 @@ fn sweep_with_bearing_translations() {
 fn validate_integrators_writes_the_failure_table() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("integrators");
-    let output = geardyn()
-        .args(["validate", "integrators", "--stiffness", "iso", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
+    run_ok(
+        &mut geardyn()
+            .args(["validate", "integrators", "--stiffness", "iso", "--out"])
+            .arg(&out),
     );
     let rows: Vec<csv::StringRecord> = csv::Reader::from_path(out.join("integrators.csv"))
         .unwrap()
@@ -618,4 +569,105 @@ fn validate_integrators_writes_the_failure_table() {
     let bad = geardyn().args(["validate", "everything"]).output().unwrap();
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("integrators"));
+}
+
+/// `geardyn fe` on a coarse mesh for 20 µs: the summary's keys, the histories and plots; its
+/// stiffness.csv is read by `sweep`; a step above the critical one fails with a message and
+/// keeps the partial results.
+#[test]
+fn fe_writes_histories_summary_and_keeps_a_diverged_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = write_case(
+        dir.path(),
+        &DEFAULT
+            .replace("fine_element_mm = 0.2 ", "fine_element_mm = 1.5 ")
+            .replace("coarse_element_mm = 1.5 ", "coarse_element_mm = 3.0 "),
+    );
+    let out = dir.path().join("fe");
+    run_ok(
+        &mut geardyn()
+            .arg("fe")
+            .arg(&case)
+            .args([
+                "--scene",
+                "high-unmodified",
+                "--duration-s",
+                "2e-5",
+                "--out",
+            ])
+            .arg(&out),
+    );
+    let summary = read_summary(&out);
+    for key in [
+        "dte_mean_rad",
+        "dte_max_rad",
+        "dte_min_rad",
+        "dte_peak_to_peak_rad",
+        "mesh_stiffness_mean_n_per_m",
+        "energy_error_rel",
+        "dt_s",
+        "dt_critical_s",
+        "ns_per_element_step",
+        "wall_s",
+    ] {
+        assert!(summary[key].as_f64().unwrap().is_finite(), "{key}");
+    }
+    assert!(summary["steps"].as_u64().unwrap() > 100);
+    assert!(summary["elements"].as_u64().unwrap() > 1000);
+    assert!(summary["stats_window_s"].is_array());
+    assert!(summary["diverged"].is_null());
+    assert!(summary["energy_error_rel"].as_f64().unwrap() < 1e-2);
+    for file in [
+        "history.csv",
+        "dte_spectrum.csv",
+        "stiffness.csv",
+        "dte.png",
+        "contact_force.svg",
+        "impacts.png",
+        "energy.png",
+    ] {
+        assert!(out.join(file).exists(), "{file}");
+    }
+    // The FE's stiffness table feeds the lumped model.
+    let sweep = dir.path().join("sweep");
+    run_ok(
+        &mut geardyn()
+            .args(["sweep", "--rpm", "1000:2000:2", "--stiffness"])
+            .arg(out.join("stiffness.csv"))
+            .arg("--out")
+            .arg(&sweep),
+    );
+    // Above the critical step: exit 1, the cause named, the partial results kept.
+    let bad = dir.path().join("bad");
+    let output = geardyn()
+        .arg("fe")
+        .arg(&case)
+        .args([
+            "--speed-rpm",
+            "600",
+            "--duration-s",
+            "2e-5",
+            "--step-factor",
+            "1.5",
+            "--out",
+        ])
+        .arg(&bad)
+        .output()
+        .unwrap();
+    assert!(!output.status.success());
+    let message = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        message.contains("diverged") && message.contains("stable step"),
+        "{message}"
+    );
+    assert!(read_summary(&bad)["diverged"].is_string());
+    assert!(bad.join("history.csv").exists());
+    let no_scene = geardyn()
+        .arg("fe")
+        .arg(&case)
+        .args(["--scene", "nowhere"])
+        .output()
+        .unwrap();
+    assert!(!no_scene.status.success());
+    assert!(String::from_utf8_lossy(&no_scene.stderr).contains("low-unmodified"));
 }

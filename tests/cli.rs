@@ -203,7 +203,7 @@ fn mesh_writes_vtk_and_png_for_both_gears() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("mesh");
     run_ok(
-        &mut geardyn()
+        geardyn()
             .args(["mesh", "--relief", "tip20-root10", "--out"])
             .arg(&out),
     );
@@ -247,7 +247,7 @@ fn ltca_writes_csv_plots_and_summary() {
     );
     let out = dir.path().join("ltca");
     run_ok(
-        &mut geardyn()
+        geardyn()
             .args(["ltca"])
             .arg(&case)
             .args(["--positions", "8", "--relief", "none", "--out"])
@@ -314,7 +314,7 @@ fn sweep_writes_curves_and_summary() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("sweep");
     run_ok(
-        &mut geardyn()
+        geardyn()
             .args([
                 "sweep",
                 "--stiffness",
@@ -371,7 +371,7 @@ fn stability_map_finds_the_principal_parametric_region() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("stability");
     run_ok(
-        &mut geardyn()
+        geardyn()
             .args([
                 "stability",
                 "--stiffness",
@@ -409,7 +409,7 @@ fn sweep_speed_drive_and_run_up() {
     let run = |name: &str, extra: &[&str]| {
         let out = dir.path().join(name);
         run_ok(
-            &mut geardyn()
+            geardyn()
                 .args(["sweep", "--stiffness", "pe", "--rpm", "1000:9000:5"])
                 .args(extra)
                 .arg("--out")
@@ -490,7 +490,7 @@ fn sweep_reads_a_stiffness_csv() {
     );
     let out = dir.path().join("from-case");
     run_ok(
-        &mut geardyn()
+        geardyn()
             .arg("sweep")
             .arg(&case)
             .args(["--rpm", "1000:9000:5", "--out"])
@@ -531,7 +531,7 @@ fn sweep_with_bearing_translations() {
     );
     let out = dir.path().join("bearings");
     run_ok(
-        &mut geardyn()
+        geardyn()
             .arg("sweep")
             .arg(&case)
             .args(["--stiffness", "pe", "--rpm", "1000:9000:5", "--out"])
@@ -554,7 +554,7 @@ fn validate_integrators_writes_the_failure_table() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("integrators");
     run_ok(
-        &mut geardyn()
+        geardyn()
             .args(["validate", "integrators", "--stiffness", "iso", "--out"])
             .arg(&out),
     );
@@ -585,7 +585,7 @@ fn fe_writes_histories_summary_and_keeps_a_diverged_run() {
     );
     let out = dir.path().join("fe");
     run_ok(
-        &mut geardyn()
+        geardyn()
             .arg("fe")
             .arg(&case)
             .args([
@@ -631,7 +631,7 @@ fn fe_writes_histories_summary_and_keeps_a_diverged_run() {
     // The FE's stiffness table feeds the lumped model.
     let sweep = dir.path().join("sweep");
     run_ok(
-        &mut geardyn()
+        geardyn()
             .args(["sweep", "--rpm", "1000:2000:2", "--stiffness"])
             .arg(out.join("stiffness.csv"))
             .arg("--out")

@@ -109,6 +109,8 @@ pub struct ExplicitPair {
     pub placement: [Placement; 2],
     /// Whether each DOF integrates freely (false: bore DOFs, slaved to the hub).
     pub free: [Vec<bool>; 2],
+    /// 1/m per DOF, zero on the bore DOFs (their motion comes from the hubs).
+    inverse_mass: [Vec<f64>; 2],
     /// Driven hub inertia I_h = Σ_bore mᵢ|Xᵢ|² [kg·m²].
     pub hub_inertia: f64,
     pub flanks: Vec<Flank>,
@@ -254,6 +256,17 @@ impl ExplicitPair {
             }
             free
         });
+        let inverse_mass = std::array::from_fn(|g| {
+            (0..free[g].len())
+                .map(|d| {
+                    if free[g][d] {
+                        1.0 / bodies[g].mass[d / 2]
+                    } else {
+                        0.0
+                    }
+                })
+                .collect()
+        });
         let hub_inertia = meshes[1]
             .bore_nodes
             .iter()
@@ -315,6 +328,7 @@ impl ExplicitPair {
             bodies,
             placement,
             free,
+            inverse_mass,
             hub_inertia,
             flanks,
             flank_pairs,
@@ -674,14 +688,19 @@ impl<'a> PairIntegrator<'a> {
     /// reactions. Returns the strain energy and damping power.
     fn forces_and_accelerations(&mut self, state: &mut PairState) -> (f64, f64) {
         let model = self.model;
-        for g in 0..2 {
-            self.force[g].iter_mut().for_each(|f| *f = 0.0);
-        }
         let beta = self.beta_k;
-        let (f0, f1) = self.force.split_at_mut(1);
+        let [x0, x1] = &state.x;
+        let [v0, v1] = &state.v;
+        let [f0, f1] = &mut self.force;
         let (o0, o1) = rayon::join(
-            || model.bodies[0].internal_forces(&state.x[0], &state.v[0], beta, &mut f0[0]),
-            || model.bodies[1].internal_forces(&state.x[1], &state.v[1], beta, &mut f1[0]),
+            || {
+                f0.fill(0.0);
+                model.bodies[0].internal_forces(x0, v0, beta, f0)
+            },
+            || {
+                f1.fill(0.0);
+                model.bodies[1].internal_forces(x1, v1, beta, f1)
+            },
         );
         for g in 0..2 {
             std::mem::swap(&mut self.previous_contact[g], &mut self.contact_force[g]);
@@ -706,24 +725,28 @@ impl<'a> PairIntegrator<'a> {
         let alpha = self.mass_damping;
         state.hub[2] = moment / model.hub_inertia - alpha * state.hub[1];
         let mut mass_damping_power = alpha * model.hub_inertia * state.hub[1] * state.hub[1];
-        for g in 0..2 {
-            for d in 0..state.a[g].len() {
-                if model.free[g][d] {
-                    state.a[g][d] = self.force[g][d] / model.bodies[g].mass[d / 2];
-                    if alpha > 0.0 {
-                        state.a[g][d] -= alpha * state.v[g][d];
-                        mass_damping_power +=
-                            alpha * model.bodies[g].mass[d / 2] * state.v[g][d] * state.v[g][d];
-                    }
-                }
-            }
-        }
-        // Driver reactions: what the hub must apply so the bore nodes follow their path.
+        // Driver reactions: what the hub must apply so the bore nodes follow their path (their
+        // prescribed accelerations are in state.a from place_bore).
         for (i, &n) in model.meshes[0].bore_nodes.iter().enumerate() {
             let m = model.bodies[0].mass[n];
             for c in 0..2 {
                 self.driver_reaction[2 * i + c] =
                     m * state.a[0][2 * n + c] - self.force[0][2 * n + c];
+            }
+        }
+        // a = f/m on the free DOFs (zero on the bore DOFs: the hubs set those after this).
+        for g in 0..2 {
+            let (a, f, w) = (&mut state.a[g], &self.force[g], &model.inverse_mass[g]);
+            for d in 0..a.len() {
+                a[d] = f[d] * w[d];
+            }
+            if alpha > 0.0 {
+                for d in 0..a.len() {
+                    if w[d] > 0.0 {
+                        a[d] -= alpha * state.v[g][d];
+                        mass_damping_power += alpha * state.v[g][d] * state.v[g][d] / w[d];
+                    }
+                }
             }
         }
         (
@@ -739,6 +762,8 @@ impl<'a> PairIntegrator<'a> {
         let [phi, phi_rate, _] = state.hub;
         self.model.place_bore(1, state, phi, phi_rate, 0.0);
         let (strain, _) = self.forces_and_accelerations(state);
+        self.model.place_bore(0, state, theta, rate, accel);
+        self.model.place_bore(1, state, phi, phi_rate, state.hub[2]);
         self.energy.strain = strain;
         self.energy.kinetic = self.kinetic(state);
     }
@@ -773,12 +798,12 @@ impl<'a> PairIntegrator<'a> {
         }
         self.old_reaction.copy_from_slice(&self.driver_reaction);
         let (old_phi, old_torque) = (state.hub[0], self.drive.load_torque_at(state.time));
+        // Half kick and drift on every DOF (the hubs overwrite the bore DOFs right after).
         for g in 0..2 {
-            for d in 0..state.x[g].len() {
-                if model.free[g][d] {
-                    state.v[g][d] += 0.5 * dt * state.a[g][d];
-                    state.x[g][d] += dt * state.v[g][d];
-                }
+            let (x, v, a) = (&mut state.x[g], &mut state.v[g], &state.a[g]);
+            for d in 0..x.len() {
+                v[d] += 0.5 * dt * a[d];
+                x[d] += dt * v[d];
             }
         }
         state.time += dt;
@@ -790,13 +815,13 @@ impl<'a> PairIntegrator<'a> {
         model.place_bore(1, state, phi, phi_rate, phi_accel);
         let (strain, damping_power) = self.forces_and_accelerations(state);
         for g in 0..2 {
-            for d in 0..state.v[g].len() {
-                if model.free[g][d] {
-                    state.v[g][d] += 0.5 * dt * state.a[g][d];
-                }
+            let (v, a) = (&mut state.v[g], &state.a[g]);
+            for d in 0..v.len() {
+                v[d] += 0.5 * dt * a[d];
             }
         }
         state.hub[1] += 0.5 * dt * state.hub[2];
+        model.place_bore(0, state, theta, rate, accel);
         let [phi, phi_rate, phi_accel] = state.hub;
         model.place_bore(1, state, phi, phi_rate, phi_accel);
         // Work: driver reactions, load torque, contact forces (trapezoid).

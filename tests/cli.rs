@@ -617,6 +617,12 @@ fn fe_writes_histories_summary_and_keeps_a_diverged_run() {
     assert!(summary["stats_window_s"].is_array());
     assert!(summary["diverged"].is_null());
     assert!(summary["energy_error_rel"].as_f64().unwrap() < 1e-2);
+    assert!(
+        summary["penalty_stiffness_per_edge_n_per_m"]["mean"]
+            .as_f64()
+            .unwrap()
+            > 1e8
+    );
     for file in [
         "history.csv",
         "dte_spectrum.csv",

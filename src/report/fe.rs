@@ -260,6 +260,17 @@ pub fn plot_run(
 
 /// Cost and step numbers of a prepared scene, for the summary.
 pub fn step_summary(prepared: &PreparedScene) -> serde_json::Value {
+    let edges: Vec<f64> = prepared
+        .model
+        .flanks
+        .iter()
+        .flat_map(|f| f.penalty.iter().copied())
+        .collect();
+    let mean = edges.iter().sum::<f64>() / edges.len().max(1) as f64;
+    let (lo, hi) = edges
+        .iter()
+        .fold((f64::INFINITY, 0.0_f64), |(a, b), k| (a.min(*k), b.max(*k)));
+    let penalty = serde_json::json!({"mean": mean, "min": lo, "max": hi});
     serde_json::json!({
         "dt_s": prepared.dt,
         "dt_critical_s": prepared.dt_critical,
@@ -268,6 +279,7 @@ pub fn step_summary(prepared: &PreparedScene) -> serde_json::Value {
         "dt_paper_formula_s": prepared.dt_paper,
         "dt_element_eigenvalue_bound_s": prepared.dt_element_bound,
         "stiffness_damping_beta_s": prepared.beta_k,
+        "penalty_stiffness_per_edge_n_per_m": penalty,
         "elements": prepared.model.elements(),
         "nodes": prepared.model.meshes.iter().map(|m| m.nodes.len()).sum::<usize>(),
         "fine_teeth": [prepared.model.meshes[0].fine_teeth.clone(), prepared.model.meshes[1].fine_teeth.clone()],

@@ -1,5 +1,6 @@
-//! Penalty contact with regularized Coulomb friction for the explicit solver (issue 4, in
-//! progress): node-to-segment geometry on quadratic (Q8) edges and the normal/tangential force law.
+//! Penalty contact with regularized Coulomb friction for the explicit solver: the projection of a
+//! point (a slave node or Gauss point) on a quadratic (Q8) edge and the normal/tangential force
+//! law. The pair's contact search and assembly are in [`crate::explicit::pair`].
 //!
 //! # Geometry
 //! A master edge is the quadratic curve x(s) = Σ Nᵢ(s) xᵢ, s ∈ [−1, 1], through its corner, mid-side

@@ -1,6 +1,7 @@
-//! Explicit dynamics of the FE bodies (issue 4, in progress): corotational Q8 bodies with lumped
-//! mass, central-difference integration, critical time step, energy balance. Contact, hubs and
-//! the meshing-pair scenes come next.
+//! Explicit dynamics: corotational Q8 bodies with lumped mass ([`body`]), central-difference
+//! integration of one body with its critical step ([`solver`]), the meshing pair on rigid hubs
+//! with penalty/Coulomb contact and its energy account ([`pair`]), and the scenes of a case with
+//! the analysis of their DTE ([`scene`]).
 
 pub mod body;
 pub mod pair;

@@ -70,7 +70,7 @@ pub struct FlankPair {
 }
 
 impl FlankPair {
-    /// A name for outputs: drive_<t1>_<t2> or back_<t1>_<t2>.
+    /// A name for outputs: `drive_<t1>_<t2>` or `back_<t1>_<t2>`.
     pub fn name(&self) -> String {
         format!(
             "{}_{}_{}",

@@ -24,6 +24,13 @@ fn model(stiffness: PeriodicTable, te_amplitude: f64, zeta: f64) -> MeshModel {
     m
 }
 
+/// k = k̄(1 + ε cos Ω_m t) over one mesh period (512 samples).
+fn cosine_stiffness(eps: f64) -> PeriodicTable {
+    PeriodicTable::from_fn(PERIOD, 512, |t| {
+        K_MEAN * (1.0 + eps * (2.0 * PI * t / PERIOD).cos())
+    })
+}
+
 /// The edge of an instability region between a stable and an unstable point, by bisection.
 fn stability_edge(unstable: &dyn Fn(f64) -> bool, mut stable: f64, mut inside: f64) -> f64 {
     for _ in 0..50 {
@@ -104,13 +111,7 @@ fn constant_stiffness_follows_the_analytic_frf() {
 #[test]
 fn floquet_boundaries_match_mathieu() {
     let eps = 0.1;
-    let m = model(
-        PeriodicTable::from_fn(PERIOD, 512, |t| {
-            K_MEAN * (1.0 + eps * (2.0 * PI * t / PERIOD).cos())
-        }),
-        0.0,
-        0.0,
-    );
+    let m = model(cosine_stiffness(eps), 0.0, 0.0);
     let wn = m.natural_frequency();
     let unstable = |w: f64| floquet_max_multiplier(&m, driver_speed(w), 512) > 1.0 + 1e-7;
     assert!(unstable(2.0 * wn), "the centre of the tongue is unstable");
@@ -159,13 +160,7 @@ fn floquet_boundaries_match_mathieu() {
 fn damping_closes_the_tongue_below_four_zeta() {
     let zeta = 0.02;
     for (eps, opens) in [(0.05, false), (0.2, true)] {
-        let m = model(
-            PeriodicTable::from_fn(PERIOD, 512, |t| {
-                K_MEAN * (1.0 + eps * (2.0 * PI * t / PERIOD).cos())
-            }),
-            0.0,
-            zeta,
-        );
+        let m = model(cosine_stiffness(eps), 0.0, zeta);
         let wn = m.natural_frequency();
         let worst = (0..41)
             .map(|i| 1.9 + 0.005 * i as f64)
@@ -184,13 +179,7 @@ fn damping_closes_the_tongue_below_four_zeta() {
 #[test]
 fn brute_force_growth_matches_the_floquet_multiplier() {
     let eps = 0.2;
-    let m = model(
-        PeriodicTable::from_fn(PERIOD, 512, |t| {
-            K_MEAN * (1.0 + eps * (2.0 * PI * t / PERIOD).cos())
-        }),
-        0.0,
-        0.0,
-    );
+    let m = model(cosine_stiffness(eps), 0.0, 0.0);
     let free = MeshModel {
         force: 0.0,
         ..m.clone()
@@ -282,28 +271,15 @@ fn damped_floquet_boundaries_match_hills_determinant() {
         }
         m.determinant()
     };
-    let root = |mut lo: f64, mut hi: f64| {
-        let f_lo = hill(lo);
-        for _ in 0..60 {
-            let mid = 0.5 * (lo + hi);
-            if (hill(mid) > 0.0) == (f_lo > 0.0) {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        0.5 * (lo + hi)
+    // A sign change of the determinant, by the same bisection.
+    let root = |lo: f64, hi: f64| {
+        let sign_lo = hill(lo) > 0.0;
+        stability_edge(&|x| (hill(x) > 0.0) != sign_lo, lo, hi)
     };
     let (hill_lower, hill_upper) = (root(1.9, 2.0), root(2.0, 2.1));
 
     // Our model in the same nondimensional form: ω_n = √(k̄/m), c = 2ζ√(k̄ m).
-    let m = model(
-        PeriodicTable::from_fn(PERIOD, 512, |t| {
-            K_MEAN * (1.0 + eps * (2.0 * PI * t / PERIOD).cos())
-        }),
-        0.0,
-        zeta,
-    );
+    let m = model(cosine_stiffness(eps), 0.0, zeta);
     let wn = m.natural_frequency();
     let unstable = |ratio: f64| floquet_max_multiplier(&m, driver_speed(ratio * wn), 512) > 1.0;
     let edge = |stable: f64, inside: f64| stability_edge(&unstable, stable, inside);
@@ -455,9 +431,7 @@ fn integrator_failure_table_matches_theory() {
 fn bearing_model_reduces_to_the_one_dof_model_on_stiff_bearings() {
     use geardyn::lumped::Bearings;
     let eps = 0.2;
-    let stiffness = PeriodicTable::from_fn(PERIOD, 512, |t| {
-        K_MEAN * (1.0 + eps * (2.0 * PI * t / PERIOD).cos())
-    });
+    let stiffness = cosine_stiffness(eps);
     let one = model(stiffness, 1e-6, 0.05);
     let with = |kb: f64| MeshModel {
         bearings: Some(Bearings {

@@ -152,10 +152,8 @@ impl Drive {
     fn ramp(&self, t: f64) -> (f64, f64, f64) {
         let tr = self.ramp_time;
         if t >= tr {
-            let integral = match self.ramp {
-                Ramp::Linear | Ramp::Cosine => t - 0.5 * tr,
-            };
-            return (1.0, integral, 0.0);
+            // Both shapes have mean ½ over the ramp.
+            return (1.0, t - 0.5 * tr, 0.0);
         }
         match self.ramp {
             Ramp::Linear => (t / tr, 0.5 * t * t / tr, 1.0 / tr),
@@ -402,11 +400,13 @@ impl ExplicitPair {
         dt: f64,
         history: &mut [Vec<SlaveState>],
         force: &mut [Vec<f64>; 2],
-    ) -> ContactOutput {
-        let mut out = ContactOutput {
-            pair_forces: vec![0.0; self.flank_pairs.len()],
-            ..ContactOutput::default()
-        };
+        out: &mut ContactOutput,
+    ) {
+        out.force_on_driven = Vector2::zeros();
+        out.pair_forces.clear();
+        out.pair_forces.resize(self.flank_pairs.len(), 0.0);
+        out.active = 0;
+        out.max_penetration = 0.0;
         let reject = 0.25 * self.pair.gears[0].module();
         for (index, fp) in self.flank_pairs.iter().enumerate() {
             let boxes = fp.flanks.map(|f| {
@@ -528,7 +528,6 @@ impl ExplicitPair {
             out.force_on_driven += on_driven;
             out.pair_forces[index] = on_driven.norm();
         }
-        out
     }
 
     /// Empty friction history for [`ExplicitPair::contact_forces`].
@@ -708,8 +707,13 @@ impl<'a> PairIntegrator<'a> {
                 self.contact_force[g][d] = 0.0;
             }
         }
-        self.last_contact =
-            model.contact_forces(state, self.dt, &mut self.history, &mut self.contact_force);
+        model.contact_forces(
+            state,
+            self.dt,
+            &mut self.history,
+            &mut self.contact_force,
+            &mut self.last_contact,
+        );
         for g in 0..2 {
             for &d in &model.contact_dofs[g] {
                 self.force[g][d] += self.contact_force[g][d];

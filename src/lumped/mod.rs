@@ -573,15 +573,8 @@ pub fn reference_periods(
             11.0 / 84.0,
         ],
     ];
-    const B5: [f64; 7] = [
-        35.0 / 384.0,
-        0.0,
-        500.0 / 1113.0,
-        125.0 / 192.0,
-        -2187.0 / 6784.0,
-        11.0 / 84.0,
-        0.0,
-    ];
+    // First same as last: the 5th-order weights are the last stage's row.
+    const B5: [f64; 7] = [A[6][0], A[6][1], A[6][2], A[6][3], A[6][4], A[6][5], 0.0];
     const B4: [f64; 7] = [
         5179.0 / 57600.0,
         0.0,

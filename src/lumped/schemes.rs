@@ -170,24 +170,25 @@ pub fn observed_amplification(scheme: Scheme, model: &MeshModel, h: f64) -> (f64
     }
 }
 
+/// The border between `good` and `bad` (bad(bad) holds, bad(good) does not), by 60 bisections.
+fn border(mut good: f64, mut bad: f64, is_bad: impl Fn(f64) -> bool) -> f64 {
+    for _ in 0..60 {
+        let mid = 0.5 * (good + bad);
+        if is_bad(mid) {
+            bad = mid;
+        } else {
+            good = mid;
+        }
+    }
+    0.5 * (good + bad)
+}
+
 /// The largest ωh at which `scheme` is still stable on the free oscillator, by bisection on the
 /// observed amplification (None: stable up to ωh = 1000).
 pub fn observed_limit(scheme: Scheme, model: &MeshModel) -> Option<f64> {
     let omega = model.natural_frequency();
     let unstable = |z: f64| observed_amplification(scheme, model, z / omega).0 > 1.0 + 1e-12;
-    let (mut stable, mut inside) = (1e-3, 1000.0);
-    if !unstable(inside) {
-        return None;
-    }
-    for _ in 0..60 {
-        let mid = 0.5 * (stable + inside);
-        if unstable(mid) {
-            inside = mid;
-        } else {
-            stable = mid;
-        }
-    }
-    Some(0.5 * (stable + inside))
+    unstable(1000.0).then(|| border(1e-3, 1000.0, unstable))
 }
 
 /// The largest ωh at which the observed frequency error stays within `tolerance` (e.g. 0.01), by
@@ -198,16 +199,11 @@ pub fn observed_accuracy_limit(scheme: Scheme, model: &MeshModel, tolerance: f64
         let (_, frequency) = observed_amplification(scheme, model, z / omega);
         (frequency / omega - 1.0).abs() > tolerance
     };
-    let (mut good, mut worse) = (1e-3, scheme.predicted_limit().unwrap_or(1000.0) * 0.999);
-    for _ in 0..60 {
-        let mid = 0.5 * (good + worse);
-        if bad(mid) {
-            worse = mid;
-        } else {
-            good = mid;
-        }
-    }
-    0.5 * (good + worse)
+    border(
+        1e-3,
+        scheme.predicted_limit().unwrap_or(1000.0) * 0.999,
+        bad,
+    )
 }
 
 /// Error of `scheme` after `periods` mesh periods at `steps_per_period`, against the adaptive
@@ -311,18 +307,10 @@ pub fn failure_table(
     SCHEMES
         .iter()
         .map(|&scheme| {
-            let predicted_accuracy_limit = {
-                let (mut good, mut bad) = (1e-3, scheme.predicted_limit().unwrap_or(1000.0));
-                for _ in 0..60 {
-                    let mid = 0.5 * (good + bad);
-                    if scheme.predicted_frequency_error(mid).abs() > 0.01 {
-                        bad = mid;
-                    } else {
-                        good = mid;
-                    }
-                }
-                0.5 * (good + bad)
-            };
+            let predicted_accuracy_limit =
+                border(1e-3, scheme.predicted_limit().unwrap_or(1000.0), |z| {
+                    scheme.predicted_frequency_error(z).abs() > 0.01
+                });
             let (order_smooth, errors_smooth) = observed_order(
                 scheme,
                 smooth,

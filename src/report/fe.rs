@@ -105,19 +105,19 @@ pub fn dte_spectrum(history: &History, from: f64) -> Vec<(f64, f64)> {
     signal::hann_amplitude_spectrum(&history.dte[start..], dt)
 }
 
-/// The strongest local maxima of a spectrum above `min_hz`: (frequency, amplitude).
+/// The strongest local maxima of a spectrum (bins 0 … N/2) above `min_hz`: (frequency,
+/// amplitude), by the sweep's [`crate::sweep::strongest_lines`].
 pub fn spectrum_peaks(spectrum: &[(f64, f64)], min_hz: f64, count: usize) -> Vec<(f64, f64)> {
-    let mut peaks: Vec<(f64, f64)> = (1..spectrum.len().saturating_sub(1))
-        .filter(|&i| {
-            spectrum[i].0 >= min_hz
-                && spectrum[i].1 > spectrum[i - 1].1
-                && spectrum[i].1 >= spectrum[i + 1].1
-        })
-        .map(|i| spectrum[i])
-        .collect();
-    peaks.sort_by(|a, b| b.1.total_cmp(&a.1));
-    peaks.truncate(count);
-    peaks
+    if spectrum.len() < 2 {
+        return Vec::new();
+    }
+    let amplitudes: Vec<f64> = spectrum[1..].iter().map(|p| p.1).collect();
+    crate::sweep::strongest_lines(&amplitudes, amplitudes.len())
+        .into_iter()
+        .map(|(line, amplitude)| (spectrum[line].0, amplitude))
+        .filter(|(frequency, _)| *frequency >= min_hz)
+        .take(count)
+        .collect()
 }
 
 /// The plots of a run.
@@ -130,12 +130,12 @@ pub fn plot_run(
     analysis: Option<&DteAnalysis>,
     pair_names: &[String],
 ) -> Result<(), PlotError> {
-    let series = |values: &[f64], scale: f64| -> Vec<(f64, f64)> {
+    let series = |values: &[f64]| -> Vec<(f64, f64)> {
         history
             .time
             .iter()
             .zip(values)
-            .map(|(t, v)| (t * 1e3, v * scale))
+            .map(|(t, v)| (t * 1e3, *v))
             .collect()
     };
     let time_plot = |stem: &str, y_label: &str, series: Vec<(String, Vec<(f64, f64)>)>| {
@@ -154,10 +154,10 @@ pub fn plot_run(
         "dte",
         "angular DTE of the driven gear [rad]",
         vec![
-            ("DTE".into(), series(&history.dte, 1.0)),
+            ("DTE".into(), series(&history.dte)),
             (
                 "de-noised (db5, soft threshold)".into(),
-                series(&derived.dte_denoised, 1.0),
+                series(&derived.dte_denoised),
             ),
         ],
     )?;
@@ -165,10 +165,10 @@ pub fn plot_run(
         "speed",
         "driven-gear speed [rad/s]",
         vec![
-            ("FE".into(), series(&history.driven_speed, 1.0)),
+            ("FE".into(), series(&history.driven_speed)),
             (
                 "theoretical (z1/z2) x driver".into(),
-                series(&history.theoretical_speed, 1.0),
+                series(&history.theoretical_speed),
             ),
         ],
     )?;
@@ -176,18 +176,18 @@ pub fn plot_run(
         "contact_force",
         "contact force on the driven gear [N]",
         vec![
-            ("resultant F_C".into(), series(&history.force_total, 1.0)),
+            ("resultant F_C".into(), series(&history.force_total)),
             (
                 "circumferential".into(),
-                series(&history.force_circumferential, 1.0),
+                series(&history.force_circumferential),
             ),
-            ("radial".into(), series(&history.force_radial, 1.0)),
+            ("radial".into(), series(&history.force_radial)),
         ],
     )?;
     time_plot(
         "impacts",
         "level-1 db5 detail of the contact force [N]",
-        vec![("D1".into(), series(&derived.force_detail, 1.0))],
+        vec![("D1".into(), series(&derived.force_detail))],
     )?;
     time_plot(
         "pair_forces",
@@ -197,7 +197,7 @@ pub fn plot_run(
             .iter()
             .zip(pair_names)
             .filter(|(f, _)| f.iter().any(|v| *v > 0.0))
-            .map(|(f, name)| (name.clone(), series(f, 1.0)))
+            .map(|(f, name)| (name.clone(), series(f)))
             .collect(),
     )?;
     let energy = |f: &dyn Fn(&crate::explicit::pair::PairEnergy) -> f64| -> Vec<f64> {
@@ -207,15 +207,15 @@ pub fn plot_run(
         "energy",
         "energy [J]",
         vec![
-            ("kinetic".into(), series(&energy(&|e| e.kinetic), 1.0)),
-            ("strain".into(), series(&energy(&|e| e.strain), 1.0)),
-            ("contact".into(), series(&energy(&|e| e.contact), 1.0)),
-            ("damping".into(), series(&energy(&|e| e.damping), 1.0)),
+            ("kinetic".into(), series(&energy(&|e| e.kinetic))),
+            ("strain".into(), series(&energy(&|e| e.strain))),
+            ("contact".into(), series(&energy(&|e| e.contact))),
+            ("damping".into(), series(&energy(&|e| e.damping))),
             (
                 "external work".into(),
-                series(&energy(&|e| e.external_work), 1.0),
+                series(&energy(&|e| e.external_work)),
             ),
-            ("balance".into(), series(&energy(&|e| e.balance()), 1.0)),
+            ("balance".into(), series(&energy(&|e| e.balance()))),
         ],
     )?;
     if !spectrum.is_empty() {

@@ -33,9 +33,10 @@ fn explicit(c: &mut Criterion) {
     )
     .unwrap();
     eprintln!(
-        "prototypes {} for {} elements",
+        "prototypes {} for {} elements, {} batches",
         body.prototypes.len(),
-        mesh.elements.len()
+        mesh.elements.len(),
+        body.batch_count()
     );
     let (s, co) = 0.3_f64.sin_cos();
     let x: Vec<f64> = mesh

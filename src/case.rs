@@ -201,6 +201,9 @@ pub struct FeSection {
     pub output_interval_us: f64,
     /// Element size on the engaging flanks for the explicit runs [mm]; default: mesh.fine_element_mm.
     pub explicit_fine_element_mm: Option<f64>,
+    /// Element size of the other teeth and the largest in the body for the explicit runs [mm];
+    /// default: mesh.coarse_element_mm.
+    pub explicit_coarse_element_mm: Option<f64>,
 }
 
 impl Default for FeSection {
@@ -212,6 +215,7 @@ impl Default for FeSection {
             high_frequency_damping_ratio: default_high_frequency_damping(),
             output_interval_us: default_output_interval(),
             explicit_fine_element_mm: None,
+            explicit_coarse_element_mm: None,
         }
     }
 }
@@ -731,17 +735,27 @@ impl Case {
                 "must be a finite number > 0",
             ));
         }
-        if let Some(size) = fe.explicit_fine_element_mm {
-            if !(size >= 0.005 * module_mm && size <= coarse) {
-                return Err(invalid(
-                    "fe.explicit_fine_element_mm",
-                    size.to_string(),
-                    &format!(
-                        "must be in [0.005·m, coarse_element_mm] = [{:.4}, {coarse}] mm",
-                        0.005 * module_mm
-                    ),
-                ));
-            }
+        let explicit_coarse = fe.explicit_coarse_element_mm.unwrap_or(coarse);
+        if !(explicit_coarse >= 0.005 * module_mm && explicit_coarse <= module_mm) {
+            return Err(invalid(
+                "fe.explicit_coarse_element_mm",
+                explicit_coarse.to_string(),
+                &format!(
+                    "must be in [0.005·m, m] = [{:.4}, {module_mm}] mm",
+                    0.005 * module_mm
+                ),
+            ));
+        }
+        let explicit_fine = fe.explicit_fine_element_mm.unwrap_or(fine);
+        if !(explicit_fine >= 0.005 * module_mm && explicit_fine <= explicit_coarse) {
+            return Err(invalid(
+                "fe.explicit_fine_element_mm",
+                explicit_fine.to_string(),
+                &format!(
+                    "must be in [0.005·m, the explicit coarse size] = [{:.4}, {explicit_coarse}] mm",
+                    0.005 * module_mm
+                ),
+            ));
         }
         let mut scenes = Vec::new();
         for (i, sc) in file.scenes.iter().enumerate() {

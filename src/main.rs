@@ -181,6 +181,10 @@ struct FeArgs {
     /// Flank element size of the explicit mesh [mm] (fe.explicit_fine_element_mm).
     #[arg(long, value_name = "MM")]
     fine_element_mm: Option<f64>,
+    /// Largest element size of the explicit mesh: other teeth, body [mm]
+    /// (fe.explicit_coarse_element_mm).
+    #[arg(long, value_name = "MM")]
+    coarse_element_mm: Option<f64>,
 }
 
 #[derive(Args)]
@@ -1485,12 +1489,24 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
         }
         settings.penalty_factor = f;
     }
-    if let Some(mm) = options.fine_element_mm {
-        let coarse = case.file.mesh.coarse_element_mm;
-        if !(mm > 0.0 && mm <= coarse) {
-            anyhow::bail!("--fine-element-mm {mm} is invalid: give a size in (0, coarse_element_mm = {coarse}]");
+    if let Some(mm) = options.coarse_element_mm {
+        let module = case.file.tool.module_mm;
+        if !(mm > 0.0 && mm <= module) {
+            anyhow::bail!(
+                "--coarse-element-mm {mm} is invalid: give a size in (0, one module = {module}] mm"
+            );
         }
+        settings.coarse_size = mm * 1e-3;
+    }
+    if let Some(mm) = options.fine_element_mm {
         settings.fine_size = mm * 1e-3;
+    }
+    if !(settings.fine_size > 0.0 && settings.fine_size <= settings.coarse_size) {
+        anyhow::bail!(
+            "the explicit flank element size {} mm is invalid: give a size in (0, the coarse size = {} mm] (--fine-element-mm, --coarse-element-mm)",
+            settings.fine_size * 1e3,
+            settings.coarse_size * 1e3
+        );
     }
     let dir = output_dir(args.out.as_deref(), &format!("fe-{}", scene.name), &case)?;
     report::write_atomic(&dir.join("case.toml"), case.text.as_bytes())
@@ -1508,10 +1524,11 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
     let prepared = prepare(&case, &scene, &settings)?;
     let total_steps = (scene.duration / prepared.dt).ceil();
     println!(
-        "{} elements ({} tooth pairs, flank elements {:.2} mm); dt_cr = {:.4e} s (bodies {:.4e} / {:.4e}, contact {:.4e}; paper's L/c {:.4e}), dt = {:.4e} s, {} steps",
+        "{} elements ({} tooth pairs, flank elements {:.2} mm, body {:.2} mm); dt_cr = {:.4e} s (bodies {:.4e} / {:.4e}, contact {:.4e}; paper's L/c {:.4e}), dt = {:.4e} s, {} steps",
         prepared.model.elements(),
         prepared.model.tooth_pairs.len(),
         settings.fine_size * 1e3,
+        settings.coarse_size * 1e3,
         prepared.dt_critical,
         prepared.dt_bodies[0],
         prepared.dt_bodies[1],
@@ -1581,6 +1598,7 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
     let ltca = {
         let mut ltca_case = case.clone();
         ltca_case.file.mesh.fine_element_mm = settings.fine_size * 1e3;
+        ltca_case.file.mesh.coarse_element_mm = settings.coarse_size * 1e3;
         let variant = case.relief_variant(&scene.relief).expect("checked above");
         let model = ltca_model(&ltca_case, &variant.modifications)?;
         let results = model.run(64, scene.torque, &|_| {})?;
@@ -1654,11 +1672,12 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
         "threads": rayon::current_num_threads(),
         "diverged": outcome.diverged,
         "model": format!(
-            "2D {} ({} plane), corotational 8-node quadrilaterals, lumped mass; rigid hubs, rigid bearings; driver at prescribed speed, driven hub with load torque; segment-to-segment penalty contact (two-pass, 4 Gauss points per edge) with Coulomb friction on drive and back flanks of {} tooth pairs; fine flank elements {:.2} mm only on the teeth that engage during the scene",
+            "2D {} ({} plane), corotational 8-node quadrilaterals, lumped mass; rigid hubs, rigid bearings; driver at prescribed speed, driven hub with load torque; segment-to-segment penalty contact (two-pass, 4 Gauss points per edge) with Coulomb friction on drive and back flanks of {} tooth pairs; fine flank elements {:.2} mm only on the teeth that engage during the scene, {:.2} mm elsewhere",
             if case.file.fe.plane == geardyn::fe::PlaneState::Strain { "plane strain" } else { "plane stress" },
             case.pair.gears[0].spec.face_width * 1e3,
             prepared.model.tooth_pairs.len(),
-            settings.fine_size * 1e3
+            settings.fine_size * 1e3,
+            settings.coarse_size * 1e3
         ),
     });
     if let Some(map) = summary.as_object_mut() {
@@ -1670,6 +1689,11 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
         );
         map.insert("penalty_factor".into(), settings.penalty_factor.into());
         map.insert("step_factor".into(), settings.step_factor.into());
+        map.insert("fine_element_mm".into(), (settings.fine_size * 1e3).into());
+        map.insert(
+            "coarse_element_mm".into(),
+            (settings.coarse_size * 1e3).into(),
+        );
     }
     report::write_json(&dir.join("summary.json"), &summary).context("cannot write summary.json")?;
     if let Some(message) = &outcome.diverged {

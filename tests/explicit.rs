@@ -200,6 +200,7 @@ fn sector_prototypes_give_the_same_forces() {
         "forces differ by {diff:e} of {scale:e}"
     );
     assert!(((a.strain_energy - b.strain_energy) / a.strain_energy).abs() < 1e-8);
+    assert!(((a.damping_power - b.damping_power) / a.damping_power).abs() < 1e-8);
     assert!(
         (plain.element_eigen_critical_step() / shared.element_eigen_critical_step() - 1.0).abs()
             < 1e-9

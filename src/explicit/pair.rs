@@ -741,8 +741,8 @@ impl<'a> PairIntegrator<'a> {
         // a = f/m on the free DOFs (zero on the bore DOFs: the hubs set those after this).
         for g in 0..2 {
             let (a, f, w) = (&mut state.a[g], &self.force[g], &model.inverse_mass[g]);
-            for d in 0..a.len() {
-                a[d] = f[d] * w[d];
+            for ((a, f), w) in a.iter_mut().zip(f).zip(w) {
+                *a = f * w;
             }
             if alpha > 0.0 {
                 for d in 0..a.len() {
@@ -805,9 +805,9 @@ impl<'a> PairIntegrator<'a> {
         // Half kick and drift on every DOF (the hubs overwrite the bore DOFs right after).
         for g in 0..2 {
             let (x, v, a) = (&mut state.x[g], &mut state.v[g], &state.a[g]);
-            for d in 0..x.len() {
-                v[d] += 0.5 * dt * a[d];
-                x[d] += dt * v[d];
+            for ((x, v), a) in x.iter_mut().zip(v.iter_mut()).zip(a) {
+                *v += 0.5 * dt * a;
+                *x += dt * *v;
             }
         }
         state.time += dt;
@@ -819,9 +819,8 @@ impl<'a> PairIntegrator<'a> {
         model.place_bore(1, state, phi, phi_rate, phi_accel);
         let (strain, damping_power) = self.forces_and_accelerations(state);
         for g in 0..2 {
-            let (v, a) = (&mut state.v[g], &state.a[g]);
-            for d in 0..v.len() {
-                v[d] += 0.5 * dt * a[d];
+            for (v, a) in state.v[g].iter_mut().zip(&state.a[g]) {
+                *v += 0.5 * dt * a;
             }
         }
         state.hub[1] += 0.5 * dt * state.hub[2];

@@ -53,7 +53,10 @@ impl FeSettings {
                 .explicit_fine_element_mm
                 .unwrap_or(case.file.mesh.fine_element_mm)
                 * 1e-3,
-            coarse_size: case.file.mesh.coarse_element_mm * 1e-3,
+            coarse_size: fe
+                .explicit_coarse_element_mm
+                .unwrap_or(case.file.mesh.coarse_element_mm)
+                * 1e-3,
         }
     }
 }

@@ -196,6 +196,11 @@ pub struct FeSection {
     /// frequencies (kHz) the damping is ζ·ω/ω_max, a few parts per million.
     #[serde(default = "default_high_frequency_damping")]
     pub high_frequency_damping_ratio: f64,
+    /// Damping ratio of the mesh mode: a dashpot on the driven hub against the DTE rate,
+    /// c_t = 2ζ√(k_m R_b2² I₂) — the lumped model's viscous mesh damping applied to the FE
+    /// (the elastic bodies themselves carry almost no damping at the mesh frequencies).
+    #[serde(default = "default_mesh_damping")]
+    pub mesh_damping_ratio: f64,
     /// Interval of the recorded time histories [µs].
     #[serde(default = "default_output_interval")]
     pub output_interval_us: f64,
@@ -213,6 +218,7 @@ impl Default for FeSection {
             step_factor: default_step_factor(),
             penalty_factor: default_penalty_factor(),
             high_frequency_damping_ratio: default_high_frequency_damping(),
+            mesh_damping_ratio: default_mesh_damping(),
             output_interval_us: default_output_interval(),
             explicit_fine_element_mm: None,
             explicit_coarse_element_mm: None,
@@ -227,6 +233,9 @@ fn default_penalty_factor() -> f64 {
     1.0
 }
 fn default_high_frequency_damping() -> f64 {
+    0.05
+}
+fn default_mesh_damping() -> f64 {
     0.05
 }
 fn default_output_interval() -> f64 {
@@ -726,6 +735,13 @@ impl Case {
                 "fe.high_frequency_damping_ratio",
                 fe.high_frequency_damping_ratio.to_string(),
                 "must be in [0, 0.5] (default 0.05)",
+            ));
+        }
+        if !(0.0..1.0).contains(&fe.mesh_damping_ratio) {
+            return Err(invalid(
+                "fe.mesh_damping_ratio",
+                fe.mesh_damping_ratio.to_string(),
+                "must be in [0, 1)",
             ));
         }
         if !(fe.output_interval_us > 0.0 && fe.output_interval_us.is_finite()) {

@@ -178,6 +178,9 @@ struct FeArgs {
     /// Contact penalty over the master element's largest diagonal stiffness (fe.penalty_factor).
     #[arg(long, value_name = "F")]
     penalty_factor: Option<f64>,
+    /// Damping ratio of the mesh mode, a dashpot on the DTE rate (fe.mesh_damping_ratio).
+    #[arg(long, value_name = "ZETA")]
+    mesh_damping_ratio: Option<f64>,
     /// Flank element size of the explicit mesh [mm] (fe.explicit_fine_element_mm).
     #[arg(long, value_name = "MM")]
     fine_element_mm: Option<f64>,
@@ -1393,7 +1396,7 @@ fn validate(study: &str, args: &CommonArgs, options: &LumpedArgs) -> Result<()> 
 }
 
 fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
-    use geardyn::explicit::scene::{analyse_dte, prepare, run, FeSettings};
+    use geardyn::explicit::scene::{analyse_dte, prepare, run, statistics_start, FeSettings};
     use geardyn::report::fe as rep;
     use indicatif::{ProgressBar, ProgressStyle};
     let started = std::time::Instant::now();
@@ -1489,6 +1492,14 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
         }
         settings.penalty_factor = f;
     }
+    if let Some(zeta) = options.mesh_damping_ratio {
+        if !(0.0..1.0).contains(&zeta) {
+            anyhow::bail!(
+                "--mesh-damping-ratio {zeta} is invalid: give a ratio in [0, 1) (default 0.05)"
+            );
+        }
+        settings.mesh_damping_ratio = zeta;
+    }
     if let Some(mm) = options.coarse_element_mm {
         let module = case.file.tool.module_mm;
         if !(mm > 0.0 && mm <= module) {
@@ -1552,9 +1563,10 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
     );
     bar.finish_and_clear();
     let history = &outcome.history;
-    let analysis = analyse_dte(history, &prepared.model, scene.torque, scene.ramp_time);
+    let stats_start = statistics_start(&prepared, &scene);
+    let analysis = analyse_dte(history, &prepared.model, scene.torque, stats_start);
     let derived = rep::derive(history);
-    let spectrum = rep::dte_spectrum(history, scene.ramp_time);
+    let spectrum = rep::dte_spectrum(history, stats_start);
     let mesh_hz = scene.driver_speed / case.pair.gears[0].angular_pitch();
     let peaks = rep::spectrum_peaks(&spectrum, 0.5 * mesh_hz, 8);
     let pair_names: Vec<String> = prepared
@@ -1594,15 +1606,16 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
         analysis.as_ref(),
         &pair_names,
     )?;
-    // LTCA on the same flank element size, over the positions the statistics window covers.
-    let ltca = {
+    // The LTCA over the positions the statistics window covers: on the explicit run's mesh
+    // (the same discretization) and on the case's mesh (the converged reference) when they differ.
+    let ltca_on = |fine_mm: f64, coarse_mm: f64| -> anyhow::Result<Option<serde_json::Value>> {
         let mut ltca_case = case.clone();
-        ltca_case.file.mesh.fine_element_mm = settings.fine_size * 1e3;
-        ltca_case.file.mesh.coarse_element_mm = settings.coarse_size * 1e3;
+        ltca_case.file.mesh.fine_element_mm = fine_mm;
+        ltca_case.file.mesh.coarse_element_mm = coarse_mm;
         let variant = case.relief_variant(&scene.relief).expect("checked above");
         let model = ltca_model(&ltca_case, &variant.modifications)?;
         let results = model.run(64, scene.torque, &|_| {})?;
-        analysis.as_ref().map(|a| {
+        Ok(analysis.as_ref().map(|a| {
             let pitch = case.pair.gears[0].angular_pitch();
             let start = history
                 .time
@@ -1619,10 +1632,38 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
                 })
                 .collect();
             let mean = covered.iter().sum::<f64>() / covered.len() as f64;
+            let (min, max) = covered
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                    (lo.min(*v), hi.max(*v))
+                });
             let k_mean = results.iter().map(|r| r.mesh_stiffness).sum::<f64>() / 64.0;
-            (mean, k_mean)
-        })
+            serde_json::json!({
+                "fine_element_mm": fine_mm,
+                "coarse_element_mm": coarse_mm,
+                "ste_mean_rad": mean,
+                "ste_max_rad": max,
+                "ste_min_rad": min,
+                "ste_peak_to_peak_rad": max - min,
+                "mesh_stiffness_mean_n_per_m": k_mean,
+                "dte_over_ste_mean": a.dte_mean_rad / mean,
+                "dte_over_ste_peak_to_peak": a.dte_peak_to_peak_rad / (max - min),
+            })
+        }))
     };
+    let (fine_mm, coarse_mm) = (settings.fine_size * 1e3, settings.coarse_size * 1e3);
+    let ltca_same = ltca_on(fine_mm, coarse_mm)?;
+    let case_mesh = (
+        case.file.mesh.fine_element_mm,
+        case.file.mesh.coarse_element_mm,
+    );
+    let ltca_case_mesh =
+        if (case_mesh.0 - fine_mm).abs() > 1e-9 || (case_mesh.1 - coarse_mm).abs() > 1e-9 {
+            ltca_on(case_mesh.0, case_mesh.1)?
+        } else {
+            ltca_same.clone()
+        };
+    let field = |v: &Option<serde_json::Value>, key: &str| v.as_ref().and_then(|v| v[key].as_f64());
     let final_energy = outcome.final_energy;
     let max_work = history
         .energy
@@ -1653,12 +1694,11 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
         "mesh_stiffness_from_mean_dte_n_per_m": get(&|a| a.mesh_stiffness_from_mean_dte_n_per_m),
         "stiffness_pitch_coverage": get(&|a| a.pitch_coverage),
         "stats_window_s": analysis.as_ref().map(|a| [a.window.0, a.window.1]),
-        "ltca_ste_mean_rad_same_positions": ltca.map(|l| l.0),
-        "ltca_mesh_stiffness_mean_n_per_m": ltca.map(|l| l.1),
-        "dte_over_ltca_mean": match (analysis.as_ref(), ltca) {
-            (Some(a), Some((ste, _))) => Some(a.dte_mean_rad / ste),
-            _ => None,
-        },
+        "ltca_ste_mean_rad_same_positions": field(&ltca_same, "ste_mean_rad"),
+        "ltca_mesh_stiffness_mean_n_per_m": field(&ltca_same, "mesh_stiffness_mean_n_per_m"),
+        "dte_over_ltca_mean": field(&ltca_same, "dte_over_ste_mean"),
+        "ltca_same_mesh": ltca_same,
+        "ltca_case_mesh": ltca_case_mesh,
         "mesh_frequency_hz": mesh_hz,
         "dte_spectrum_peaks": peaks.iter().map(|(f, a)| serde_json::json!({"frequency_hz": f, "amplitude_rad": a})).collect::<Vec<_>>(),
         "contact_force_max_n": history.force_total.iter().copied().fold(0.0, f64::max),
@@ -1672,9 +1712,10 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
         "threads": rayon::current_num_threads(),
         "diverged": outcome.diverged,
         "model": format!(
-            "2D {} ({} plane), corotational 8-node quadrilaterals, lumped mass; rigid hubs, rigid bearings; driver at prescribed speed, driven hub with load torque; segment-to-segment penalty contact (two-pass, 4 Gauss points per edge) with Coulomb friction on drive and back flanks of {} tooth pairs; fine flank elements {:.2} mm only on the teeth that engage during the scene, {:.2} mm elsewhere",
+            "2D {} ({} plane), corotational 8-node quadrilaterals, lumped mass; rigid hubs, rigid bearings; driver at prescribed speed, driven hub with load torque and a mesh dashpot (zeta {:.3}) on the DTE rate; segment-to-segment penalty contact (two-pass, 4 Gauss points per edge) with Coulomb friction on drive and back flanks of {} tooth pairs; fine flank elements {:.2} mm only on the teeth that engage during the scene, {:.2} mm elsewhere",
             if case.file.fe.plane == geardyn::fe::PlaneState::Strain { "plane strain" } else { "plane stress" },
             case.pair.gears[0].spec.face_width * 1e3,
+            settings.mesh_damping_ratio,
             prepared.model.tooth_pairs.len(),
             settings.fine_size * 1e3,
             settings.coarse_size * 1e3
@@ -1689,6 +1730,10 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
         );
         map.insert("penalty_factor".into(), settings.penalty_factor.into());
         map.insert("step_factor".into(), settings.step_factor.into());
+        map.insert(
+            "mesh_damping_ratio".into(),
+            settings.mesh_damping_ratio.into(),
+        );
         map.insert("fine_element_mm".into(), (settings.fine_size * 1e3).into());
         map.insert(
             "coarse_element_mm".into(),
@@ -1700,14 +1745,17 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
         anyhow::bail!("{message}; partial results in {}", dir.display());
     }
     println!(
-        "{} steps in {:.1} s ({:.1} ns per element-step on {} threads); DTE mean {:.4e} rad (LTCA at the same positions {:.4e}), peak-to-peak {:.4e} rad; k mean {:.4e} N/m; energy error {:.2e} of the work",
+        "{} steps in {:.1} s ({:.1} ns per element-step on {} threads); DTE mean {:.4e} rad (LTCA at the same positions: {:.4e} on this mesh, {:.4e} on the case's), peak-to-peak {:.4e} rad (LTCA {:.4e}, {:.4e}); k mean {:.4e} N/m; energy error {:.2e} of the work",
         outcome.steps,
         outcome.wall_s,
         ns_per_element_step,
         rayon::current_num_threads(),
         summary["dte_mean_rad"].as_f64().unwrap_or(f64::NAN),
-        summary["ltca_ste_mean_rad_same_positions"].as_f64().unwrap_or(f64::NAN),
+        field(&ltca_same, "ste_mean_rad").unwrap_or(f64::NAN),
+        field(&ltca_case_mesh, "ste_mean_rad").unwrap_or(f64::NAN),
         summary["dte_peak_to_peak_rad"].as_f64().unwrap_or(f64::NAN),
+        field(&ltca_same, "ste_peak_to_peak_rad").unwrap_or(f64::NAN),
+        field(&ltca_case_mesh, "ste_peak_to_peak_rad").unwrap_or(f64::NAN),
         summary["mesh_stiffness_mean_n_per_m"].as_f64().unwrap_or(f64::NAN),
         energy_error_rel
     );

@@ -341,6 +341,17 @@ impl ExplicitPair {
         self.bodies.iter().map(|b| b.elements.len()).sum()
     }
 
+    /// Polar moment of inertia of the driven gear (body and hub) about its centre [kg m²]:
+    /// Σ m_i |X_i|² of the lumped nodal masses.
+    pub fn driven_inertia(&self) -> f64 {
+        self.meshes[1]
+            .nodes
+            .iter()
+            .zip(&self.bodies[1].mass)
+            .map(|(p, m)| m * p.coords.norm_squared())
+            .sum()
+    }
+
     /// The driven gear's kinematic hub rotation for driver rotation θ₁: −(z₁/z₂) θ₁.
     pub fn kinematic_hub_rotation(&self, driver_rotation: f64) -> f64 {
         -(self.pair.gears[0].teeth() as f64) / self.pair.gears[1].teeth() as f64 * driver_rotation
@@ -642,6 +653,10 @@ pub struct PairIntegrator<'a> {
     /// driven hub). It brakes rigid rotation as well, so it is for static solutions by dynamic
     /// relaxation (driver at rest) only; scenes use 0.
     pub mass_damping: f64,
+    /// Mesh dashpot c_t [N m s]: torque −c_t (φ̇₂ − φ̇₂,kin) on the driven hub, against the rate
+    /// of the angular DTE (the lumped model's viscous mesh damping c_m R_b2²). Its work is
+    /// booked as damping.
+    pub mesh_damping: f64,
     pub energy: PairEnergy,
     pub steps: usize,
     pub last_contact: ContactOutput,
@@ -666,6 +681,7 @@ impl<'a> PairIntegrator<'a> {
             dt,
             beta_k,
             mass_damping: 0.0,
+            mesh_damping: 0.0,
             energy: PairEnergy::default(),
             steps: 0,
             last_contact: ContactOutput::default(),
@@ -726,9 +742,14 @@ impl<'a> PairIntegrator<'a> {
             let (rx, ry) = (state.x[1][2 * n] - c2.x, state.x[1][2 * n + 1] - c2.y);
             moment += rx * self.force[1][2 * n + 1] - ry * self.force[1][2 * n];
         }
+        let (_, driver_rate, _) = self.drive.driver_motion(state.time);
+        let dte_rate = state.hub[1] - model.kinematic_hub_rotation(driver_rate);
+        let mesh_torque = -self.mesh_damping * dte_rate;
+        moment += mesh_torque;
         let alpha = self.mass_damping;
         state.hub[2] = moment / model.hub_inertia - alpha * state.hub[1];
-        let mut mass_damping_power = alpha * model.hub_inertia * state.hub[1] * state.hub[1];
+        let mut mass_damping_power =
+            alpha * model.hub_inertia * state.hub[1] * state.hub[1] - mesh_torque * state.hub[1];
         // Driver reactions: what the hub must apply so the bore nodes follow their path (their
         // prescribed accelerations are in state.a from place_bore).
         for (i, &n) in model.meshes[0].bore_nodes.iter().enumerate() {

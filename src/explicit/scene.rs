@@ -34,6 +34,8 @@ pub struct FeSettings {
     pub step_factor: f64,
     pub penalty_factor: f64,
     pub high_frequency_damping_ratio: f64,
+    /// Damping ratio of the mesh mode (the driven hub's dashpot on the DTE rate).
+    pub mesh_damping_ratio: f64,
     /// Recorded sample interval [s].
     pub output_interval: f64,
     /// Flank element size [m] and coarse size [m].
@@ -48,6 +50,7 @@ impl FeSettings {
             step_factor: fe.step_factor,
             penalty_factor: fe.penalty_factor,
             high_frequency_damping_ratio: fe.high_frequency_damping_ratio,
+            mesh_damping_ratio: fe.mesh_damping_ratio,
             output_interval: fe.output_interval_us * 1e-6,
             fine_size: fe
                 .explicit_fine_element_mm
@@ -110,6 +113,12 @@ pub struct PreparedScene {
     pub dt_element_bound: f64,
     /// Stiffness-proportional damping coefficient [s].
     pub beta_k: f64,
+    /// Mesh dashpot on the driven hub [N m s] and the mesh stiffness it was sized with [N/m].
+    pub mesh_damping: f64,
+    pub mesh_damping_stiffness: f64,
+    /// Three decay times of the mesh mode, 3/(ζ ω_n) with ω_n = √(k_m R_b2²/I₂) [s]: the ringing
+    /// the end of the ramp leaves is down to e⁻³ ≈ 5 % after it (0 without mesh damping).
+    pub settling_time: f64,
     pub mesh_wall_s: f64,
     pub setup_wall_s: f64,
 }
@@ -175,8 +184,27 @@ pub fn prepare(
     let dt_element_bound = model.bodies[0]
         .element_eigen_critical_step()
         .min(model.bodies[1].element_eigen_critical_step());
+    // Mesh dashpot: ζ of the driven gear turning against the mesh spring (driver prescribed),
+    // k_t = k_m R_b2², c_t = 2ζ√(k_t I₂); k_m the ISO 6336 mean mesh stiffness (its error enters
+    // c_t as a square root).
+    let mesh_damping_stiffness =
+        crate::stiffness::iso_6336_method_b(&case.pair, scene.torque, case.material.youngs_modulus)
+            .mean_n_per_m;
+    let rb2 = case.pair.gears[1].base_radius;
+    let mesh_damping = 2.0
+        * settings.mesh_damping_ratio
+        * (mesh_damping_stiffness * rb2 * rb2 * model.driven_inertia()).sqrt();
+    let mesh_mode = (mesh_damping_stiffness * rb2 * rb2 / model.driven_inertia()).sqrt();
+    let settling_time = if settings.mesh_damping_ratio > 0.0 {
+        3.0 / (settings.mesh_damping_ratio * mesh_mode)
+    } else {
+        0.0
+    };
     Ok(PreparedScene {
         dt: settings.step_factor * dt_critical,
+        settling_time,
+        mesh_damping,
+        mesh_damping_stiffness,
         model,
         drive,
         dt_bodies,
@@ -188,6 +216,19 @@ pub fn prepare(
         mesh_wall_s,
         setup_wall_s: started.elapsed().as_secs_f64(),
     })
+}
+
+/// Where the statistics of a run of `duration` start: after the ramp and the settling time of
+/// the mesh mode, but early enough to leave one mesh period (a base pitch of the driver) when
+/// the run has it — and never before the end of the ramp.
+pub fn statistics_start(prepared: &PreparedScene, scene: &Scene) -> f64 {
+    let ramp = scene.ramp_time;
+    let settled = ramp + prepared.settling_time;
+    if scene.driver_speed <= 0.0 {
+        return settled.min(scene.duration);
+    }
+    let mesh_period = prepared.model.pair.gears[0].angular_pitch() / scene.driver_speed;
+    settled.min((scene.duration - mesh_period).max(ramp))
 }
 
 /// Recorded time histories of a run (one sample per output interval).
@@ -235,6 +276,7 @@ pub fn run(
 ) -> RunOutcome {
     let model = &prepared.model;
     let mut integrator = PairIntegrator::new(model, prepared.drive, prepared.dt, prepared.beta_k);
+    integrator.mesh_damping = prepared.mesh_damping;
     let mut state = model.initial_state(prepared.drive.start_rotation);
     integrator.initialize(&mut state);
     let total_steps = (duration / prepared.dt).ceil() as usize;

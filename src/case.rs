@@ -716,11 +716,11 @@ impl Case {
         )?;
 
         let fe = &file.fe;
-        if !(fe.step_factor > 0.0 && fe.step_factor <= 1.5) {
+        if !(fe.step_factor > 0.0 && fe.step_factor <= 3.0) {
             return Err(invalid(
                 "fe.step_factor",
                 fe.step_factor.to_string(),
-                "must be in (0, 1.5]; values above 1 are unstable and only useful to see the failure (default 0.9)",
+                "must be in (0, 3]; values above 1 are unstable and only useful to see the failure (default 0.9)",
             ));
         }
         if !(fe.penalty_factor > 0.0 && fe.penalty_factor.is_finite()) {

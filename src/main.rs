@@ -1479,9 +1479,9 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
     }
     let mut settings = FeSettings::from_case(&case);
     if let Some(beta) = options.step_factor {
-        if !(beta > 0.0 && beta.is_finite()) {
+        if !(beta > 0.0 && beta <= 3.0) {
             anyhow::bail!(
-                "--step-factor {beta} is invalid: give a value > 0 (0.9 is safe; above 1 diverges)"
+                "--step-factor {beta} is invalid: give a value in (0, 3] (0.9 is safe; above 1 diverges)"
             );
         }
         settings.step_factor = beta;
@@ -1648,6 +1648,8 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
                 "mesh_stiffness_mean_n_per_m": k_mean,
                 "dte_over_ste_mean": a.dte_mean_rad / mean,
                 "dte_over_ste_peak_to_peak": a.dte_peak_to_peak_rad / (max - min),
+                "dte_lowpass_over_ste_mean": a.lowpass.map(|l| l.mean_rad / mean),
+                "dte_lowpass_over_ste_peak_to_peak": a.lowpass.map(|l| l.peak_to_peak_rad / (max - min)),
             })
         }))
     };
@@ -1694,6 +1696,7 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
         "mesh_stiffness_from_mean_dte_n_per_m": get(&|a| a.mesh_stiffness_from_mean_dte_n_per_m),
         "stiffness_pitch_coverage": get(&|a| a.pitch_coverage),
         "stats_window_s": analysis.as_ref().map(|a| [a.window.0, a.window.1]),
+        "dte_lowpass": analysis.as_ref().and_then(|a| a.lowpass),
         "ltca_ste_mean_rad_same_positions": field(&ltca_same, "ste_mean_rad"),
         "ltca_mesh_stiffness_mean_n_per_m": field(&ltca_same, "mesh_stiffness_mean_n_per_m"),
         "dte_over_ltca_mean": field(&ltca_same, "dte_over_ste_mean"),

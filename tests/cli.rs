@@ -612,6 +612,15 @@ fn fe_writes_histories_summary_and_keeps_a_diverged_run() {
     ] {
         assert!(summary[key].as_f64().unwrap().is_finite(), "{key}");
     }
+    // The LTCA cross-checks: on the explicit run's mesh (1.0 mm flanks) and on the case's.
+    assert_eq!(summary["ltca_same_mesh"]["fine_element_mm"], 1.0);
+    assert_eq!(summary["ltca_case_mesh"]["fine_element_mm"], 1.5);
+    for key in ["ltca_same_mesh", "ltca_case_mesh"] {
+        assert!(
+            summary[key]["ste_mean_rad"].as_f64().unwrap() > 0.0,
+            "{key}"
+        );
+    }
     assert!(summary["steps"].as_u64().unwrap() > 100);
     assert!(summary["elements"].as_u64().unwrap() > 1000);
     assert!(summary["stats_window_s"].is_array());
@@ -654,7 +663,7 @@ fn fe_writes_histories_summary_and_keeps_a_diverged_run() {
             "--duration-s",
             "2e-5",
             "--step-factor",
-            "1.5",
+            "2.0",
             "--out",
         ])
         .arg(&bad)

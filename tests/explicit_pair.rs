@@ -11,7 +11,11 @@ use geardyn::explicit::scene::{prepare, run, FeSettings, PreparedScene};
 fn coarse_case() -> Case {
     let text = geardyn::case::EMBEDDED_DEFAULT
         .replace("fine_element_mm = 0.2 ", "fine_element_mm = 1.5 ")
-        .replace("coarse_element_mm = 1.5 ", "coarse_element_mm = 3.0 ");
+        .replace("coarse_element_mm = 1.5 ", "coarse_element_mm = 3.0 ")
+        .replace(
+            "explicit_fine_element_mm = 1.0",
+            "explicit_fine_element_mm = 1.5",
+        );
     Case::from_toml_str(&text, "coarse").unwrap()
 }
 

@@ -373,6 +373,22 @@ pub struct DteAnalysis {
     pub mesh_stiffness_from_mean_dte_n_per_m: f64,
     /// Fraction of one base pitch the window covers.
     pub pitch_coverage: f64,
+    /// The quasi-static part of the DTE: a centred moving average over one period of the mesh
+    /// mode, T_n = 2π/ω_n with ω_n = √(k̄ R_b2²/I₂) (k̄ from the mean DTE, I₂ the driven gear).
+    /// The average removes the mode's free ringing (a sinc null at f_n) and keeps what changes
+    /// slower than T_n — what a static analysis (the LTCA) sees. Statistics over the window
+    /// (the averaging span trimmed at both ends of the record).
+    pub lowpass: Option<LowpassDte>,
+}
+
+/// Statistics of the low-passed DTE (see [`DteAnalysis::lowpass`]).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct LowpassDte {
+    pub period_s: f64,
+    pub mean_rad: f64,
+    pub max_rad: f64,
+    pub min_rad: f64,
+    pub peak_to_peak_rad: f64,
 }
 
 /// Analyses the DTE of `history` in the window [t_from, end].
@@ -429,5 +445,90 @@ pub fn analyse_dte(
         mesh_stiffness_mean_n_per_m: k_mean,
         mesh_stiffness_from_mean_dte_n_per_m: torque / (mean * rb2 * rb2),
         pitch_coverage: covered,
+        lowpass: lowpass_dte(
+            history,
+            start,
+            torque / (mean * rb2 * rb2) * rb2 * rb2,
+            model.driven_inertia(),
+        ),
     })
+}
+
+/// Moving average of the DTE over one mesh-mode period (torsional stiffness `k_t`, inertia
+/// `inertia`), statistics from sample `start`; None when the record is too short or the
+/// stiffness not positive.
+fn lowpass_dte(history: &History, start: usize, k_t: f64, inertia: f64) -> Option<LowpassDte> {
+    if !(k_t > 0.0 && inertia > 0.0) || history.time.len() < 3 {
+        return None;
+    }
+    let period = std::f64::consts::TAU / (k_t / inertia).sqrt();
+    let sample = history.time[1] - history.time[0];
+    let width = ((period / sample).round() as usize).max(1);
+    let half = width / 2;
+    let n = history.dte.len();
+    let first = start.max(half);
+    if first + width > n {
+        return None;
+    }
+    // Prefix sums: each average in O(1).
+    let mut prefix = vec![0.0; n + 1];
+    for (i, d) in history.dte.iter().enumerate() {
+        prefix[i + 1] = prefix[i] + d;
+    }
+    let averages: Vec<f64> = (first..n - (width - half))
+        .map(|i| (prefix[i - half + width] - prefix[i - half]) / width as f64)
+        .collect();
+    if averages.is_empty() {
+        return None;
+    }
+    let mean = averages.iter().sum::<f64>() / averages.len() as f64;
+    let (min, max) = averages
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(*v), b.max(*v))
+        });
+    Some(LowpassDte {
+        period_s: period,
+        mean_rad: mean,
+        max_rad: max,
+        min_rad: min,
+        peak_to_peak_rad: max - min,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Ringing at the mesh mode on top of a slow square wave: the one-period average removes the
+    /// ringing exactly (a whole period of a sine averages to zero) and keeps the plateaus.
+    #[test]
+    fn lowpass_removes_the_mesh_mode_and_keeps_the_quasi_static_dte() {
+        let (sample, f_n) = (1e-5, 2500.0);
+        let omega = std::f64::consts::TAU * f_n;
+        let inertia = 3e-3;
+        let k_t = omega * omega * inertia;
+        let time: Vec<f64> = (0..1000).map(|i| i as f64 * sample).collect();
+        let dte: Vec<f64> = time
+            .iter()
+            .map(|t| {
+                let plateau = if (t / 2.5e-3) as usize % 2 == 0 {
+                    1.0e-4
+                } else {
+                    1.5e-4
+                };
+                plateau + 3e-5 * (omega * t + 0.3).sin()
+            })
+            .collect();
+        let history = History {
+            time,
+            dte,
+            ..History::default()
+        };
+        let l = lowpass_dte(&history, 100, k_t, inertia).unwrap();
+        assert!((l.period_s - 4e-4).abs() < 1e-12);
+        assert!((l.max_rad - 1.5e-4).abs() < 1e-12, "{}", l.max_rad);
+        assert!((l.min_rad - 1.0e-4).abs() < 1e-12, "{}", l.min_rad);
+        assert!((l.peak_to_peak_rad - 5e-5).abs() < 1e-12);
+    }
 }

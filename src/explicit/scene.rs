@@ -512,7 +512,7 @@ mod tests {
         let dte: Vec<f64> = time
             .iter()
             .map(|t| {
-                let plateau = if (t / 2.5e-3) as usize % 2 == 0 {
+                let plateau = if ((t / 2.5e-3) as usize).is_multiple_of(2) {
                     1.0e-4
                 } else {
                     1.5e-4

@@ -1555,11 +1555,28 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
         )
         .expect("valid template"),
     );
+    // Without a terminal (a log file, CI) the bar is hidden: a line every 10 % instead.
+    let plain_log = bar.is_hidden();
+    let started_loop = std::time::Instant::now();
+    let mut logged = 0;
     let outcome = run(
         &prepared,
         scene.duration,
         settings.output_interval,
-        &mut |f| bar.set_position((f * 1000.0) as u64),
+        &mut |f| {
+            bar.set_position((f * 1000.0) as u64);
+            let tenth = (f * 10.0).floor() as usize;
+            if plain_log && tenth > logged {
+                logged = tenth;
+                let elapsed = started_loop.elapsed().as_secs_f64();
+                eprintln!(
+                    "explicit FE {:3.0} % after {:.0} s, about {:.0} s to go",
+                    f * 100.0,
+                    elapsed,
+                    elapsed * (1.0 - f) / f.max(1e-9)
+                );
+            }
+        },
     );
     bar.finish_and_clear();
     let history = &outcome.history;

@@ -4,7 +4,7 @@
 //! mesh, and a freely spinning body that stays unstrained.
 
 use geardyn::case::Case;
-use geardyn::explicit::pair::{PairIntegrator, Ramp};
+use geardyn::explicit::pair::{PairIntegrator, PairState, Ramp};
 use geardyn::explicit::scene::{prepare, run, FeSettings, PreparedScene};
 
 /// The paper's pair with a coarse mesh.
@@ -91,6 +91,28 @@ fn step_above_the_critical_step_is_caught() {
     );
 }
 
+/// The pair with the driver held at the pitch-point position and the load torque ramped over
+/// 0.15 ms.
+fn static_scene(case: &Case, duration: f64, penalty: f64) -> PreparedScene {
+    let mut p = prepared(case, 0.0, duration, 1.5e-4, penalty);
+    p.drive.driver_speed = 0.0;
+    p
+}
+
+/// Dynamic relaxation of a static scene for `duration`: mass-proportional damping at ζ ≈ 0.7 of
+/// the mesh mode with the driver held (√(k r_b2²/I₂) ≈ 2π·2.8 kHz), the fastest settling. The
+/// integrator is returned with that damping still on.
+fn relaxed(p: &PreparedScene, duration: f64) -> (PairIntegrator<'_>, PairState) {
+    let mut integrator = PairIntegrator::new(&p.model, p.drive, p.dt, 0.0);
+    integrator.mass_damping = 1.4 * std::f64::consts::TAU * 2800.0;
+    let mut state = p.model.initial_state(0.0);
+    integrator.initialize(&mut state);
+    for _ in 0..(duration / p.dt) as usize {
+        integrator.step(&mut state).unwrap();
+    }
+    (integrator, state)
+}
+
 /// Static DTE by dynamic relaxation (driver at rest, torque ramped, mass-proportional damping
 /// near the optimum for the mesh mode) against the LTCA on the same mesh at the same position.
 /// Tolerance 8 %: at 1.5 mm flank elements the two contact discretizations differ by 6 % (the
@@ -100,18 +122,8 @@ fn step_above_the_critical_step_is_caught() {
 fn static_dte_matches_the_ltca_on_the_same_mesh() {
     let case = coarse_case();
     let duration = 5.0e-4;
-    let mut p = prepared(&case, 0.0, duration, 1.5e-4, 16.0);
-    p.drive.driver_speed = 0.0;
-    let mut integrator = PairIntegrator::new(&p.model, p.drive, p.dt, 0.0);
-    // ζ ≈ 0.7 for the mesh mode with the driver held, √(k r_b2²/I₂) ≈ 2π·2.8 kHz: the fastest
-    // settling.
-    integrator.mass_damping = 1.4 * std::f64::consts::TAU * 2800.0;
-    let mut state = p.model.initial_state(0.0);
-    integrator.initialize(&mut state);
-    let steps = (duration / p.dt) as usize;
-    for _ in 0..steps {
-        integrator.step(&mut state).unwrap();
-    }
+    let p = static_scene(&case, duration, 16.0);
+    let (integrator, state) = relaxed(&p, duration);
     let dte = state.hub[0] - p.model.kinematic_hub_rotation(0.0);
     let force = integrator.last_contact.force_on_driven.norm();
     let static_force = 143.6 / case.pair.gears[1].base_radius;
@@ -153,15 +165,8 @@ fn static_dte_matches_the_ltca_on_the_same_mesh() {
 fn mesh_dashpot_damps_the_mesh_mode_as_sized() {
     let case = coarse_case();
     let duration = 4.0e-4;
-    let mut p = prepared(&case, 0.0, duration, 1.5e-4, 1.0);
-    p.drive.driver_speed = 0.0;
-    let mut integrator = PairIntegrator::new(&p.model, p.drive, p.dt, 0.0);
-    integrator.mass_damping = 1.4 * std::f64::consts::TAU * 2800.0;
-    let mut state = p.model.initial_state(0.0);
-    integrator.initialize(&mut state);
-    for _ in 0..(duration / p.dt) as usize {
-        integrator.step(&mut state).unwrap();
-    }
+    let p = static_scene(&case, duration, 1.0);
+    let (mut integrator, mut state) = relaxed(&p, duration);
     integrator.mass_damping = 0.0;
     let inertia = p.model.driven_inertia();
     let omega_guess = std::f64::consts::TAU * 2800.0;

@@ -236,19 +236,20 @@ impl ExplicitBody {
             x.len() == 2 * self.reference.len() && v.len() == x.len() && force.len() == x.len()
         );
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked on the line above.
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: the CPU has AVX2 and FMA, checked on the line above.
             return unsafe { self.internal_forces_avx2(x, v, beta_k, force) };
         }
-        self.batched_forces(x, v, beta_k, force)
+        self.batched_forces::<Unfused>(x, v, beta_k, force)
     }
 
-    /// [`ExplicitBody::batched_forces`] compiled for AVX2.
+    /// [`ExplicitBody::batched_forces`] compiled for AVX2 with fused multiply-adds.
     ///
     /// # Safety
-    /// The CPU must support AVX2.
+    /// The CPU must support AVX2 and FMA.
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,fma")]
     unsafe fn internal_forces_avx2(
         &self,
         x: &[f64],
@@ -256,11 +257,17 @@ impl ExplicitBody {
         beta_k: f64,
         force: &mut [f64],
     ) -> ForceOutput {
-        self.batched_forces(x, v, beta_k, force)
+        self.batched_forces::<Fused>(x, v, beta_k, force)
     }
 
     #[inline(always)]
-    fn batched_forces(&self, x: &[f64], v: &[f64], beta_k: f64, force: &mut [f64]) -> ForceOutput {
+    fn batched_forces<M: MulAdd>(
+        &self,
+        x: &[f64],
+        v: &[f64],
+        beta_k: f64,
+        force: &mut [f64],
+    ) -> ForceOutput {
         let mut strain = [0.0; LANES];
         let mut power = [0.0; LANES];
         for batch in &self.batches {
@@ -315,16 +322,12 @@ impl ExplicitBody {
                     u_loc[2 * k + 1][l] = -s[l] * dx + c[l] * dy - oy;
                 }
             }
-            let mut f_loc = mat_vec_lanes(&proto.rows, &u_loc);
-            for i in 0..16 {
-                for l in 0..LANES {
-                    strain[l] += 0.5 * u_loc[i][l] * f_loc[i][l] * batch.weight[l];
-                }
-            }
-            if beta_k > 0.0 {
-                let mut vs = [[0.0; LANES]; 16];
+            let f_loc = if beta_k > 0.0 {
+                // Velocities relative to the centroid's, in the element frame: the deformation
+                // rate (plus a spin that K_e annihilates to first order).
                 let mut vcx = [0.0; LANES];
                 let mut vcy = [0.0; LANES];
+                let mut vs = [[0.0; LANES]; 16];
                 for k in 0..8 {
                     for l in 0..LANES {
                         let n = nodes[k][l] as usize;
@@ -334,25 +337,42 @@ impl ExplicitBody {
                         vcy[l] += v[2 * n + 1];
                     }
                 }
-                let mut v_loc = [[0.0; LANES]; 16];
+                // K_e [u_loc | v_loc] in one pass over the matrix: u in lanes 0..LANES, v in
+                // lanes LANES..2·LANES.
+                let mut uv = [[0.0; 2 * LANES]; 16];
                 for k in 0..8 {
                     for l in 0..LANES {
                         let (wx, wy) = (
                             vs[2 * k][l] - 0.125 * vcx[l],
                             vs[2 * k + 1][l] - 0.125 * vcy[l],
                         );
-                        v_loc[2 * k][l] = c[l] * wx + s[l] * wy;
-                        v_loc[2 * k + 1][l] = -s[l] * wx + c[l] * wy;
+                        uv[2 * k][l] = u_loc[2 * k][l];
+                        uv[2 * k + 1][l] = u_loc[2 * k + 1][l];
+                        uv[2 * k][LANES + l] = c[l] * wx + s[l] * wy;
+                        uv[2 * k + 1][LANES + l] = -s[l] * wx + c[l] * wy;
                     }
                 }
-                let kv = mat_vec_lanes(&proto.rows, &v_loc);
-                for i in 0..16 {
+                let kuv = mat_vec_lanes::<M, { 2 * LANES }, 4>(&proto.rows, &uv);
+                let energies = lane_dots::<M, { 2 * LANES }>(&uv, &kuv);
+                let mut f_loc = [[0.0; LANES]; 16];
+                for (f, k) in f_loc.iter_mut().zip(&kuv) {
                     for l in 0..LANES {
-                        power[l] += beta_k * v_loc[i][l] * kv[i][l] * batch.weight[l];
-                        f_loc[i][l] += beta_k * kv[i][l];
+                        f[l] = M::mul_add(beta_k, k[LANES + l], k[l]);
                     }
                 }
-            }
+                for l in 0..LANES {
+                    strain[l] += 0.5 * energies[l] * batch.weight[l];
+                    power[l] += beta_k * energies[LANES + l] * batch.weight[l];
+                }
+                f_loc
+            } else {
+                let f_loc = mat_vec_lanes::<M, LANES, 8>(&proto.rows, &u_loc);
+                let energies = lane_dots::<M, LANES>(&u_loc, &f_loc);
+                for l in 0..LANES {
+                    strain[l] += 0.5 * energies[l] * batch.weight[l];
+                }
+                f_loc
+            };
             // Scatter the real lanes (padding lanes repeat a real element).
             for l in 0..batch.count as usize {
                 for k in 0..8 {
@@ -408,22 +428,64 @@ fn make_batches(elements: &[[usize; 8]], prototype_of: &[u32], prototypes: usize
     batches
 }
 
-/// K U for a symmetric 16×16 matrix given by rows (= columns) and [`LANES`] vectors side by
-/// side: F[i][l] = Σ_j K[j][i] U[j][l], so each (i, j) is one vector multiply-add over the lanes.
-/// Done in two halves of 8 rows, so the 8 accumulators stay in registers.
+/// Σ_i a[i][l]·b[i][l] for each lane l, in four partial sums: a single running sum over every
+/// element of the body would be one chain of dependent additions, the kernel's slowest path.
 #[inline(always)]
-fn mat_vec_lanes(rows: &[[f64; 16]; 16], u: &[[f64; LANES]; 16]) -> [[f64; LANES]; 16] {
-    let mut f = [[0.0; LANES]; 16];
-    for half in 0..2 {
-        let mut acc = [[0.0; LANES]; 8];
+fn lane_dots<M: MulAdd, const W: usize>(a: &[[f64; W]; 16], b: &[[f64; W]; 16]) -> [f64; W] {
+    let mut partial = [[0.0; W]; 4];
+    for (i, (ai, bi)) in a.iter().zip(b).enumerate() {
+        for l in 0..W {
+            partial[i % 4][l] = M::mul_add(ai[l], bi[l], partial[i % 4][l]);
+        }
+    }
+    std::array::from_fn(|l| (partial[0][l] + partial[1][l]) + (partial[2][l] + partial[3][l]))
+}
+
+/// a·b + c, fused (one rounding, one instruction) or as two operations: `f64::mul_add` is a
+/// library call where the build lacks FMA, and plain `a * b + c` is never contracted by rustc.
+trait MulAdd {
+    fn mul_add(a: f64, b: f64, c: f64) -> f64;
+}
+
+/// For builds with FMA.
+struct Fused;
+
+/// The portable build.
+struct Unfused;
+
+impl MulAdd for Fused {
+    #[inline(always)]
+    fn mul_add(a: f64, b: f64, c: f64) -> f64 {
+        a.mul_add(b, c)
+    }
+}
+
+impl MulAdd for Unfused {
+    #[inline(always)]
+    fn mul_add(a: f64, b: f64, c: f64) -> f64 {
+        a * b + c
+    }
+}
+
+/// K U for a symmetric 16×16 matrix given by rows (= columns) and `W` vectors side by side:
+/// F[i][l] = Σ_j K[j][i] U[j][l], so each (i, j) is one vector multiply-add over the `W` lanes.
+/// Done in blocks of `R` rows so the R·W accumulators stay in registers.
+#[inline(always)]
+fn mat_vec_lanes<M: MulAdd, const W: usize, const R: usize>(
+    rows: &[[f64; 16]; 16],
+    u: &[[f64; W]; 16],
+) -> [[f64; W]; 16] {
+    let mut f = [[0.0; W]; 16];
+    for block in 0..16 / R {
+        let mut acc = [[0.0; W]; R];
         for (column, uj) in rows.iter().zip(u) {
-            for (a, &kij) in acc.iter_mut().zip(&column[8 * half..8 * half + 8]) {
-                for l in 0..LANES {
-                    a[l] += kij * uj[l];
+            for (a, &kij) in acc.iter_mut().zip(&column[R * block..R * block + R]) {
+                for l in 0..W {
+                    a[l] = M::mul_add(kij, uj[l], a[l]);
                 }
             }
         }
-        f[8 * half..8 * half + 8].copy_from_slice(&acc);
+        f[R * block..R * block + R].copy_from_slice(&acc);
     }
     f
 }

@@ -37,7 +37,7 @@
 use nalgebra::{Point2, Rotation2, Vector2};
 
 use crate::contact::{project_on_quadratic_edge, ContactLaw, FrictionState};
-use crate::explicit::body::{ExplicitBody, ExplicitMaterial};
+use crate::explicit::body::{ExplicitBody, ExplicitMaterial, ForceOutput};
 use crate::fe::FeError;
 use crate::geometry::{GearPair, Placement, Side};
 use crate::mesh::GearMesh;
@@ -390,21 +390,22 @@ impl ExplicitPair {
         }
     }
 
-    /// Sets the bore nodes of gear `g` on a rigid rotation `angle` (from the placement) with
-    /// rate `rate` and angular acceleration `accel`; returns nothing, writes x, v, a.
-    fn place_bore(&self, g: usize, state: &mut PairState, angle: f64, rate: f64, accel: f64) {
+    /// Sets the bore nodes of gear `g` on a rigid rotation (from the placement) given as
+    /// `[angle, rate, acceleration]`; writes the bore DOFs of that gear's x, v, a.
+    fn place_bore(&self, g: usize, x: &mut [f64], v: &mut [f64], a: &mut [f64], motion: [f64; 3]) {
+        let [angle, rate, accel] = motion;
         let placement = &self.placement[g];
         let rotation = Rotation2::new(placement.rotation + angle);
         for &n in &self.meshes[g].bore_nodes {
             let r = rotation * self.meshes[g].nodes[n].coords;
-            let x = placement.centre + r;
-            state.x[g][2 * n] = x.x;
-            state.x[g][2 * n + 1] = x.y;
+            let p = placement.centre + r;
+            x[2 * n] = p.x;
+            x[2 * n + 1] = p.y;
             // v = ω ẑ × r, a = α ẑ × r − ω² r
-            state.v[g][2 * n] = -rate * r.y;
-            state.v[g][2 * n + 1] = rate * r.x;
-            state.a[g][2 * n] = -accel * r.y - rate * rate * r.x;
-            state.a[g][2 * n + 1] = accel * r.x - rate * rate * r.y;
+            v[2 * n] = -rate * r.y;
+            v[2 * n + 1] = rate * r.x;
+            a[2 * n] = -accel * r.y - rate * rate * r.x;
+            a[2 * n + 1] = accel * r.x - rate * rate * r.y;
         }
     }
 
@@ -704,24 +705,40 @@ impl<'a> PairIntegrator<'a> {
         }
     }
 
-    /// Net forces at the state; accelerations of free DOFs and of the driven hub; driver
-    /// reactions. Returns the strain energy and damping power.
-    fn forces_and_accelerations(&mut self, state: &mut PairState) -> (f64, f64) {
-        let model = self.model;
-        let beta = self.beta_k;
-        let [x0, x1] = &state.x;
-        let [v0, v1] = &state.v;
+    /// Phase A of a step, per gear and in parallel: the drift x += Δt v after the half kick
+    /// v += ½Δt a (skipped with `dt` = None), the hub motion of the bore nodes, and the body's
+    /// internal and damping forces into `self.force` (contact forces not yet added).
+    fn drift_and_body_forces(
+        &mut self,
+        state: &mut PairState,
+        dt: Option<f64>,
+        bore: [[f64; 3]; 2],
+    ) -> [ForceOutput; 2] {
+        let (model, beta) = (self.model, self.beta_k);
+        let [x0, x1] = &mut state.x;
+        let [v0, v1] = &mut state.v;
+        let [a0, a1] = &mut state.a;
         let [f0, f1] = &mut self.force;
-        let (o0, o1) = rayon::join(
-            || {
-                f0.fill(0.0);
-                model.bodies[0].internal_forces(x0, v0, beta, f0)
-            },
-            || {
-                f1.fill(0.0);
-                model.bodies[1].internal_forces(x1, v1, beta, f1)
-            },
-        );
+        let gear = |g: usize, x: &mut [f64], v: &mut [f64], a: &mut [f64], f: &mut [f64]| {
+            if let Some(dt) = dt {
+                for ((x, v), a) in x.iter_mut().zip(v.iter_mut()).zip(a.iter()) {
+                    *v += 0.5 * dt * a;
+                    *x += dt * *v;
+                }
+            }
+            model.place_bore(g, x, v, a, bore[g]);
+            f.fill(0.0);
+            model.bodies[g].internal_forces(x, v, beta, f)
+        };
+        let (o0, o1) = rayon::join(|| gear(0, x0, v0, a0, f0), || gear(1, x1, v1, a1, f1));
+        [o0, o1]
+    }
+
+    /// The serial middle of a step: contact forces added to the body forces, the driven hub's
+    /// angular acceleration and the driver's hub reactions. Returns the power dissipated on the
+    /// hub (mesh dashpot and mass damping).
+    fn contact_and_hubs(&mut self, state: &mut PairState) -> f64 {
+        let model = self.model;
         for g in 0..2 {
             std::mem::swap(&mut self.previous_contact[g], &mut self.contact_force[g]);
             for &d in &model.contact_dofs[g] {
@@ -753,8 +770,6 @@ impl<'a> PairIntegrator<'a> {
         moment += mesh_torque;
         let alpha = self.mass_damping;
         state.hub[2] = moment / model.hub_inertia - alpha * state.hub[1];
-        let mut mass_damping_power =
-            alpha * model.hub_inertia * state.hub[1] * state.hub[1] - mesh_torque * state.hub[1];
         // Driver reactions: what the hub must apply so the bore nodes follow their path (their
         // prescribed accelerations are in state.a from place_bore).
         for (i, &n) in model.meshes[0].bore_nodes.iter().enumerate() {
@@ -764,37 +779,55 @@ impl<'a> PairIntegrator<'a> {
                     m * state.a[0][2 * n + c] - self.force[0][2 * n + c];
             }
         }
-        // a = f/m on the free DOFs (zero on the bore DOFs: the hubs set those after this).
-        for g in 0..2 {
-            let (a, f, w) = (&mut state.a[g], &self.force[g], &model.inverse_mass[g]);
-            for ((a, f), w) in a.iter_mut().zip(f).zip(w) {
-                *a = f * w;
-            }
+        alpha * model.hub_inertia * state.hub[1] * state.hub[1] - mesh_torque * state.hub[1]
+    }
+
+    /// Phase B, per gear and in parallel: accelerations a = f/m (− α v) of the free DOFs, the
+    /// closing half kick v += ½Δt a (skipped with `dt` = None) and the hub motion of the bore
+    /// nodes. Returns the mass-damping power of the free nodes.
+    fn accelerate(&mut self, state: &mut PairState, dt: Option<f64>, bore: [[f64; 3]; 2]) -> f64 {
+        let (model, alpha) = (self.model, self.mass_damping);
+        let half = 0.5 * dt.unwrap_or(0.0);
+        let [x0, x1] = &mut state.x;
+        let [v0, v1] = &mut state.v;
+        let [a0, a1] = &mut state.a;
+        let [f0, f1] = &self.force;
+        let gear = |g: usize, x: &mut [f64], v: &mut [f64], a: &mut [f64], f: &[f64]| {
+            let w = &model.inverse_mass[g];
+            let mut power = 0.0;
+            // The bore DOFs have w = 0: a = 0 and v unchanged here, then set by their hub.
             if alpha > 0.0 {
-                for d in 0..a.len() {
-                    if w[d] > 0.0 {
-                        a[d] -= alpha * state.v[g][d];
-                        mass_damping_power += alpha * state.v[g][d] * state.v[g][d] / w[d];
+                for (((a, v), f), w) in a.iter_mut().zip(v.iter_mut()).zip(f).zip(w) {
+                    if *w > 0.0 {
+                        *a = f * w - alpha * *v;
+                        power += alpha * *v * *v / w;
+                    } else {
+                        *a = 0.0;
                     }
+                    *v += half * *a;
+                }
+            } else {
+                for (((a, v), f), w) in a.iter_mut().zip(v.iter_mut()).zip(f).zip(w) {
+                    *a = f * w;
+                    *v += half * *a;
                 }
             }
-        }
-        (
-            o0.strain_energy + o1.strain_energy,
-            o0.damping_power + o1.damping_power + mass_damping_power,
-        )
+            model.place_bore(g, x, v, a, bore[g]);
+            power
+        };
+        let (p0, p1) = rayon::join(|| gear(0, x0, v0, a0, f0), || gear(1, x1, v1, a1, f1));
+        p0 + p1
     }
 
     /// Hub placement of both gears at the state's time; then forces and accelerations.
     pub fn initialize(&mut self, state: &mut PairState) {
         let (theta, rate, accel) = self.drive.driver_motion(state.time);
-        self.model.place_bore(0, state, theta, rate, accel);
         let [phi, phi_rate, _] = state.hub;
-        self.model.place_bore(1, state, phi, phi_rate, 0.0);
-        let (strain, _) = self.forces_and_accelerations(state);
-        self.model.place_bore(0, state, theta, rate, accel);
-        self.model.place_bore(1, state, phi, phi_rate, state.hub[2]);
-        self.energy.strain = strain;
+        let body =
+            self.drift_and_body_forces(state, None, [[theta, rate, accel], [phi, phi_rate, 0.0]]);
+        self.contact_and_hubs(state);
+        self.accelerate(state, None, [[theta, rate, accel], state.hub]);
+        self.energy.strain = body[0].strain_energy + body[1].strain_energy;
         self.energy.kinetic = self.kinetic(state);
     }
 
@@ -828,31 +861,17 @@ impl<'a> PairIntegrator<'a> {
         }
         self.old_reaction.copy_from_slice(&self.driver_reaction);
         let (old_phi, old_torque) = (state.hub[0], self.drive.load_torque_at(state.time));
-        // Half kick and drift on every DOF (the hubs overwrite the bore DOFs right after).
-        for g in 0..2 {
-            let (x, v, a) = (&mut state.x[g], &mut state.v[g], &state.a[g]);
-            for ((x, v), a) in x.iter_mut().zip(v.iter_mut()).zip(a) {
-                *v += 0.5 * dt * a;
-                *x += dt * *v;
-            }
-        }
         state.time += dt;
         let (theta, rate, accel) = self.drive.driver_motion(state.time);
-        model.place_bore(0, state, theta, rate, accel);
         state.hub[1] += 0.5 * dt * state.hub[2];
         state.hub[0] += dt * state.hub[1];
-        let [phi, phi_rate, phi_accel] = state.hub;
-        model.place_bore(1, state, phi, phi_rate, phi_accel);
-        let (strain, damping_power) = self.forces_and_accelerations(state);
-        for g in 0..2 {
-            for (v, a) in state.v[g].iter_mut().zip(&state.a[g]) {
-                *v += 0.5 * dt * a;
-            }
-        }
+        // Half kick and drift on every DOF, then the hubs set the bore DOFs.
+        let body = self.drift_and_body_forces(state, Some(dt), [[theta, rate, accel], state.hub]);
+        let hub_power = self.contact_and_hubs(state);
         state.hub[1] += 0.5 * dt * state.hub[2];
-        model.place_bore(0, state, theta, rate, accel);
-        let [phi, phi_rate, phi_accel] = state.hub;
-        model.place_bore(1, state, phi, phi_rate, phi_accel);
+        let node_power = self.accelerate(state, Some(dt), [[theta, rate, accel], state.hub]);
+        let strain = body[0].strain_energy + body[1].strain_energy;
+        let damping_power = body[0].damping_power + body[1].damping_power + hub_power + node_power;
         // Work: driver reactions, load torque, contact forces (trapezoid).
         let mut work = 0.0;
         for (i, &n) in model.meshes[0].bore_nodes.iter().enumerate() {

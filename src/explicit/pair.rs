@@ -727,7 +727,7 @@ impl<'a> PairIntegrator<'a> {
                 }
             }
             model.place_bore(g, x, v, a, bore[g]);
-            f.fill(0.0);
+            // `f` is zero here: `accelerate` clears it as it reads it.
             model.bodies[g].internal_forces(x, v, beta, f)
         };
         let (o0, o1) = rayon::join(|| gear(0, x0, v0, a0, f0), || gear(1, x1, v1, a1, f1));
@@ -791,25 +791,28 @@ impl<'a> PairIntegrator<'a> {
         let [x0, x1] = &mut state.x;
         let [v0, v1] = &mut state.v;
         let [a0, a1] = &mut state.a;
-        let [f0, f1] = &self.force;
-        let gear = |g: usize, x: &mut [f64], v: &mut [f64], a: &mut [f64], f: &[f64]| {
+        let [f0, f1] = &mut self.force;
+        let gear = |g: usize, x: &mut [f64], v: &mut [f64], a: &mut [f64], f: &mut [f64]| {
             let w = &model.inverse_mass[g];
             let mut power = 0.0;
-            // The bore DOFs have w = 0: a = 0 and v unchanged here, then set by their hub.
+            // The bore DOFs have w = 0: a = 0 and v unchanged here, then set by their hub. The
+            // force is cleared for the next step's accumulation in the same pass.
             if alpha > 0.0 {
-                for (((a, v), f), w) in a.iter_mut().zip(v.iter_mut()).zip(f).zip(w) {
+                for (((a, v), f), w) in a.iter_mut().zip(v.iter_mut()).zip(f.iter_mut()).zip(w) {
                     if *w > 0.0 {
-                        *a = f * w - alpha * *v;
+                        *a = *f * w - alpha * *v;
                         power += alpha * *v * *v / w;
                     } else {
                         *a = 0.0;
                     }
                     *v += half * *a;
+                    *f = 0.0;
                 }
             } else {
-                for (((a, v), f), w) in a.iter_mut().zip(v.iter_mut()).zip(f).zip(w) {
-                    *a = f * w;
+                for (((a, v), f), w) in a.iter_mut().zip(v.iter_mut()).zip(f.iter_mut()).zip(w) {
+                    *a = *f * w;
                     *v += half * *a;
+                    *f = 0.0;
                 }
             }
             model.place_bore(g, x, v, a, bore[g]);

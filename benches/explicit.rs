@@ -69,31 +69,41 @@ fn explicit(c: &mut Criterion) {
     );
 }
 
-/// One central-difference step of the meshing pair at the default mesh (scene low-unmodified):
-/// both bodies (rayon over the two gears), contact search and forces, hubs.
+/// One central-difference step of the meshing pair at the default explicit mesh, for the scenes
+/// low-unmodified (1 ms: three teeth per gear fine) and high-unmodified (its full 0.03 s: every
+/// tooth fine): two per-gear parallel phases (rayon), contact search and forces, hubs.
 fn pair_step(c: &mut Criterion) {
     use geardyn::explicit::pair::PairIntegrator;
     use geardyn::explicit::scene::{prepare, FeSettings};
     let case = samples::paper36_case();
-    let mut scene = case.scene("low-unmodified").unwrap().clone();
-    scene.duration = 1e-3;
-    let prepared = prepare(&case, &scene, &FeSettings::from_case(&case)).unwrap();
-    let mut integrator = PairIntegrator::new(
-        &prepared.model,
-        prepared.drive,
-        prepared.dt,
-        prepared.beta_k,
-    );
-    let mut state = prepared.model.initial_state(0.0);
-    integrator.initialize(&mut state);
-    let elements = prepared.model.elements();
-    eprintln!("pair: {elements} elements, dt {:.3e} s", prepared.dt);
     let mut group = c.benchmark_group("explicit_pair_paper36_default_mesh");
     group.sample_size(10);
-    group.throughput(Throughput::Elements(elements as u64));
-    group.bench_function("step", |b| {
-        b.iter(|| integrator.step(black_box(&mut state)).unwrap())
-    });
+    for (name, duration) in [("low-unmodified", Some(1e-3)), ("high-unmodified", None)] {
+        let mut scene = case.scene(name).unwrap().clone();
+        if let Some(duration) = duration {
+            scene.duration = duration;
+        }
+        let prepared = prepare(&case, &scene, &FeSettings::from_case(&case)).unwrap();
+        let mut integrator = PairIntegrator::new(
+            &prepared.model,
+            prepared.drive,
+            prepared.dt,
+            prepared.beta_k,
+        );
+        let mut state = prepared.model.initial_state(0.0);
+        integrator.initialize(&mut state);
+        let elements = prepared.model.elements();
+        eprintln!("pair {name}: {elements} elements, dt {:.3e} s", prepared.dt);
+        group.throughput(Throughput::Elements(elements as u64));
+        let id = if duration.is_some() {
+            "step"
+        } else {
+            "step_high_scene"
+        };
+        group.bench_function(id, |b| {
+            b.iter(|| integrator.step(black_box(&mut state)).unwrap())
+        });
+    }
     group.finish();
 }
 

@@ -57,6 +57,11 @@ pub struct Flank {
     /// [N/m²] (the edge stiffness over the edge length).
     pub penalty: Vec<f64>,
     pub line_penalty: Vec<f64>,
+    /// The middle node and a radius about it that holds the whole flank (reference geometry
+    /// plus 5 % for deformation): two flanks whose spheres are apart are skipped with one
+    /// distance instead of two bounding boxes.
+    pub middle: usize,
+    pub radius: f64,
 }
 
 /// Two flanks that can touch: `flanks[0]` on gear 1, `flanks[1]` on gear 2.
@@ -93,6 +98,15 @@ const GAUSS_EDGE: [(f64, f64); 4] = [
 /// Quadratic edge shape functions at s: corner, mid-side, corner.
 fn edge_shape(s: f64) -> [f64; 3] {
     [0.5 * s * (s - 1.0), 1.0 - s * s, 0.5 * s * (s + 1.0)]
+}
+
+/// Friction history of a flank pair: per pass, one state per slave Gauss point.
+#[derive(Debug, Clone)]
+struct PairHistory {
+    passes: [Vec<SlaveState>; 2],
+    /// Every state is at its default (the pair was apart at the last step): a pair that stays
+    /// apart is not cleared again every step.
+    cleared: bool,
 }
 
 /// Friction history of one slave Gauss point of a flank pair.
@@ -415,7 +429,7 @@ impl ExplicitPair {
         &self,
         state: &PairState,
         dt: f64,
-        history: &mut [Vec<SlaveState>],
+        history: &mut [PairHistory],
         force: &mut [Vec<f64>; 2],
         out: &mut ContactOutput,
     ) {
@@ -426,38 +440,51 @@ impl ExplicitPair {
         out.max_penetration = 0.0;
         let reject = 0.25 * self.pair.gears[0].module();
         for (index, fp) in self.flank_pairs.iter().enumerate() {
-            let boxes = fp.flanks.map(|f| {
-                let flank = &self.flanks[f];
-                let x = &state.x[flank.gear];
-                flank.nodes.iter().fold(
-                    [
-                        f64::INFINITY,
-                        f64::INFINITY,
-                        f64::NEG_INFINITY,
-                        f64::NEG_INFINITY,
-                    ],
-                    |b, &n| {
+            let node = |f: usize, n: usize| {
+                let x = &state.x[self.flanks[f].gear];
+                Point2::new(x[2 * n], x[2 * n + 1])
+            };
+            let [f1, f2] = fp.flanks.map(|f| &self.flanks[f]);
+            let spheres_apart = (node(fp.flanks[0], f1.middle) - node(fp.flanks[1], f2.middle))
+                .norm()
+                > f1.radius + f2.radius + reject;
+            let apart = spheres_apart || {
+                let boxes = [f1, f2].map(|flank| {
+                    let x = &state.x[flank.gear];
+                    flank.nodes.iter().fold(
                         [
-                            b[0].min(x[2 * n]),
-                            b[1].min(x[2 * n + 1]),
-                            b[2].max(x[2 * n]),
-                            b[3].max(x[2 * n + 1]),
-                        ]
-                    },
-                )
-            });
-            let apart = (boxes[0][0] - boxes[1][2])
-                .max(boxes[1][0] - boxes[0][2])
-                .max(boxes[0][1] - boxes[1][3])
-                .max(boxes[1][1] - boxes[0][3]);
-            if apart > reject {
-                for pass in 0..2 {
-                    history[2 * index + pass]
-                        .iter_mut()
-                        .for_each(|s| *s = SlaveState::default());
+                            f64::INFINITY,
+                            f64::INFINITY,
+                            f64::NEG_INFINITY,
+                            f64::NEG_INFINITY,
+                        ],
+                        |b, &n| {
+                            [
+                                b[0].min(x[2 * n]),
+                                b[1].min(x[2 * n + 1]),
+                                b[2].max(x[2 * n]),
+                                b[3].max(x[2 * n + 1]),
+                            ]
+                        },
+                    )
+                });
+                (boxes[0][0] - boxes[1][2])
+                    .max(boxes[1][0] - boxes[0][2])
+                    .max(boxes[0][1] - boxes[1][3])
+                    .max(boxes[1][1] - boxes[0][3])
+                    > reject
+            };
+            let pair_history = &mut history[index];
+            if apart {
+                if !pair_history.cleared {
+                    for pass in &mut pair_history.passes {
+                        pass.iter_mut().for_each(|s| *s = SlaveState::default());
+                    }
+                    pair_history.cleared = true;
                 }
                 continue;
             }
+            pair_history.cleared = false;
             let mut on_driven = Vector2::zeros();
             for pass in 0..2 {
                 let (slave, master) = (
@@ -465,7 +492,7 @@ impl ExplicitPair {
                     &self.flanks[fp.flanks[1 - pass]],
                 );
                 let (sg, mg) = (slave.gear, master.gear);
-                let slots = &mut history[2 * index + pass];
+                let slots = &mut pair_history.passes[pass];
                 let point =
                     |g: usize, n: usize| Point2::new(state.x[g][2 * n], state.x[g][2 * n + 1]);
                 let velocity =
@@ -548,14 +575,15 @@ impl ExplicitPair {
     }
 
     /// Empty friction history for [`ExplicitPair::contact_forces`].
-    fn new_history(&self) -> Vec<Vec<SlaveState>> {
+    fn new_history(&self) -> Vec<PairHistory> {
         self.flank_pairs
             .iter()
-            .flat_map(|fp| {
-                [0, 1].map(|pass| {
+            .map(|fp| PairHistory {
+                passes: [0, 1].map(|pass| {
                     let points = self.flanks[fp.flanks[pass]].edges.len() * GAUSS_EDGE.len();
                     vec![SlaveState::default(); points]
-                })
+                }),
+                cleared: true,
             })
             .collect()
     }
@@ -637,6 +665,12 @@ fn make_flank(
         .zip(&penalty)
         .map(|(edge, k)| k / (mesh.nodes[edge[2]] - mesh.nodes[edge[0]]).norm())
         .collect();
+    let middle = nodes[nodes.len() / 2];
+    let radius = 1.05
+        * nodes
+            .iter()
+            .map(|&n| (mesh.nodes[n] - mesh.nodes[middle]).norm())
+            .fold(0.0, f64::max);
     Flank {
         gear,
         tooth,
@@ -645,6 +679,8 @@ fn make_flank(
         edges,
         penalty,
         line_penalty,
+        middle,
+        radius,
     }
 }
 
@@ -669,7 +705,7 @@ pub struct PairIntegrator<'a> {
     force: [Vec<f64>; 2],
     contact_force: [Vec<f64>; 2],
     previous_contact: [Vec<f64>; 2],
-    history: Vec<Vec<SlaveState>>,
+    history: Vec<PairHistory>,
     /// Driver hub reaction on the bore DOFs at the last step, and at the step before.
     driver_reaction: Vec<f64>,
     old_reaction: Vec<f64>,

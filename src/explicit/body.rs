@@ -223,8 +223,10 @@ impl ExplicitBody {
     ///
     /// Elements run in batches of [`LANES`] congruent elements (one prototype, different
     /// sectors): every arithmetic step is done for the lanes side by side, so the compiler turns
-    /// the 16×16 product into vector instructions; on x86-64 with AVX2 the same code is compiled
-    /// a second time for 4-wide registers and chosen at run time.
+    /// the 16×16 product into vector instructions; on x86-64 with AVX2 and FMA the same code is
+    /// compiled a second time for 4-wide registers with fused multiply-adds and chosen at run
+    /// time. (Tried and dropped, no faster on the machines we measured: the 16×16 product in
+    /// single precision, 8-wide. The kernel is bound by gathering and scattering the nodes.)
     pub fn internal_forces(
         &self,
         x: &[f64],

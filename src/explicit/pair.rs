@@ -882,10 +882,16 @@ impl<'a> PairIntegrator<'a> {
             .sum()
     }
 
-    /// One central-difference step (no allocation). The energy account's kinetic and strain
-    /// parts are state functions, updated by [`PairIntegrator::update_energy`] when asked; the
-    /// work terms accumulate every step. A non-finite hub state is reported as divergence here;
-    /// energy growth is checked in `update_energy`.
+    /// One central-difference step (no allocation):
+    /// ```text
+    /// v ← v + ½Δt a;  x ← x + Δt v;  hubs → bore DOFs;  f = −f_int(x) − f_damp(v)   per gear, parallel
+    /// f += f_contact(x, v);  driven hub: φ̈ = M/I_h;  driver reactions                serial
+    /// a = f/m;  v ← v + ½Δt a;  hubs → bore DOFs                                      per gear, parallel
+    /// ```
+    /// The energy account's kinetic and strain parts are state functions, updated by
+    /// [`PairIntegrator::update_energy`] when asked; the work terms accumulate every step. A
+    /// non-finite hub state is reported as divergence here; energy growth is checked in
+    /// `update_energy`.
     pub fn step(&mut self, state: &mut PairState) -> Result<(), String> {
         let model = self.model;
         let dt = self.dt;

@@ -25,9 +25,10 @@
 //! The penalty of a master edge is k_e = f_p · max diag K_e of its element (2D: K_e ∝ E·B
 //! whatever the size), spread over the edge length: a Gauss point representing slave length
 //! w·|x′| gets k_n = (k_e/L_e)·w|x′| — `penalty_factor` f_p; the stick stiffness is k_t = k_n.
-//! Search: per step a flank pair is skipped when the bounding boxes of its two flanks are
-//! apart by more than a quarter module; otherwise each Gauss point is tested against the chords
-//! of the master edges and projected (Newton) on the nearest one.
+//! Search: per step a flank pair is skipped when the spheres about its two flanks' middle
+//! nodes, or else their bounding boxes, are apart by more than a quarter module; otherwise each
+//! Gauss point is tested against the chords of the master edges and projected (Newton) on the
+//! nearest one.
 //!
 //! # Energy balance
 //! E_kin + E_strain + E_damping + E_contact − W_ext = 0, with E_contact the work done by the

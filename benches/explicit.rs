@@ -78,7 +78,10 @@ fn pair_step(c: &mut Criterion) {
     let case = samples::paper36_case();
     let mut group = c.benchmark_group("explicit_pair_paper36_default_mesh");
     group.sample_size(10);
-    for (name, duration) in [("low-unmodified", Some(1e-3)), ("high-unmodified", None)] {
+    for (name, id, duration) in [
+        ("low-unmodified", "step", Some(1e-3)),
+        ("high-unmodified", "step_high_scene", None),
+    ] {
         let mut scene = case.scene(name).unwrap().clone();
         if let Some(duration) = duration {
             scene.duration = duration;
@@ -95,11 +98,6 @@ fn pair_step(c: &mut Criterion) {
         let elements = prepared.model.elements();
         eprintln!("pair {name}: {elements} elements, dt {:.3e} s", prepared.dt);
         group.throughput(Throughput::Elements(elements as u64));
-        let id = if duration.is_some() {
-            "step"
-        } else {
-            "step_high_scene"
-        };
         group.bench_function(id, |b| {
             b.iter(|| integrator.step(black_box(&mut state)).unwrap())
         });

@@ -333,17 +333,13 @@ impl ExplicitBody {
             let mut loc = [[0.0; W]; 16];
             for k in 0..8 {
                 let (ox, oy) = (proto.offsets[k].x, proto.offsets[k].y);
-                for l in 0..LANES {
+                for l in 0..W {
                     let dx = g[2 * k][l] - 0.125 * centroid[0][l];
                     let dy = g[2 * k + 1][l] - 0.125 * centroid[1][l];
-                    loc[2 * k][l] = M::mul_add(c[l], dx, s[l] * dy) - ox;
-                    loc[2 * k + 1][l] = M::mul_add(c[l], dy, -s[l] * dx) - oy;
-                }
-                for l in LANES..W {
-                    let dx = g[2 * k][l] - 0.125 * centroid[0][l];
-                    let dy = g[2 * k + 1][l] - 0.125 * centroid[1][l];
-                    loc[2 * k][l] = M::mul_add(c[l], dx, s[l] * dy);
-                    loc[2 * k + 1][l] = M::mul_add(c[l], dy, -s[l] * dx);
+                    // The reference shape comes off the positions only.
+                    let (rx, ry) = if l < LANES { (ox, oy) } else { (0.0, 0.0) };
+                    loc[2 * k][l] = M::mul_add(c[l], dx, s[l] * dy) - rx;
+                    loc[2 * k + 1][l] = M::mul_add(c[l], dy, -s[l] * dx) - ry;
                 }
             }
             let k_loc = mat_vec_lanes::<M, W, 4>(&proto.rows, &loc);

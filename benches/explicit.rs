@@ -1,5 +1,5 @@
-//! Cost of the explicit kernel: corotational internal forces of one gear body at the default
-//! mesh (one core), reported per element per step.
+//! Cost of the explicit kernel: corotational internal forces of one gear body (one core),
+//! reported per element per step; and of the meshing pair's whole step.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use geardyn::explicit::body::{ExplicitBody, ExplicitMaterial};
@@ -10,14 +10,37 @@ use geardyn::samples;
 use std::hint::black_box;
 
 fn explicit(c: &mut Criterion) {
+    use geardyn::explicit::scene::FeSettings;
+    use geardyn::mesh::MeshSpec;
     let case = samples::paper36_case();
     let gear = &case.pair.gears[0];
     let mods = case.relief_variant("none").unwrap().modifications;
-    let mesh = mesh_gear(
-        gear,
-        &mods[0],
-        &case.mesh_spec(engaging_teeth(&case.pair)[0].clone()),
-    );
+    let settings = FeSettings::from_case(&case);
+    // The LTCA's mesh (0.2 mm flanks on the three engaging teeth: few congruent copies, so the
+    // element matrices stream from memory) and the 3000 rpm scenes' body (the explicit sizes,
+    // every tooth fine: each matrix serves 36 elements).
+    let meshes = [
+        (
+            "ltca_mesh",
+            mesh_gear(
+                gear,
+                &mods[0],
+                &case.mesh_spec(engaging_teeth(&case.pair)[0].clone()),
+            ),
+        ),
+        (
+            "high_scene_body",
+            mesh_gear(
+                gear,
+                &mods[0],
+                &MeshSpec {
+                    fine_size: settings.fine_size,
+                    coarse_size: settings.coarse_size,
+                    fine_teeth: (0..gear.teeth() as usize).collect(),
+                },
+            ),
+        ),
+    ];
     let material = ExplicitMaterial {
         youngs_modulus: case.material.youngs_modulus,
         poisson_ratio: case.material.poisson_ratio,
@@ -25,66 +48,73 @@ fn explicit(c: &mut Criterion) {
         plane: PlaneState::Strain,
         thickness: gear.spec.face_width,
     };
-    let body = ExplicitBody::with_symmetry(
-        &mesh.nodes,
-        &mesh.elements,
-        material,
-        Some(gear.teeth() as usize),
-    )
-    .unwrap();
-    eprintln!(
-        "prototypes {} for {} elements, {} batches",
-        body.prototypes.len(),
-        mesh.elements.len(),
-        body.batch_count()
-    );
-    let (s, co) = 0.3_f64.sin_cos();
-    let x: Vec<f64> = mesh
-        .nodes
-        .iter()
-        .flat_map(|p| [co * p.x - s * p.y + 1e-7, s * p.x + co * p.y])
-        .collect();
-    let v = vec![1e-3; x.len()];
-    let mut force = vec![0.0; x.len()];
-    let mut group = c.benchmark_group("explicit_paper36_default_mesh");
-    group.throughput(Throughput::Elements(mesh.elements.len() as u64));
-    group.bench_function("internal_forces_one_gear", |b| {
-        b.iter(|| {
-            force.iter_mut().for_each(|f| *f = 0.0);
-            body.internal_forces(black_box(&x), &v, 0.0, &mut force)
-        })
-    });
-    group.bench_function("internal_and_damping_forces_one_gear", |b| {
-        b.iter(|| {
-            force.iter_mut().for_each(|f| *f = 0.0);
-            body.internal_forces(black_box(&x), &v, 1e-8, &mut force)
-        })
-    });
+    let mut group = c.benchmark_group("explicit_paper36_kernel");
+    for (name, mesh) in &meshes {
+        let body = ExplicitBody::with_symmetry(
+            &mesh.nodes,
+            &mesh.elements,
+            material,
+            Some(gear.teeth() as usize),
+        )
+        .unwrap();
+        eprintln!(
+            "{name}: {} elements, {} prototypes, {} batches; paper L/c {:.4e} s, element \
+             eigenvalue bound {:.4e} s",
+            mesh.elements.len(),
+            body.prototypes.len(),
+            body.batch_count(),
+            body.paper_critical_step(),
+            body.element_eigen_critical_step()
+        );
+        let (s, co) = 0.3_f64.sin_cos();
+        let x: Vec<f64> = mesh
+            .nodes
+            .iter()
+            .flat_map(|p| [co * p.x - s * p.y + 1e-7, s * p.x + co * p.y])
+            .collect();
+        let v = vec![1e-3; x.len()];
+        let mut force = vec![0.0; x.len()];
+        group.throughput(Throughput::Elements(mesh.elements.len() as u64));
+        for (label, beta_k) in [("undamped", 0.0), ("damped", 1e-8)] {
+            group.bench_function(format!("{name}/{label}"), |b| {
+                b.iter(|| {
+                    force.iter_mut().for_each(|f| *f = 0.0);
+                    body.internal_forces(black_box(&x), &v, beta_k, &mut force)
+                })
+            });
+        }
+    }
     group.finish();
-    eprintln!(
-        "elements {}, paper L/c {:.4e} s, element eigenvalue bound {:.4e} s",
-        mesh.elements.len(),
-        body.paper_critical_step(),
-        body.element_eigen_critical_step()
-    );
 }
 
 /// One central-difference step of the meshing pair at the default explicit mesh, for the scenes
-/// low-unmodified (1 ms: three teeth per gear fine) and high-unmodified (its full 0.03 s: every
-/// tooth fine): two per-gear parallel phases (rayon), contact search and forces, hubs.
+/// low-unmodified (1 ms, from rest: three teeth per gear fine) and high-unmodified (every tooth
+/// fine), the latter with the teeth in mesh: its ramp shortened to 0.1 ms and the step measured
+/// from 0.15 ms on, when 20–26 Gauss points are in contact. Two per-gear parallel phases
+/// (rayon), contact search and forces, hubs.
 fn pair_step(c: &mut Criterion) {
     use geardyn::explicit::pair::PairIntegrator;
     use geardyn::explicit::scene::{prepare, FeSettings};
     let case = samples::paper36_case();
     let mut group = c.benchmark_group("explicit_pair_paper36_default_mesh");
     group.sample_size(10);
-    for (name, id, duration) in [
-        ("low-unmodified", "step", Some(1e-3)),
-        ("high-unmodified", "step_high_scene", None),
+    // (scene, bench id, duration, ramp, start of the measured steps) [s]
+    for (name, id, duration, ramp, start) in [
+        ("low-unmodified", "step", Some(1e-3), None, 0.0),
+        (
+            "high-unmodified",
+            "step_high_scene_meshing",
+            None,
+            Some(1e-4),
+            1.5e-4,
+        ),
     ] {
         let mut scene = case.scene(name).unwrap().clone();
         if let Some(duration) = duration {
             scene.duration = duration;
+        }
+        if let Some(ramp) = ramp {
+            scene.ramp_time = ramp;
         }
         let prepared = prepare(&case, &scene, &FeSettings::from_case(&case)).unwrap();
         let mut integrator = PairIntegrator::new(
@@ -95,8 +125,14 @@ fn pair_step(c: &mut Criterion) {
         );
         let mut state = prepared.model.initial_state(0.0);
         integrator.initialize(&mut state);
+        while state.time < start {
+            integrator.step(&mut state).unwrap();
+        }
         let elements = prepared.model.elements();
-        eprintln!("pair {name}: {elements} elements, dt {:.3e} s", prepared.dt);
+        eprintln!(
+            "pair {name}: {elements} elements, dt {:.3e} s, {} Gauss points in contact",
+            prepared.dt, integrator.last_contact.active
+        );
         group.throughput(Throughput::Elements(elements as u64));
         group.bench_function(id, |b| {
             b.iter(|| integrator.step(black_box(&mut state)).unwrap())

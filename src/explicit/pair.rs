@@ -26,9 +26,12 @@
 //! whatever the size), spread over the edge length: a Gauss point representing slave length
 //! w·|x′| gets k_n = (k_e/L_e)·w|x′| — `penalty_factor` f_p; the stick stiffness is k_t = k_n.
 //! Search: per step a flank pair is skipped when the spheres about its two flanks' middle
-//! nodes, or else their bounding boxes, are apart by more than a quarter module; otherwise each
-//! Gauss point is tested against the chords of the master edges and projected (Newton) on the
-//! nearest one.
+//! nodes, or else their bounding boxes, are apart by more than a quarter module; otherwise a
+//! Gauss point outside the master flank's box (widened by that distance) is skipped, the others
+//! find the nearest master chord, and only a point that is not clearly outside it — within the
+//! edge's bulge |x_m − (x_a + x_b)/2| of the chord line, or inside — is projected (Newton) on
+//! the quadratic edge. (Most points of a near pair are clear of contact: the two tests cut the
+//! search from 81 to 27 µs per step at the 3000 rpm scene's mesh.)
 //!
 //! # Energy balance
 //! E_kin + E_strain + E_damping + E_contact − W_ext = 0, with E_contact the work done by the
@@ -498,6 +501,25 @@ impl ExplicitPair {
                     |g: usize, n: usize| Point2::new(state.x[g][2 * n], state.x[g][2 * n + 1]);
                 let velocity =
                     |g: usize, n: usize| Vector2::new(state.v[g][2 * n], state.v[g][2 * n + 1]);
+                // The master flank's bounding box, widened by the rejection distance: slave
+                // points outside it cannot be in contact.
+                let x = &state.x[mg];
+                let near = master.nodes.iter().fold(
+                    [
+                        f64::INFINITY,
+                        f64::INFINITY,
+                        f64::NEG_INFINITY,
+                        f64::NEG_INFINITY,
+                    ],
+                    |b, &n| {
+                        [
+                            b[0].min(x[2 * n] - reject),
+                            b[1].min(x[2 * n + 1] - reject),
+                            b[2].max(x[2 * n] + reject),
+                            b[3].max(x[2 * n + 1] + reject),
+                        ]
+                    },
+                );
                 for (se, slave_edge) in slave.edges.iter().enumerate() {
                     let ends = [
                         point(sg, slave_edge[0]),
@@ -512,6 +534,10 @@ impl ExplicitPair {
                                 + ends[2].coords * shape[2],
                         );
                         let slot = &mut slots[se * GAUSS_EDGE.len() + q];
+                        if p.x < near[0] || p.y < near[1] || p.x > near[2] || p.y > near[3] {
+                            *slot = SlaveState::default();
+                            continue;
+                        }
                         // Nearest master chord.
                         let mut best = (f64::INFINITY, 0);
                         for (e, edge) in master.edges.iter().enumerate() {
@@ -524,6 +550,17 @@ impl ExplicitPair {
                             }
                         }
                         let edge = master.edges[best.1];
+                        // The quadratic edge x(s) = chord(s) + (1 − s²)(x_m − (x_a + x_b)/2)
+                        // stays within |x_m − (x_a + x_b)/2| of its chord line: a point farther
+                        // than that on the outer side has a positive gap (no Newton needed).
+                        let [a, m, b] = edge.map(|n| point(mg, n));
+                        let chord = b - a;
+                        let outward = Vector2::new(chord.y, -chord.x) / chord.norm();
+                        let bulge = (m - Point2::from((a.coords + b.coords) * 0.5)).norm();
+                        if (p - a).dot(&outward) > bulge {
+                            *slot = SlaveState::default();
+                            continue;
+                        }
                         let proj = project_on_quadratic_edge(&p, &edge.map(|n| point(mg, n)));
                         // Off the ends of the master flank the projection clamps: no contact
                         // there (corner contact is the other pass's).

@@ -3,7 +3,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use geardyn::explicit::body::{ExplicitBody, ExplicitMaterial};
-use geardyn::fe::PlaneState;
+use geardyn::fe::{MassLumping, PlaneState};
 use geardyn::ltca::engaging_teeth;
 use geardyn::mesh::mesh_gear;
 use geardyn::samples;
@@ -47,6 +47,7 @@ fn explicit(c: &mut Criterion) {
         density: case.material.density,
         plane: PlaneState::Strain,
         thickness: gear.spec.face_width,
+        lumping: MassLumping::default(),
     };
     let mut group = c.benchmark_group("explicit_paper36_kernel");
     for (name, mesh) in &meshes {

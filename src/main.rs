@@ -8,6 +8,7 @@ use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 
 use geardyn::case::{Case, EMBEDDED_DEFAULT};
+use geardyn::fe::MassLumping;
 use geardyn::report::{self, geometry::GeometrySummary, plot::PairDrawing};
 
 /// Spur-gear mesh dynamics: exact geometry, loaded contact, explicit dynamics, lumped sweeps.
@@ -178,6 +179,9 @@ struct FeArgs {
     /// Contact penalty over the master element's largest diagonal stiffness (fe.penalty_factor).
     #[arg(long, value_name = "F")]
     penalty_factor: Option<f64>,
+    /// Lumped mass of the bodies: corner-twelfth (longer step) or hrz (fe.mass_lumping).
+    #[arg(long, value_name = "SCHEME", value_parser = parse_mass_lumping)]
+    mass_lumping: Option<MassLumping>,
     /// Damping ratio of the mesh mode, a dashpot on the DTE rate (fe.mesh_damping_ratio).
     #[arg(long, value_name = "ZETA")]
     mesh_damping_ratio: Option<f64>,
@@ -661,6 +665,16 @@ fn load_torque(case: &Case, torque_nm: Option<f64>) -> Result<f64> {
         );
     }
     Ok(torque)
+}
+
+fn parse_mass_lumping(text: &str) -> std::result::Result<MassLumping, String> {
+    match text {
+        "corner-twelfth" => Ok(MassLumping::CornerTwelfth),
+        "hrz" => Ok(MassLumping::Hrz),
+        _ => Err(format!(
+            "unknown mass lumping '{text}': give corner-twelfth or hrz"
+        )),
+    }
 }
 
 fn parse_range(text: &str) -> Result<Vec<f64>> {
@@ -1491,6 +1505,9 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
             anyhow::bail!("--penalty-factor {f} is invalid: give a value > 0 (default 1)");
         }
         settings.penalty_factor = f;
+    }
+    if let Some(lumping) = options.mass_lumping {
+        settings.mass_lumping = lumping;
     }
     if let Some(zeta) = options.mesh_damping_ratio {
         if !(0.0..1.0).contains(&zeta) {

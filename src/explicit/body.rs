@@ -1,4 +1,5 @@
-//! An elastic body for explicit dynamics: corotational Q8 elements with lumped (HRZ) mass.
+//! An elastic body for explicit dynamics: corotational Q8 elements with a lumped mass
+//! ([`MassLumping`]).
 //!
 //! # Corotational internal force (exact for rigid rotations of any size)
 //! For each element, with reference nodes X, current nodes x and centroids X_c, x_c:
@@ -17,7 +18,7 @@
 use nalgebra::{Matrix2, Point2, Vector2};
 
 use crate::fe::q8::{self, ElementMatrix};
-use crate::fe::{elasticity_matrix, FeError, PlaneState};
+use crate::fe::{elasticity_matrix, FeError, MassLumping, PlaneState};
 
 /// Material data of an explicit body.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -27,6 +28,8 @@ pub struct ExplicitMaterial {
     pub density: f64,
     pub plane: PlaneState,
     pub thickness: f64,
+    /// How the element masses go on the nodes.
+    pub lumping: MassLumping,
 }
 
 /// The shared data of congruent elements: stiffness, centre gradients and node offsets from the
@@ -107,9 +110,10 @@ impl ExplicitBody {
             .max(1e-12);
         for e in elements {
             let xe = e.map(|i| nodes[i]);
-            for (k, m) in q8::lumped_mass(&xe, material.density, material.thickness)
-                .iter()
-                .enumerate()
+            for (k, m) in
+                q8::lumped_mass(&xe, material.density, material.thickness, material.lumping)
+                    .iter()
+                    .enumerate()
             {
                 mass[e[k]] += m;
             }
@@ -204,7 +208,12 @@ impl ExplicitBody {
         let mut omega2_max: f64 = 0.0;
         for (index, e) in self.elements.iter().enumerate() {
             let xe = e.map(|i| self.reference[i]);
-            let m = q8::lumped_mass(&xe, self.material.density, self.material.thickness);
+            let m = q8::lumped_mass(
+                &xe,
+                self.material.density,
+                self.material.thickness,
+                self.material.lumping,
+            );
             let k = self.element_stiffness(index);
             let scaled = ElementMatrix::from_fn(|i, j| k[(i, j)] / (m[i / 2] * m[j / 2]).sqrt());
             let max = scaled
@@ -500,6 +509,7 @@ mod tests {
             density: 7850.0,
             plane: PlaneState::Strain,
             thickness: 0.0254,
+            lumping: MassLumping::default(),
         };
         let body =
             ExplicitBody::with_symmetry(&mesh.nodes, &mesh.elements, material, Some(36)).unwrap();

@@ -752,6 +752,7 @@ pub struct PairIntegrator<'a> {
     old_bore_x: Vec<f64>,
 }
 
+pub static mut PHASES: [u64; 8] = [0; 8];
 impl<'a> PairIntegrator<'a> {
     pub fn new(model: &'a ExplicitPair, drive: Drive, dt: f64, beta_k: f64) -> Self {
         let zeros = |g: usize| vec![0.0; 2 * model.meshes[g].nodes.len()];
@@ -933,6 +934,7 @@ impl<'a> PairIntegrator<'a> {
     pub fn step(&mut self, state: &mut PairState) -> Result<(), String> {
         let model = self.model;
         let dt = self.dt;
+        let t0 = std::time::Instant::now();
         for g in 0..2 {
             for (k, &d) in model.contact_dofs[g].iter().enumerate() {
                 self.old_contact_x[g][k] = state.x[g][d];
@@ -949,10 +951,14 @@ impl<'a> PairIntegrator<'a> {
         state.hub[1] += 0.5 * dt * state.hub[2];
         state.hub[0] += dt * state.hub[1];
         // Half kick and drift on every DOF, then the hubs set the bore DOFs.
+        let t1 = std::time::Instant::now();
         let body = self.drift_and_body_forces(state, Some(dt), [[theta, rate, accel], state.hub]);
+        let t2 = std::time::Instant::now();
         let hub_power = self.contact_and_hubs(state);
+        let t3 = std::time::Instant::now();
         state.hub[1] += 0.5 * dt * state.hub[2];
         let node_power = self.accelerate(state, Some(dt), [[theta, rate, accel], state.hub]);
+        let t4 = std::time::Instant::now();
         let strain = body[0].strain_energy + body[1].strain_energy;
         let damping_power = body[0].damping_power + body[1].damping_power + hub_power + node_power;
         // Work: driver reactions, load torque, contact forces (trapezoid).
@@ -971,6 +977,14 @@ impl<'a> PairIntegrator<'a> {
                 let dx = state.x[g][d] - self.old_contact_x[g][k];
                 contact -= 0.5 * (self.previous_contact[g][d] + self.contact_force[g][d]) * dx;
             }
+        }
+        let t5 = std::time::Instant::now();
+        unsafe {
+            PHASES[0] += (t1 - t0).as_nanos() as u64;
+            PHASES[1] += (t2 - t1).as_nanos() as u64;
+            PHASES[2] += (t3 - t2).as_nanos() as u64;
+            PHASES[3] += (t4 - t3).as_nanos() as u64;
+            PHASES[4] += (t5 - t4).as_nanos() as u64;
         }
         self.steps += 1;
         self.energy.external_work += work;

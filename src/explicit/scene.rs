@@ -33,7 +33,7 @@ use crate::case::{Case, Scene};
 use crate::explicit::body::ExplicitMaterial;
 use crate::explicit::pair::{Drive, ExplicitPair, PairEnergy, PairIntegrator};
 use crate::explicit::solver::critical_step;
-use crate::fe::FeError;
+use crate::fe::{FeError, MassLumping};
 use crate::mesh::mesh_gear;
 
 /// Settings of an explicit run (from the case's `[fe]` section).
@@ -41,6 +41,7 @@ use crate::mesh::mesh_gear;
 pub struct FeSettings {
     pub step_factor: f64,
     pub penalty_factor: f64,
+    pub mass_lumping: MassLumping,
     pub high_frequency_damping_ratio: f64,
     /// Damping ratio of the mesh mode (the driven hub's dashpot on the DTE rate).
     pub mesh_damping_ratio: f64,
@@ -57,6 +58,7 @@ impl FeSettings {
         FeSettings {
             step_factor: fe.step_factor,
             penalty_factor: fe.penalty_factor,
+            mass_lumping: fe.mass_lumping,
             high_frequency_damping_ratio: fe.high_frequency_damping_ratio,
             mesh_damping_ratio: fe.mesh_damping_ratio,
             output_interval: fe.output_interval_us * 1e-6,
@@ -167,6 +169,7 @@ pub fn prepare(
         density: case.material.density,
         plane: case.file.fe.plane,
         thickness: case.pair.gears[0].spec.face_width,
+        lumping: settings.mass_lumping,
     };
     let model = ExplicitPair::new(
         &case.pair,

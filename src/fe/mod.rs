@@ -7,4 +7,4 @@ pub mod assembly;
 pub mod q8;
 
 pub use assembly::{FactorizedStiffness, FeError};
-pub use q8::{elasticity_matrix, PlaneState};
+pub use q8::{elasticity_matrix, MassLumping, PlaneState};

@@ -1749,9 +1749,13 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
         "threads": rayon::current_num_threads(),
         "diverged": outcome.diverged,
         "model": format!(
-            "2D {} ({} plane), corotational 8-node quadrilaterals, lumped mass; rigid hubs, rigid bearings; driver at prescribed speed, driven hub with load torque and a mesh dashpot (zeta {:.3}) on the DTE rate; segment-to-segment penalty contact (two-pass, 4 Gauss points per edge) with Coulomb friction on drive and back flanks of {} tooth pairs; fine flank elements {:.2} mm only on the teeth that engage during the scene, {:.2} mm elsewhere",
+            "2D {} ({} plane), corotational 8-node quadrilaterals, lumped mass ({}); rigid hubs, rigid bearings; driver at prescribed speed, driven hub with load torque and a mesh dashpot (zeta {:.3}) on the DTE rate; segment-to-segment penalty contact (two-pass, 4 Gauss points per edge) with Coulomb friction on drive and back flanks of {} tooth pairs; fine flank elements {:.2} mm only on the teeth that engage during the scene, {:.2} mm elsewhere",
             if case.file.fe.plane == geardyn::fe::PlaneState::Strain { "plane strain" } else { "plane stress" },
             case.pair.gears[0].spec.face_width * 1e3,
+            match settings.mass_lumping {
+                MassLumping::CornerTwelfth => "corners 1/12, mid-sides 1/6 of each element's mass",
+                MassLumping::Hrz => "HRZ diagonal scaling",
+            },
             settings.mesh_damping_ratio,
             prepared.model.tooth_pairs.len(),
             settings.fine_size * 1e3,
@@ -1767,6 +1771,10 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
         );
         map.insert("penalty_factor".into(), settings.penalty_factor.into());
         map.insert("step_factor".into(), settings.step_factor.into());
+        map.insert(
+            "mass_lumping".into(),
+            serde_json::to_value(settings.mass_lumping).unwrap_or_default(),
+        );
         map.insert(
             "mesh_damping_ratio".into(),
             settings.mesh_damping_ratio.into(),

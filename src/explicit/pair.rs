@@ -137,8 +137,6 @@ pub struct ExplicitPair {
     pub tooth_pairs: Vec<(usize, usize)>,
     pub friction: f64,
     pub penalty_factor: f64,
-    /// Flank DOFs of each gear: where contact forces can act.
-    contact_dofs: [Vec<usize>; 2],
 }
 
 /// Shape of the ramps from rest.
@@ -238,6 +236,9 @@ pub struct ContactOutput {
     pub active: usize,
     /// Deepest penetration [m].
     pub max_penetration: f64,
+    /// Per flank pair: near enough to be searched at this step (contact forces can be
+    /// non-zero only on the flanks of these pairs).
+    pub searched: Vec<bool>,
 }
 
 impl ExplicitPair {
@@ -328,16 +329,6 @@ impl ExplicitPair {
                 .expect("two candidates");
             add_pair(t1, back, Side::Right, false);
         }
-        let contact_dofs = std::array::from_fn(|g| {
-            let mut nodes: Vec<usize> = flanks
-                .iter()
-                .filter(|f| f.gear == g)
-                .flat_map(|f| f.nodes.iter().copied())
-                .collect();
-            nodes.sort_unstable();
-            nodes.dedup();
-            nodes.iter().flat_map(|&n| [2 * n, 2 * n + 1]).collect()
-        });
         Ok(ExplicitPair {
             pair: pair.clone(),
             meshes,
@@ -351,7 +342,6 @@ impl ExplicitPair {
             tooth_pairs,
             friction,
             penalty_factor,
-            contact_dofs,
         })
     }
 
@@ -440,6 +430,8 @@ impl ExplicitPair {
         out.force_on_driven = Vector2::zeros();
         out.pair_forces.clear();
         out.pair_forces.resize(self.flank_pairs.len(), 0.0);
+        out.searched.clear();
+        out.searched.resize(self.flank_pairs.len(), false);
         out.active = 0;
         out.max_penetration = 0.0;
         let reject = 0.25 * self.pair.gears[0].module();
@@ -489,6 +481,7 @@ impl ExplicitPair {
                 continue;
             }
             pair_history.cleared = false;
+            out.searched[index] = true;
             let mut on_driven = Vector2::zeros();
             for pass in 0..2 {
                 let (slave, master) = (
@@ -609,6 +602,38 @@ impl ExplicitPair {
             }
             out.force_on_driven += on_driven;
             out.pair_forces[index] = on_driven.norm();
+        }
+    }
+
+    /// Calls `visit` once for every DOF of gear `g` on the flanks of the flank pairs selected by
+    /// any of `selections` (flags per flank pair). `stamp` (one entry per node of the gear)
+    /// removes duplicates: a node is visited when its stamp differs from `id`, which must be
+    /// new for each call.
+    fn for_flank_dofs(
+        &self,
+        g: usize,
+        selections: &[&[bool]],
+        stamp: &mut [u64],
+        id: u64,
+        mut visit: impl FnMut(usize),
+    ) {
+        for (index, fp) in self.flank_pairs.iter().enumerate() {
+            if !selections.iter().any(|s| s[index]) {
+                continue;
+            }
+            for &f in &fp.flanks {
+                let flank = &self.flanks[f];
+                if flank.gear != g {
+                    continue;
+                }
+                for &n in &flank.nodes {
+                    if stamp[n] != id {
+                        stamp[n] = id;
+                        visit(2 * n);
+                        visit(2 * n + 1);
+                    }
+                }
+            }
         }
     }
 
@@ -747,8 +772,14 @@ pub struct PairIntegrator<'a> {
     /// Driver hub reaction on the bore DOFs at the last step, and at the step before.
     driver_reaction: Vec<f64>,
     old_reaction: Vec<f64>,
-    /// Positions of the contact DOFs and of the driver's bore DOFs at the start of the step.
-    old_contact_x: [Vec<f64>; 2],
+    /// Flank pairs searched for contact two steps ago and at the last step: the contact forces
+    /// of those steps sit on their flanks only, so the per-step loops over contact DOFs visit
+    /// those flanks instead of every flank of the scene.
+    searched: [Vec<bool>; 2],
+    /// Per node of each gear, for visiting shared flank nodes once; and the last stamp used.
+    node_stamp: [Vec<u64>; 2],
+    stamp_id: u64,
+    /// Positions of the driver's bore DOFs at the start of the step.
     old_bore_x: Vec<f64>,
 }
 
@@ -772,10 +803,15 @@ impl<'a> PairIntegrator<'a> {
             history: model.new_history(),
             driver_reaction: vec![0.0; 2 * model.meshes[0].bore_nodes.len()],
             old_reaction: vec![0.0; 2 * model.meshes[0].bore_nodes.len()],
-            old_contact_x: [
-                vec![0.0; model.contact_dofs[0].len()],
-                vec![0.0; model.contact_dofs[1].len()],
+            searched: [
+                vec![false; model.flank_pairs.len()],
+                vec![false; model.flank_pairs.len()],
             ],
+            node_stamp: [
+                vec![0; model.meshes[0].nodes.len()],
+                vec![0; model.meshes[1].nodes.len()],
+            ],
+            stamp_id: 0,
             old_bore_x: vec![0.0; 2 * model.meshes[0].bore_nodes.len()],
         }
     }
@@ -814,11 +850,19 @@ impl<'a> PairIntegrator<'a> {
     /// hub (mesh dashpot and mass damping).
     fn contact_and_hubs(&mut self, state: &mut PairState) -> f64 {
         let model = self.model;
+        // After the swap, `contact_force` holds the forces of two steps ago, on the flanks
+        // searched then.
         for g in 0..2 {
             std::mem::swap(&mut self.previous_contact[g], &mut self.contact_force[g]);
-            for &d in &model.contact_dofs[g] {
-                self.contact_force[g][d] = 0.0;
-            }
+            self.stamp_id += 1;
+            let current = &mut self.contact_force[g];
+            model.for_flank_dofs(
+                g,
+                &[&self.searched[0]],
+                &mut self.node_stamp[g],
+                self.stamp_id,
+                |d| current[d] = 0.0,
+            );
         }
         model.contact_forces(
             state,
@@ -827,10 +871,18 @@ impl<'a> PairIntegrator<'a> {
             &mut self.contact_force,
             &mut self.last_contact,
         );
+        self.searched.swap(0, 1);
+        self.searched[1].copy_from_slice(&self.last_contact.searched);
         for g in 0..2 {
-            for &d in &model.contact_dofs[g] {
-                self.force[g][d] += self.contact_force[g][d];
-            }
+            self.stamp_id += 1;
+            let (force, current) = (&mut self.force[g], &self.contact_force[g]);
+            model.for_flank_dofs(
+                g,
+                &[&self.searched[1]],
+                &mut self.node_stamp[g],
+                self.stamp_id,
+                |d| force[d] += current[d],
+            );
         }
         // Driven hub: moment of the net forces on its bore nodes plus the load torque.
         let c2 = model.placement[1].centre;
@@ -935,11 +987,6 @@ impl<'a> PairIntegrator<'a> {
         let model = self.model;
         let dt = self.dt;
         let t0 = std::time::Instant::now();
-        for g in 0..2 {
-            for (k, &d) in model.contact_dofs[g].iter().enumerate() {
-                self.old_contact_x[g][k] = state.x[g][d];
-            }
-        }
         for (i, &n) in model.meshes[0].bore_nodes.iter().enumerate() {
             self.old_bore_x[2 * i] = state.x[0][2 * n];
             self.old_bore_x[2 * i + 1] = state.x[0][2 * n + 1];
@@ -971,12 +1018,23 @@ impl<'a> PairIntegrator<'a> {
         }
         work +=
             0.5 * (old_torque + self.drive.load_torque_at(state.time)) * (state.hub[0] - old_phi);
+        // Contact work on the flanks searched at this step or the last (the only DOFs with
+        // forces); x_{n+1} − x_n = Δt v_{n+½} with v_{n+½} = v_{n+1} − ½Δt a_{n+1}.
         let mut contact = 0.0;
         for g in 0..2 {
-            for (k, &d) in model.contact_dofs[g].iter().enumerate() {
-                let dx = state.x[g][d] - self.old_contact_x[g][k];
-                contact -= 0.5 * (self.previous_contact[g][d] + self.contact_force[g][d]) * dx;
-            }
+            self.stamp_id += 1;
+            let (v, a) = (&state.v[g], &state.a[g]);
+            let (previous, current) = (&self.previous_contact[g], &self.contact_force[g]);
+            model.for_flank_dofs(
+                g,
+                &[&self.searched[0], &self.searched[1]],
+                &mut self.node_stamp[g],
+                self.stamp_id,
+                |d| {
+                    let dx = dt * (v[d] - 0.5 * dt * a[d]);
+                    contact -= 0.5 * (previous[d] + current[d]) * dx;
+                },
+            );
         }
         let t5 = std::time::Instant::now();
         unsafe {

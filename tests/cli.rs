@@ -605,6 +605,7 @@ fn fe_writes_histories_summary_and_keeps_a_diverged_run() {
         "dte_peak_to_peak_rad",
         "mesh_stiffness_mean_n_per_m",
         "energy_error_rel",
+        "energy_error_rel_transmitted",
         "dt_s",
         "dt_critical_s",
         "ns_per_element_step",
@@ -626,6 +627,7 @@ fn fe_writes_histories_summary_and_keeps_a_diverged_run() {
     assert!(summary["stats_window_s"].is_array());
     assert!(summary["diverged"].is_null());
     assert!(summary["energy_error_rel"].as_f64().unwrap() < 1e-2);
+    assert_eq!(summary["mass_lumping"], "corner-twelfth");
     assert!(
         summary["penalty_stiffness_per_edge_n_per_m"]["mean"]
             .as_f64()

@@ -55,6 +55,7 @@ pub fn write_history(
             "damping_j",
             "external_work_j",
             "energy_balance_j",
+            "transmitted_work_j",
             "active_contact_points",
             "max_penetration_um",
         ]
@@ -84,6 +85,7 @@ pub fn write_history(
             format!("{:.6e}", e.damping),
             format!("{:.6e}", e.external_work),
             format!("{:.6e}", e.balance()),
+            format!("{:.6e}", e.transmitted_work),
             history.active_contacts[i].to_string(),
             format!("{:.6}", history.max_penetration[i] * 1e6),
         ]);

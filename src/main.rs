@@ -667,14 +667,11 @@ fn load_torque(case: &Case, torque_nm: Option<f64>) -> Result<f64> {
     Ok(torque)
 }
 
+/// The case file's names (`fe.mass_lumping`), so the two spellings cannot drift apart.
 fn parse_mass_lumping(text: &str) -> std::result::Result<MassLumping, String> {
-    match text {
-        "corner-twelfth" => Ok(MassLumping::CornerTwelfth),
-        "hrz" => Ok(MassLumping::Hrz),
-        _ => Err(format!(
-            "unknown mass lumping '{text}': give corner-twelfth or hrz"
-        )),
-    }
+    use serde::de::{value::Error, Deserialize, IntoDeserializer};
+    MassLumping::deserialize(IntoDeserializer::<Error>::into_deserializer(text))
+        .map_err(|_| format!("unknown mass lumping '{text}': give corner-twelfth or hrz"))
 }
 
 fn parse_range(text: &str) -> Result<Vec<f64>> {

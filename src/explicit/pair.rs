@@ -68,6 +68,28 @@ pub struct Flank {
     pub radius: f64,
 }
 
+impl Flank {
+    /// [x_min, y_min, x_max, y_max] of the flank's nodes at positions `x` (its gear's).
+    fn bounding_box(&self, x: &[f64]) -> [f64; 4] {
+        self.nodes.iter().fold(
+            [
+                f64::INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::NEG_INFINITY,
+            ],
+            |b, &n| {
+                [
+                    b[0].min(x[2 * n]),
+                    b[1].min(x[2 * n + 1]),
+                    b[2].max(x[2 * n]),
+                    b[3].max(x[2 * n + 1]),
+                ]
+            },
+        )
+    }
+}
+
 /// Two flanks that can touch: `flanks[0]` on gear 1, `flanks[1]` on gear 2.
 #[derive(Debug, Clone)]
 pub struct FlankPair {
@@ -450,25 +472,7 @@ impl ExplicitPair {
                 .norm()
                 > f1.radius + f2.radius + reject;
             let apart = spheres_apart || {
-                let boxes = [f1, f2].map(|flank| {
-                    let x = &state.x[flank.gear];
-                    flank.nodes.iter().fold(
-                        [
-                            f64::INFINITY,
-                            f64::INFINITY,
-                            f64::NEG_INFINITY,
-                            f64::NEG_INFINITY,
-                        ],
-                        |b, &n| {
-                            [
-                                b[0].min(x[2 * n]),
-                                b[1].min(x[2 * n + 1]),
-                                b[2].max(x[2 * n]),
-                                b[3].max(x[2 * n + 1]),
-                            ]
-                        },
-                    )
-                });
+                let boxes = [f1, f2].map(|flank| flank.bounding_box(&state.x[flank.gear]));
                 (boxes[0][0] - boxes[1][2])
                     .max(boxes[1][0] - boxes[0][2])
                     .max(boxes[0][1] - boxes[1][3])
@@ -501,23 +505,8 @@ impl ExplicitPair {
                     |g: usize, n: usize| Vector2::new(state.v[g][2 * n], state.v[g][2 * n + 1]);
                 // The master flank's bounding box, widened by the rejection distance: slave
                 // points outside it cannot be in contact.
-                let x = &state.x[mg];
-                let near = master.nodes.iter().fold(
-                    [
-                        f64::INFINITY,
-                        f64::INFINITY,
-                        f64::NEG_INFINITY,
-                        f64::NEG_INFINITY,
-                    ],
-                    |b, &n| {
-                        [
-                            b[0].min(x[2 * n] - reject),
-                            b[1].min(x[2 * n + 1] - reject),
-                            b[2].max(x[2 * n] + reject),
-                            b[3].max(x[2 * n + 1] + reject),
-                        ]
-                    },
-                );
+                let [x_lo, y_lo, x_hi, y_hi] = master.bounding_box(&state.x[mg]);
+                let near = [x_lo - reject, y_lo - reject, x_hi + reject, y_hi + reject];
                 for (se, slave_edge) in slave.edges.iter().enumerate() {
                     let ends = [
                         point(sg, slave_edge[0]),
@@ -551,7 +540,8 @@ impl ExplicitPair {
                         // The quadratic edge x(s) = chord(s) + (1 − s²)(x_m − (x_a + x_b)/2)
                         // stays within |x_m − (x_a + x_b)/2| of its chord line: a point farther
                         // than that on the outer side has a positive gap (no Newton needed).
-                        let [a, m, b] = edge.map(|n| point(mg, n));
+                        let nodes = edge.map(|n| point(mg, n));
+                        let [a, m, b] = nodes;
                         let chord = b - a;
                         let outward = Vector2::new(chord.y, -chord.x) / chord.norm();
                         let bulge = (m - Point2::from((a.coords + b.coords) * 0.5)).norm();
@@ -559,7 +549,7 @@ impl ExplicitPair {
                             *slot = SlaveState::default();
                             continue;
                         }
-                        let proj = project_on_quadratic_edge(&p, &edge.map(|n| point(mg, n)));
+                        let proj = project_on_quadratic_edge(&p, &nodes);
                         // Off the ends of the master flank the projection clamps: no contact
                         // there (corner contact is the other pass's).
                         let at_end = (best.1 == 0 && proj.parameter <= -1.0)

@@ -194,24 +194,16 @@ pub fn lumped_mass(
     thickness: f64,
     lumping: MassLumping,
 ) -> [f64; 8] {
-    let mut diag = [0.0; 8];
-    let mut mass = 0.0;
-    for (xi, wx) in GAUSS_3 {
-        for (eta, wy) in GAUSS_3 {
-            let n = shape(xi, eta);
-            let dv = strain_matrix(nodes, xi, eta).1 * wx * wy * density * thickness;
-            mass += dv;
-            for k in 0..8 {
-                diag[k] += n[k] * n[k] * dv;
-            }
-        }
-    }
     match lumping {
         MassLumping::Hrz => {
+            let diag = consistent_mass(nodes, density, thickness).diagonal();
+            let diag: [f64; 8] = std::array::from_fn(|k| diag[2 * k]);
             let sum: f64 = diag.iter().sum();
+            let mass = density * thickness * area(nodes);
             diag.map(|m| m * mass / sum)
         }
         MassLumping::CornerTwelfth => {
+            let mass = density * thickness * area(nodes);
             std::array::from_fn(|k| if k < 4 { mass / 12.0 } else { mass / 6.0 })
         }
     }

@@ -121,7 +121,8 @@ fn relaxed(p: &PreparedScene, duration: f64) -> (PairIntegrator<'_>, PairState) 
 #[test]
 fn static_dte_matches_the_ltca_on_the_same_mesh() {
     let case = coarse_case();
-    let duration = 5.0e-4;
+    // 0.6 ms: the contact force is within 0.2 % of T/r_b2 from 0.55 ms on.
+    let duration = 6.0e-4;
     let p = static_scene(&case, duration, 16.0);
     let (integrator, state) = relaxed(&p, duration);
     let dte = state.hub[0] - p.model.kinematic_hub_rotation(0.0);

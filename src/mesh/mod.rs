@@ -11,10 +11,11 @@
 //! * **Base block**: from the bore up to the curve root arc → lower fillet → chord → lower fillet
 //!   → root arc, meshed along radial rays through the nodes of that curve, with layers that thin
 //!   geometrically towards the root (one layer distribution for all sectors, so neighbouring
-//!   sectors share the nodes of their common radial edge). Going down, three columns that have
-//!   become narrow against the layer thickness merge into one through a 3-to-1 transition unit,
-//!   so the fine columns under an engaging tooth do not run as slivers down to the bore (they
-//!   would set the explicit time step and waste DOFs).
+//!   sectors share the nodes of their common radial edge). Going down, the columns merge three
+//!   into one through 3-to-1 transition units once every triple of the sector has become narrow
+//!   against the layer thickness, so the fine columns under an engaging tooth do not run as
+//!   slivers down to the bore (they would set the explicit time step and waste DOFs); the layers
+//!   grow to the coarse size.
 //!
 //! Splitting the fillet at F* keeps the corners of both blocks well away from 180° (the fillet
 //! meets the root circle tangentially). Coincident nodes of neighbouring blocks are merged.
@@ -101,7 +102,7 @@ pub fn mesh_gear(gear: &Gear, modification: &FlankModification, spec: &MeshSpec)
     } else {
         spec.fine_size
     };
-    let layers = base_layers(gear, top_layer, &coarse);
+    let layers = base_layers(gear, top_layer, spec.coarse_size, &coarse);
 
     let mut merger = NodeMerger::new(1e-9 * gear.tip_radius.max(1e-3) * 10.0);
     let mut elements = Vec::new();
@@ -188,23 +189,29 @@ fn grid_elements(ids: &[usize], rows: usize, cols: usize) -> Vec<[usize; 8]> {
 }
 
 /// Radial layer fractions g of the base block, from the top (1) to the bore (0).
-/// The first layer below the root is `top_size` thick; layers grow by [`GROWTH`] up to 2.5 times
-/// the width of a coarse sector's columns at that radius.
-fn base_layers(gear: &Gear, top_size: f64, coarse: &SectorLayout) -> Vec<f64> {
+/// The first layer below the root is `top_size` thick; layers grow by [`GROWTH`] up to the
+/// larger of the coarse element size and 2.5 times the width of a coarse sector's top columns
+/// at that radius (the solid web's share of the mesh stiffness is resolved at the coarse size:
+/// the mean stiffness moves by 0.01 % between 1.5 and 3 mm there).
+fn base_layers(gear: &Gear, top_size: f64, coarse_size: f64, coarse: &SectorLayout) -> Vec<f64> {
     let (top, bore) = (gear.root_radius, gear.spec.bore_radius);
     let column_angle = gear.angular_pitch() / (coarse.base_top.len() / 2) as f64;
     let mut thicknesses = Vec::new();
     let (mut r, mut t) = (top, top_size);
     loop {
         let remaining = r - bore;
-        // The last layer takes the remainder rather than leaving a sliver.
+        // The last one or two layers share the remainder rather than leaving a sliver.
         if remaining <= 1.3 * t {
             thicknesses.push(remaining);
             break;
         }
+        if remaining <= 2.3 * t {
+            thicknesses.extend([0.5 * remaining; 2]);
+            break;
+        }
         thicknesses.push(t);
         r -= t;
-        let cap = (2.5 * r * column_angle).max(top_size);
+        let cap = (2.5 * r * column_angle).max(coarse_size).max(top_size);
         t = (t * GROWTH).min(cap);
     }
     let total = top - bore;
@@ -369,8 +376,9 @@ impl SectorLayout {
     }
 
     /// Base-block elements (8 node positions each) from the top curve down to the bore, layer by
-    /// layer. Where three neighbouring columns have become narrow against the layer thickness
-    /// (their joint width below twice the layer), a 3-to-1 transition unit merges them:
+    /// layer. The columns form fixed groups — triples, with the one or two left over in the
+    /// middle — and once every triple has become narrow against the layer thickness (joint width
+    /// at most twice the layer), a layer of 3-to-1 transition units merges all of them:
     /// ```text
     ///   T0 ── T1 ── T2 ── T3        four quads: T0 T1 I1 B0 | T1 T2 I2 I1 | T2 T3 B1 I2 | I1 I2 B1 B0
     ///   │     │     │     │         I1, I2 half-way down the layer below T1, T2
@@ -406,12 +414,36 @@ impl SectorLayout {
                 let radius = 0.5 * (a.coords.norm() + b.coords.norm());
                 Point2::new(radius * angle.sin(), radius * angle.cos())
             };
+            // Columns in fixed groups: triples, with the one or two left over in the middle
+            // (under the tooth, where the columns are widest). A layer merges every triple or
+            // none, so the groups of the next layer line up again; merging triple by triple
+            // left narrow columns between wide ones, running down to the bore as slivers that
+            // set the body's time step.
+            let columns = active.len() - 1;
+            let (triples, singles) = (columns / 3, columns % 3);
+            let right = triples - triples / 2;
+            let groups: Vec<usize> = std::iter::repeat_n(3, right)
+                .chain(std::iter::repeat_n(1, singles))
+                .chain(std::iter::repeat_n(3, triples - right))
+                .collect();
+            let merge_layer = k >= 2
+                && triples > 0
+                && groups
+                    .iter()
+                    .scan(0, |start, &size| {
+                        let first = *start;
+                        *start += size;
+                        Some((first, size))
+                    })
+                    .filter(|&(_, size)| size == 3)
+                    .all(|(first, _)| {
+                        (at(active[first + 3], gb) - at(active[first], gb)).norm()
+                            <= 2.0 * thickness
+                    });
             let mut next = vec![active[0]];
             let mut i = 0;
-            while i + 1 < active.len() {
-                let merge = k >= 2
-                    && i + 3 < active.len()
-                    && (at(active[i + 3], gb) - at(active[i], gb)).norm() <= 2.0 * thickness;
+            for size in groups {
+                let merge = merge_layer && size == 3;
                 if merge {
                     let [c0, c1, c2, c3] = [active[i], active[i + 1], active[i + 2], active[i + 3]];
                     let (t0, t1, t2, t3) = (at(c0, gt), at(c1, gt), at(c2, gt), at(c3, gt));
@@ -460,7 +492,9 @@ impl SectorLayout {
                     ]);
                     next.push(c3);
                     i += 3;
-                } else {
+                    continue;
+                }
+                for _ in 0..size {
                     let (ca, cb) = (active[i], active[i + 1]);
                     out.push([
                         at(ca, gt),

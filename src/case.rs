@@ -163,7 +163,7 @@ pub struct MeshSection {
     /// Element size along flanks and fillets of the teeth that engage in the analysis.
     #[serde(default = "default_fine_element")]
     pub fine_element_mm: f64,
-    /// Element size on the other teeth; the largest size in the body.
+    /// Element size on the other teeth and of the body's layers below the teeth.
     #[serde(default = "default_coarse_element")]
     pub coarse_element_mm: f64,
 }
@@ -211,7 +211,7 @@ pub struct FeSection {
     pub output_interval_us: f64,
     /// Element size on the engaging flanks for the explicit runs [mm]; default: mesh.fine_element_mm.
     pub explicit_fine_element_mm: Option<f64>,
-    /// Element size of the other teeth and the largest in the body for the explicit runs [mm];
+    /// Element size of the other teeth and of the body below the teeth for the explicit runs [mm];
     /// default: mesh.coarse_element_mm.
     pub explicit_coarse_element_mm: Option<f64>,
 }

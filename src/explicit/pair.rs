@@ -248,7 +248,14 @@ pub struct PairState {
 pub struct PairEnergy {
     pub kinetic: f64,
     pub strain: f64,
+    /// Work taken out by damping: the bodies' stiffness damping and mass damping (dissipation,
+    /// ≥ 0) and the mesh dashpot's work on the driven hub, −∫T_d φ̇₂ dt = ∫c_t δ̇ φ̇₂ dt with δ the
+    /// angular DTE. The dashpot acts against the kinematic motion, which the driver supplies, so
+    /// beside its dissipation c_t δ̇² this holds the exchange c_t δ̇ φ̇₂,kin: negative while the
+    /// mean DTE grows (the ramp; with relief, tens of mJ).
     pub damping: f64,
+    /// Work done on the contact forces (penalty springs and friction; friction's share is its
+    /// dissipation).
     pub contact: f64,
     pub external_work: f64,
     /// The work the pair transmits by design: ∫ T(t) |φ̇₂,kin| dt, the load torque times the

@@ -37,7 +37,8 @@ use merge::NodeMerger;
 pub struct MeshSpec {
     /// Element size along the flanks and fillets of the fine teeth [m].
     pub fine_size: f64,
-    /// Element size on the other teeth and the largest in the body [m].
+    /// Element size on the other teeth, and the radial size the body's layers grow to below
+    /// the teeth (a column there is at most twice as wide as its layer is thick) [m].
     pub coarse_size: f64,
     /// Teeth meshed fine (tooth k is the reference tooth turned counter-clockwise by k·2π/z).
     pub fine_teeth: Vec<usize>,

@@ -1753,7 +1753,7 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
         "threads": rayon::current_num_threads(),
         "diverged": outcome.diverged,
         "model": format!(
-            "2D {} ({} plane), corotational 8-node quadrilaterals, lumped mass ({}); rigid hubs, rigid bearings; driver at prescribed speed, driven hub with load torque and a mesh dashpot (zeta {:.3}) on the DTE rate; segment-to-segment penalty contact (two-pass, 4 Gauss points per edge) with Coulomb friction on drive and back flanks of {} tooth pairs; fine flank elements {:.2} mm only on the teeth that engage during the scene, {:.2} mm elsewhere",
+            "2D {} ({} plane), corotational 8-node quadrilaterals, lumped mass ({}); rigid hubs, rigid bearings; driver at prescribed speed, driven hub with load torque and a mesh dashpot (zeta {:.3}) on the DTE rate; segment-to-segment penalty contact (two-pass, 4 Gauss points per edge and the tip corner) with Coulomb friction on drive and back flanks of {} tooth pairs; fine flank elements {:.2} mm only on the teeth that engage during the scene, {:.2} mm elsewhere",
             if case.file.fe.plane == geardyn::fe::PlaneState::Strain { "plane strain" } else { "plane stress" },
             case.pair.gears[0].spec.face_width * 1e3,
             match settings.mass_lumping {

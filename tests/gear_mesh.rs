@@ -137,34 +137,40 @@ fn gear_rotated_by_any_angle_has_zero_strain_energy() {
 }
 
 /// The body below the teeth never sets the explicit time step: over fine and coarse sectors and
-/// several mesh sizes, the smallest element critical step 2/ω_max(M_e⁻¹K_e) of the elements
-/// below the root circle is at least that of the teeth (flanks, fillets, tip corners). A column
-/// that misses its merge runs down to the bore narrowing with the radius, a 0.25 mm sliver at
-/// 1 mm flanks, and fails this at 0.65 of the teeth's step.
+/// several mesh sizes, Irons' element bound 2/max ω_e (`element_eigen_critical_step`) of the
+/// elements below the root circle is at least that of the teeth (flanks, fillets, tip corners).
+/// A column that misses its merge runs down to the bore narrowing with the radius, a 0.25 mm
+/// sliver at 1 mm flanks, and fails this at 0.65 of the teeth's step.
 #[test]
 fn no_element_below_the_teeth_sets_the_explicit_step() {
-    use geardyn::fe::MassLumping;
+    use geardyn::explicit::body::{ExplicitBody, ExplicitMaterial};
     let case = samples::paper36_case();
     let gear = &case.pair.gears[0];
-    let d = elasticity_matrix(206e9, 0.3, PlaneState::Strain);
+    let material = ExplicitMaterial {
+        youngs_modulus: 206e9,
+        poisson_ratio: 0.3,
+        density: 7850.0,
+        plane: PlaneState::Strain,
+        thickness: 0.0254,
+        lumping: Default::default(),
+    };
     for (fine, coarse) in [(1.0e-3, 3.0e-3), (1.5e-3, 3.0e-3), (0.5e-3, 1.5e-3)] {
         let mesh = samples::paper36_gear_mesh(fine, coarse);
-        let (mut teeth, mut body) = (f64::INFINITY, f64::INFINITY);
-        for element in &mesh.elements {
-            let xe = element_nodes(&mesh.nodes, element);
-            let k = q8::stiffness(&xe, &d, 0.0254);
-            let m = q8::lumped_mass(&xe, 7850.0, 0.0254, MassLumping::CornerTwelfth);
-            let scaled =
-                q8::ElementMatrix::from_fn(|a, b| k[(a, b)] / (m[a / 2] * m[b / 2]).sqrt());
-            let omega2 = scaled.symmetric_eigenvalues().max();
-            let step = 2.0 / omega2.sqrt();
-            let centroid = xe.iter().map(|p| p.coords).sum::<nalgebra::Vector2<f64>>() / 8.0;
-            if centroid.norm() < gear.root_radius {
-                body = body.min(step);
-            } else {
-                teeth = teeth.min(step);
-            }
-        }
+        let (below, teeth): (Vec<[usize; 8]>, Vec<[usize; 8]>) =
+            mesh.elements.iter().partition(|element| {
+                let centroid = element_nodes(&mesh.nodes, element)
+                    .iter()
+                    .map(|p| p.coords)
+                    .sum::<nalgebra::Vector2<f64>>()
+                    / 8.0;
+                centroid.norm() < gear.root_radius
+            });
+        let step = |elements: &[[usize; 8]]| {
+            ExplicitBody::new(&mesh.nodes, elements, material)
+                .unwrap()
+                .element_eigen_critical_step()
+        };
+        let (body, teeth) = (step(&below), step(&teeth));
         assert!(
             body >= teeth,
             "{fine:e}/{coarse:e} m: below the root {body:.3e} s, teeth {teeth:.3e} s"

@@ -1080,9 +1080,9 @@ impl<'a> PairIntegrator<'a> {
     /// when |balance| exceeds 1 % of the largest of the net work put in, the energy present, the
     /// kinetic energy of both gears at the drive's full speed (the last keeps the start of a run,
     /// when little energy is present and the account's O(Δt) start-up error is relatively large,
-    /// from tripping the check) and the transmitted work (at low speed the others are small:
-    /// at 60 rpm a tenth of a joule, against which the ≈ 1 mJ a tooth entering mesh books —
-    /// its corner meets the flank already a few µm deep — adds up over a few mesh cycles). Stable runs stay below 5e-4 of the work; a step 1.3 × the
+    /// from tripping the check) and the transmitted work (at low speed the others are small: at
+    /// 60 rpm a tenth of a joule, so a discretization error of a millijoule per mesh cycle
+    /// would read as divergence). Stable runs stay below 5e-5 of the net work; a step 1.3 × the
     /// critical one on the loaded pair passes 1 % within 0.15 ms (validation/README.md).
     pub fn update_energy(&mut self, state: &PairState) -> Result<(), String> {
         self.energy.kinetic = self.kinetic(state);

@@ -231,11 +231,12 @@ impl ExplicitBody {
     /// stiffness-proportional damping coefficient [s].
     ///
     /// Elements run in batches of [`LANES`] congruent elements (one prototype, different
-    /// sectors): every arithmetic step is done for the lanes side by side, so the compiler turns
-    /// the 16×16 product into vector instructions; on x86-64 with AVX2 and FMA the same code is
-    /// compiled a second time for 4-wide registers with fused multiply-adds and chosen at run
-    /// time. (Tried and dropped, no faster on the machines we measured: the 16×16 product in
-    /// single precision, 8-wide. The kernel is bound by gathering and scattering the nodes.)
+    /// sectors), lane l of every vector one element. On x86-64 with AVX2 and FMA (chosen at run
+    /// time) the kernel is written with intrinsics (`avx2` below); elsewhere the portable
+    /// [`ExplicitBody::batched_forces`] does the same arithmetic on plain arrays. (Tried and
+    /// dropped: the 16×16 product in single precision, 8-wide, no faster; the damping folded into
+    /// one product K (u_loc + β v_loc), which halves the multiply-adds but leaves the strain
+    /// energy and the damping power, both needed for the energy account, unknown.)
     pub fn internal_forces(
         &self,
         x: &[f64],
@@ -249,40 +250,17 @@ impl ExplicitBody {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
         {
-            // SAFETY: the CPU has AVX2 and FMA, checked on the line above.
-            return unsafe { self.internal_forces_avx2(x, v, beta_k, force) };
+            // SAFETY: the CPU has AVX2 and FMA, checked on the line above; every node index is
+            // below reference.len() (checked at construction) and the slices hold 2 values per
+            // node (the assert above), which the kernel's unchecked indexing relies on.
+            return unsafe { avx2::internal_forces(self, x, v, beta_k, force) };
         }
-        self.batched_forces::<Unfused>(x, v, beta_k, force)
+        self.batched_forces(x, v, beta_k, force)
     }
 
-    /// [`ExplicitBody::batched_forces`] compiled for AVX2 with fused multiply-adds.
-    ///
-    /// # Safety
-    /// The CPU must support AVX2 and FMA.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn internal_forces_avx2(
-        &self,
-        x: &[f64],
-        v: &[f64],
-        beta_k: f64,
-        force: &mut [f64],
-    ) -> ForceOutput {
-        self.batched_forces::<Fused>(x, v, beta_k, force)
-    }
-
-    /// The kernel. Positions go in lanes 0..LANES of the work arrays and velocities in
+    /// The portable kernel. Positions go in lanes 0..LANES of the work arrays and velocities in
     /// LANES..2·LANES (zero without damping), so one pass over K_e gives both K u_loc and K v_loc.
-    /// (A separate build for the undamped case, with half the lanes, came out slower: the
-    /// compiler vectorized it worse.)
-    #[inline(always)]
-    fn batched_forces<M: MulAdd>(
-        &self,
-        x: &[f64],
-        v: &[f64],
-        beta_k: f64,
-        force: &mut [f64],
-    ) -> ForceOutput {
+    fn batched_forces(&self, x: &[f64], v: &[f64], beta_k: f64, force: &mut [f64]) -> ForceOutput {
         const W: usize = 2 * LANES;
         let damped = beta_k > 0.0;
         let mut strain = [0.0; LANES];
@@ -347,16 +325,16 @@ impl ExplicitBody {
                     let dy = g[2 * k + 1][l] - 0.125 * centroid[1][l];
                     // The reference shape comes off the positions only.
                     let (rx, ry) = if l < LANES { (ox, oy) } else { (0.0, 0.0) };
-                    loc[2 * k][l] = M::mul_add(c[l], dx, s[l] * dy) - rx;
-                    loc[2 * k + 1][l] = M::mul_add(c[l], dy, -s[l] * dx) - ry;
+                    loc[2 * k][l] = c[l] * dx + s[l] * dy - rx;
+                    loc[2 * k + 1][l] = c[l] * dy - s[l] * dx - ry;
                 }
             }
-            let k_loc = mat_vec_lanes::<M, W, 4>(&proto.rows, &loc);
-            let energies = lane_dots::<M, W>(&loc, &k_loc);
+            let k_loc = mat_vec_lanes::<W, 4>(&proto.rows, &loc);
+            let energies = lane_dots::<W>(&loc, &k_loc);
             let mut f_loc = [[0.0; LANES]; 16];
             for (f, k) in f_loc.iter_mut().zip(&k_loc) {
                 for l in 0..LANES {
-                    f[l] = M::mul_add(beta_k, k[LANES + l], k[l]);
+                    f[l] = beta_k * k[LANES + l] + k[l];
                 }
             }
             for l in 0..LANES {
@@ -376,6 +354,185 @@ impl ExplicitBody {
         ForceOutput {
             strain_energy: strain.iter().sum(),
             damping_power: power.iter().sum(),
+        }
+    }
+}
+
+/// The kernel of [`ExplicitBody::batched_forces`] written with AVX2 intrinsics: the same
+/// arithmetic, lane l of every register one element of the batch. Written out because the
+/// compiler's version of the generic kernel fills the lanes of its work arrays one scalar at a
+/// time and reads them back as vectors (a store-forwarding stall on each), and keeps the
+/// 16×16 product's accumulators in memory.
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    use super::{ExplicitBody, ForceOutput, LANES};
+    use std::arch::x86_64::*;
+
+    /// Four doubles, one per lane, straight into a register (no round trip through memory).
+    #[inline(always)]
+    unsafe fn gather(values: &[f64], index: [usize; LANES]) -> __m256d {
+        _mm256_set_pd(
+            *values.get_unchecked(index[3]),
+            *values.get_unchecked(index[2]),
+            *values.get_unchecked(index[1]),
+            *values.get_unchecked(index[0]),
+        )
+    }
+
+    #[inline(always)]
+    unsafe fn lanes(v: __m256d) -> [f64; LANES] {
+        let mut out = [0.0; LANES];
+        _mm256_storeu_pd(out.as_mut_ptr(), v);
+        out
+    }
+
+    /// # Safety
+    /// The CPU must support AVX2 and FMA; `x`, `v` and `force` hold 2 values per node of the
+    /// body (checked by the caller).
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) unsafe fn internal_forces(
+        body: &ExplicitBody,
+        x: &[f64],
+        v: &[f64],
+        beta_k: f64,
+        force: &mut [f64],
+    ) -> ForceOutput {
+        if beta_k > 0.0 {
+            kernel::<true>(body, x, v, beta_k, force)
+        } else {
+            kernel::<false>(body, x, v, beta_k, force)
+        }
+    }
+
+    /// With `DAMPED` false the velocities are not read and K v_loc is not formed.
+    #[inline(always)]
+    unsafe fn kernel<const DAMPED: bool>(
+        body: &ExplicitBody,
+        x: &[f64],
+        v: &[f64],
+        beta_k: f64,
+        force: &mut [f64],
+    ) -> ForceOutput {
+        let beta = _mm256_set1_pd(beta_k);
+        let eighth = _mm256_set1_pd(0.125);
+        let mut strain = _mm256_setzero_pd();
+        let mut power = _mm256_setzero_pd();
+        let mut pos = [_mm256_setzero_pd(); 16];
+        let mut vel = [_mm256_setzero_pd(); 16];
+        for batch in &body.batches {
+            let proto = &body.prototypes[batch.prototype as usize];
+            let nodes = &batch.nodes;
+            for k in 0..8 {
+                let base = nodes[k].map(|n| 2 * n as usize);
+                pos[2 * k] = gather(x, base);
+                pos[2 * k + 1] = gather(x, base.map(|b| b + 1));
+                if DAMPED {
+                    vel[2 * k] = gather(v, base);
+                    vel[2 * k + 1] = gather(v, base.map(|b| b + 1));
+                }
+            }
+            // Deformation gradient at the centre (prototype frame), centroids.
+            let (mut f11, mut f12, mut f21, mut f22) = (
+                _mm256_setzero_pd(),
+                _mm256_setzero_pd(),
+                _mm256_setzero_pd(),
+                _mm256_setzero_pd(),
+            );
+            let (mut cx, mut cy, mut cvx, mut cvy) = (
+                _mm256_setzero_pd(),
+                _mm256_setzero_pd(),
+                _mm256_setzero_pd(),
+                _mm256_setzero_pd(),
+            );
+            for k in 0..8 {
+                let gx = _mm256_set1_pd(proto.centre_gradients[k].x);
+                let gy = _mm256_set1_pd(proto.centre_gradients[k].y);
+                let (px, py) = (pos[2 * k], pos[2 * k + 1]);
+                f11 = _mm256_fmadd_pd(px, gx, f11);
+                f12 = _mm256_fmadd_pd(px, gy, f12);
+                f21 = _mm256_fmadd_pd(py, gx, f21);
+                f22 = _mm256_fmadd_pd(py, gy, f22);
+                cx = _mm256_add_pd(cx, px);
+                cy = _mm256_add_pd(cy, py);
+                if DAMPED {
+                    cvx = _mm256_add_pd(cvx, vel[2 * k]);
+                    cvy = _mm256_add_pd(cvy, vel[2 * k + 1]);
+                }
+            }
+            let a = _mm256_add_pd(f11, f22);
+            let b = _mm256_sub_pd(f21, f12);
+            let norm = _mm256_sqrt_pd(_mm256_fmadd_pd(a, a, _mm256_mul_pd(b, b)));
+            let inv_norm = _mm256_div_pd(_mm256_set1_pd(1.0), norm);
+            let (c, s) = (_mm256_mul_pd(a, inv_norm), _mm256_mul_pd(b, inv_norm));
+            let (cx, cy) = (_mm256_mul_pd(cx, eighth), _mm256_mul_pd(cy, eighth));
+            let (cvx, cvy) = (_mm256_mul_pd(cvx, eighth), _mm256_mul_pd(cvy, eighth));
+            // u_loc = Rᵀ(x − x_c) − (X − X_c), v_loc = Rᵀ(v − v_c), in place.
+            for k in 0..8 {
+                let ox = _mm256_set1_pd(proto.offsets[k].x);
+                let oy = _mm256_set1_pd(proto.offsets[k].y);
+                let dx = _mm256_sub_pd(pos[2 * k], cx);
+                let dy = _mm256_sub_pd(pos[2 * k + 1], cy);
+                pos[2 * k] = _mm256_sub_pd(_mm256_fmadd_pd(c, dx, _mm256_mul_pd(s, dy)), ox);
+                pos[2 * k + 1] = _mm256_sub_pd(_mm256_fmsub_pd(c, dy, _mm256_mul_pd(s, dx)), oy);
+                if DAMPED {
+                    let ex = _mm256_sub_pd(vel[2 * k], cvx);
+                    let ey = _mm256_sub_pd(vel[2 * k + 1], cvy);
+                    vel[2 * k] = _mm256_fmadd_pd(c, ex, _mm256_mul_pd(s, ey));
+                    vel[2 * k + 1] = _mm256_fmsub_pd(c, ey, _mm256_mul_pd(s, ex));
+                }
+            }
+            // K u_loc and K v_loc, four rows at a time (8 accumulators in registers); the
+            // forces f_loc = K u_loc + β K v_loc go back to the global frame and are scattered.
+            // Four partial sums each: one running sum would be a chain of 16 dependent
+            // multiply-adds per batch.
+            let mut batch_strain = [_mm256_setzero_pd(); 4];
+            let mut batch_power = [_mm256_setzero_pd(); 4];
+            for block in 0..4 {
+                let mut ku = [_mm256_setzero_pd(); 4];
+                let mut kv = [_mm256_setzero_pd(); 4];
+                for j in 0..16 {
+                    let column = &proto.rows[j];
+                    for r in 0..4 {
+                        let kij = _mm256_broadcast_sd(column.get_unchecked(4 * block + r));
+                        ku[r] = _mm256_fmadd_pd(kij, pos[j], ku[r]);
+                        if DAMPED {
+                            kv[r] = _mm256_fmadd_pd(kij, vel[j], kv[r]);
+                        }
+                    }
+                }
+                for r in 0..4 {
+                    let i = 4 * block + r;
+                    batch_strain[r] = _mm256_fmadd_pd(pos[i], ku[r], batch_strain[r]);
+                    if DAMPED {
+                        batch_power[r] = _mm256_fmadd_pd(vel[i], kv[r], batch_power[r]);
+                        ku[r] = _mm256_fmadd_pd(beta, kv[r], ku[r]);
+                    }
+                }
+                // Rows (x, y) of nodes 2·block and 2·block + 1: global force −R f_loc.
+                for half in 0..2 {
+                    let (fx, fy) = (ku[2 * half], ku[2 * half + 1]);
+                    let gx = lanes(_mm256_fmsub_pd(c, fx, _mm256_mul_pd(s, fy)));
+                    let gy = lanes(_mm256_fmadd_pd(s, fx, _mm256_mul_pd(c, fy)));
+                    let node = &nodes[2 * block + half];
+                    for l in 0..batch.count as usize {
+                        let n = 2 * node[l] as usize;
+                        *force.get_unchecked_mut(n) -= gx[l];
+                        *force.get_unchecked_mut(n + 1) -= gy[l];
+                    }
+                }
+            }
+            // Padding lanes repeat a real element: their weight 0 takes them out of the sums.
+            let weight = _mm256_loadu_pd(batch.weight.as_ptr());
+            let sum = |p: [__m256d; 4]| {
+                _mm256_add_pd(_mm256_add_pd(p[0], p[1]), _mm256_add_pd(p[2], p[3]))
+            };
+            strain = _mm256_fmadd_pd(sum(batch_strain), weight, strain);
+            power = _mm256_fmadd_pd(sum(batch_power), weight, power);
+        }
+        let (strain, power) = (lanes(strain), lanes(power));
+        ForceOutput {
+            strain_energy: 0.5 * strain.iter().sum::<f64>(),
+            damping_power: beta_k * power.iter().sum::<f64>(),
         }
     }
 }
@@ -421,47 +578,21 @@ fn make_batches(elements: &[[usize; 8]], prototype_of: &[u32], prototypes: usize
 /// Σ_i a[i][l]·b[i][l] for each lane l, in four partial sums: a single running sum over every
 /// element of the body would be one chain of dependent additions, the kernel's slowest path.
 #[inline(always)]
-fn lane_dots<M: MulAdd, const W: usize>(a: &[[f64; W]; 16], b: &[[f64; W]; 16]) -> [f64; W] {
+fn lane_dots<const W: usize>(a: &[[f64; W]; 16], b: &[[f64; W]; 16]) -> [f64; W] {
     let mut partial = [[0.0; W]; 4];
     for (i, (ai, bi)) in a.iter().zip(b).enumerate() {
         for l in 0..W {
-            partial[i % 4][l] = M::mul_add(ai[l], bi[l], partial[i % 4][l]);
+            partial[i % 4][l] += ai[l] * bi[l];
         }
     }
     std::array::from_fn(|l| (partial[0][l] + partial[1][l]) + (partial[2][l] + partial[3][l]))
-}
-
-/// a·b + c, fused (one rounding, one instruction) or as two operations: `f64::mul_add` is a
-/// library call where the build lacks FMA, and plain `a * b + c` is never contracted by rustc.
-trait MulAdd {
-    fn mul_add(a: f64, b: f64, c: f64) -> f64;
-}
-
-/// For builds with FMA.
-struct Fused;
-
-/// The portable build.
-struct Unfused;
-
-impl MulAdd for Fused {
-    #[inline(always)]
-    fn mul_add(a: f64, b: f64, c: f64) -> f64 {
-        a.mul_add(b, c)
-    }
-}
-
-impl MulAdd for Unfused {
-    #[inline(always)]
-    fn mul_add(a: f64, b: f64, c: f64) -> f64 {
-        a * b + c
-    }
 }
 
 /// K U for a symmetric 16×16 matrix given by rows (= columns) and `W` vectors side by side:
 /// F[i][l] = Σ_j K[j][i] U[j][l], so each (i, j) is one vector multiply-add over the `W` lanes.
 /// Done in blocks of `R` rows so the R·W accumulators stay in registers.
 #[inline(always)]
-fn mat_vec_lanes<M: MulAdd, const W: usize, const R: usize>(
+fn mat_vec_lanes<const W: usize, const R: usize>(
     rows: &[[f64; 16]; 16],
     u: &[[f64; W]; 16],
 ) -> [[f64; W]; 16] {
@@ -471,7 +602,7 @@ fn mat_vec_lanes<M: MulAdd, const W: usize, const R: usize>(
         for (column, uj) in rows.iter().zip(u) {
             for (a, &kij) in acc.iter_mut().zip(&column[R * block..R * block + R]) {
                 for l in 0..W {
-                    a[l] = M::mul_add(kij, uj[l], a[l]);
+                    a[l] += kij * uj[l];
                 }
             }
         }
@@ -498,8 +629,10 @@ fn centre_gradient(xe: &[Point2<f64>; 8]) -> [Vector2<f64>; 8] {
 mod tests {
     use super::*;
 
-    /// The portable build of the kernel and the one the CPU gets (AVX2 where it has it) are the
-    /// same arithmetic (the latter with fused multiply-adds): their forces agree to round-off.
+    /// The portable kernel and the one the CPU gets (AVX2 intrinsics where it has them) are the
+    /// same arithmetic (the latter with fused multiply-adds): their forces and energies agree to
+    /// round-off, damped and undamped, with full batches (36 congruent copies of every element)
+    /// and with padded ones (no symmetry: one element per batch, three padding lanes).
     #[test]
     fn portable_and_dispatched_kernels_agree() {
         let mesh = crate::samples::paper36_gear_mesh(1.5e-3, 3.0e-3);
@@ -511,8 +644,6 @@ mod tests {
             thickness: 0.0254,
             lumping: MassLumping::default(),
         };
-        let body =
-            ExplicitBody::with_symmetry(&mesh.nodes, &mesh.elements, material, Some(36)).unwrap();
         let (s, c) = 0.4_f64.sin_cos();
         let x: Vec<f64> = mesh
             .nodes
@@ -525,21 +656,40 @@ mod tests {
             })
             .collect();
         let v: Vec<f64> = x.iter().map(|q| 1e-2 * (q * 2e3).cos()).collect();
-        let (mut fa, mut fb) = (vec![0.0; x.len()], vec![0.0; x.len()]);
-        let a = body.internal_forces(&x, &v, 1e-8, &mut fa);
-        let b = body.batched_forces::<Unfused>(&x, &v, 1e-8, &mut fb);
-        let scale = fa.iter().map(|f| f.abs()).fold(0.0, f64::max);
-        let diff = fa
-            .iter()
-            .zip(&fb)
-            .map(|(p, q)| (p - q).abs())
-            .fold(0.0, f64::max);
-        // u_loc is a difference of positions (~1e-3 m apart within an element) that leaves
-        // deformations of ~1e-7 m, so one rounding more or less (fused or not) moves it by
-        // ε·1e-3/1e-7 ≈ 2e-12 relative; the 16-term product with K_e's mixed signs amplifies that
-        // by about ten. A wrong index or lane would be off by O(1).
-        assert!(diff <= 1e-10 * scale, "{diff:e} of {scale:e}");
-        assert!((a.strain_energy / b.strain_energy - 1.0).abs() < 1e-10);
-        assert!((a.damping_power / b.damping_power - 1.0).abs() < 1e-10);
+        for symmetry in [Some(36), None] {
+            let body = ExplicitBody::with_symmetry(&mesh.nodes, &mesh.elements, material, symmetry)
+                .unwrap();
+            for beta_k in [1e-8, 0.0] {
+                let (mut fa, mut fb) = (vec![0.0; x.len()], vec![0.0; x.len()]);
+                let a = body.internal_forces(&x, &v, beta_k, &mut fa);
+                let b = body.batched_forces(&x, &v, beta_k, &mut fb);
+                let scale = fa.iter().map(|f| f.abs()).fold(0.0, f64::max);
+                let diff = fa
+                    .iter()
+                    .zip(&fb)
+                    .map(|(p, q)| (p - q).abs())
+                    .fold(0.0, f64::max);
+                // u_loc is a difference of positions (~1e-3 m apart within an element) that
+                // leaves deformations of ~1e-7 m, so one rounding more or less (fused or not)
+                // moves it by ε·1e-3/1e-7 ≈ 2e-12 relative; the 16-term product with K_e's mixed
+                // signs amplifies that by about ten. A wrong index or lane would be off by O(1).
+                let case = format!("symmetry {symmetry:?}, beta {beta_k:e}");
+                assert!(diff <= 1e-10 * scale, "{case}: {diff:e} of {scale:e}");
+                assert!(
+                    (a.strain_energy / b.strain_energy - 1.0).abs() < 1e-10,
+                    "{case}: strain {} vs {}",
+                    a.strain_energy,
+                    b.strain_energy
+                );
+                if beta_k > 0.0 {
+                    assert!(
+                        (a.damping_power / b.damping_power - 1.0).abs() < 1e-10,
+                        "{case}"
+                    );
+                } else {
+                    assert_eq!((a.damping_power, b.damping_power), (0.0, 0.0), "{case}");
+                }
+            }
+        }
     }
 }

@@ -368,15 +368,15 @@ mod avx2 {
     use super::{ExplicitBody, ForceOutput, LANES};
     use std::arch::x86_64::*;
 
-    /// Four doubles, one per lane, straight into a register (no round trip through memory).
+    /// The (x, y) pairs at `values[index[l]..]` of the four lanes, transposed into an x and a
+    /// y register: 16-byte loads, lanes 0 and 2 in the low halves, 1 and 3 in the high ones,
+    /// then unpacked (no round trip through memory).
     #[inline(always)]
-    unsafe fn gather(values: &[f64], index: [usize; LANES]) -> __m256d {
-        _mm256_set_pd(
-            *values.get_unchecked(index[3]),
-            *values.get_unchecked(index[2]),
-            *values.get_unchecked(index[1]),
-            *values.get_unchecked(index[0]),
-        )
+    unsafe fn gather_pairs(values: &[f64], index: [usize; LANES]) -> (__m256d, __m256d) {
+        let pair = |l: usize| _mm_loadu_pd(values.as_ptr().add(index[l]));
+        let even = _mm256_insertf128_pd::<1>(_mm256_castpd128_pd256(pair(0)), pair(2));
+        let odd = _mm256_insertf128_pd::<1>(_mm256_castpd128_pd256(pair(1)), pair(3));
+        (_mm256_unpacklo_pd(even, odd), _mm256_unpackhi_pd(even, odd))
     }
 
     #[inline(always)]
@@ -422,16 +422,7 @@ mod avx2 {
         for batch in &body.batches {
             let proto = &body.prototypes[batch.prototype as usize];
             let nodes = &batch.nodes;
-            for k in 0..8 {
-                let base = nodes[k].map(|n| 2 * n as usize);
-                pos[2 * k] = gather(x, base);
-                pos[2 * k + 1] = gather(x, base.map(|b| b + 1));
-                if DAMPED {
-                    vel[2 * k] = gather(v, base);
-                    vel[2 * k + 1] = gather(v, base.map(|b| b + 1));
-                }
-            }
-            // Deformation gradient at the centre (prototype frame), centroids.
+            // Gather; deformation gradient at the centre (prototype frame) and centroids.
             let (mut f11, mut f12, mut f21, mut f22) = (
                 _mm256_setzero_pd(),
                 _mm256_setzero_pd(),
@@ -445,9 +436,15 @@ mod avx2 {
                 _mm256_setzero_pd(),
             );
             for k in 0..8 {
+                let base = nodes[k].map(|n| 2 * n as usize);
+                let (px, py) = gather_pairs(x, base);
+                pos[2 * k] = px;
+                pos[2 * k + 1] = py;
+                if DAMPED {
+                    (vel[2 * k], vel[2 * k + 1]) = gather_pairs(v, base);
+                }
                 let gx = _mm256_set1_pd(proto.centre_gradients[k].x);
                 let gy = _mm256_set1_pd(proto.centre_gradients[k].y);
-                let (px, py) = (pos[2 * k], pos[2 * k + 1]);
                 f11 = _mm256_fmadd_pd(px, gx, f11);
                 f12 = _mm256_fmadd_pd(px, gy, f12);
                 f21 = _mm256_fmadd_pd(py, gx, f21);
@@ -511,13 +508,20 @@ mod avx2 {
                 // Rows (x, y) of nodes 2·block and 2·block + 1: global force −R f_loc.
                 for half in 0..2 {
                     let (fx, fy) = (ku[2 * half], ku[2 * half + 1]);
-                    let gx = lanes(_mm256_fmsub_pd(c, fx, _mm256_mul_pd(s, fy)));
-                    let gy = lanes(_mm256_fmadd_pd(s, fx, _mm256_mul_pd(c, fy)));
+                    let gx = _mm256_fmsub_pd(c, fx, _mm256_mul_pd(s, fy));
+                    let gy = _mm256_fmadd_pd(s, fx, _mm256_mul_pd(c, fy));
+                    // Back into (x, y) pairs: lanes 0 and 2 in `even`, 1 and 3 in `odd`.
+                    let (even, odd) = (_mm256_unpacklo_pd(gx, gy), _mm256_unpackhi_pd(gx, gy));
+                    let pairs = [
+                        _mm256_castpd256_pd128(even),
+                        _mm256_castpd256_pd128(odd),
+                        _mm256_extractf128_pd::<1>(even),
+                        _mm256_extractf128_pd::<1>(odd),
+                    ];
                     let node = &nodes[2 * block + half];
-                    for l in 0..batch.count as usize {
-                        let n = 2 * node[l] as usize;
-                        *force.get_unchecked_mut(n) -= gx[l];
-                        *force.get_unchecked_mut(n + 1) -= gy[l];
+                    for (l, pair) in pairs.iter().enumerate().take(batch.count as usize) {
+                        let at = force.as_mut_ptr().add(2 * node[l] as usize);
+                        _mm_storeu_pd(at, _mm_sub_pd(_mm_loadu_pd(at), *pair));
                     }
                 }
             }

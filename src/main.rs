@@ -1752,6 +1752,8 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
         "total_wall_s": started.elapsed().as_secs_f64(),
         "threads": rayon::current_num_threads(),
         "diverged": outcome.diverged,
+        "dt_critical_coupled_s": outcome.coupled_steps.iter().map(|c| c.dt_critical_s).reduce(f64::min),
+        "dt_critical_coupled_checks": outcome.coupled_steps,
         "model": format!(
             "2D {} ({} plane), corotational 8-node quadrilaterals, lumped mass ({}); rigid hubs, rigid bearings; driver at prescribed speed, driven hub with load torque and a mesh dashpot (zeta {:.3}) on the DTE rate; segment-to-segment penalty contact (two-pass, 4 Gauss points per edge and the tip corner) with Coulomb friction on drive and back flanks of {} tooth pairs; fine flank elements {:.2} mm only on the teeth that engage during the scene, {:.2} mm elsewhere",
             if case.file.fe.plane == geardyn::fe::PlaneState::Strain { "plane strain" } else { "plane stress" },
@@ -1809,6 +1811,13 @@ fn fe(args: &CommonArgs, options: &FeArgs) -> Result<()> {
         energy_error_rel,
         energy_error_rel_transmitted
     );
+    if let Some(coupled) = summary["dt_critical_coupled_s"].as_f64() {
+        println!(
+            "stable step where the contact was (bodies and penalty springs, power iteration at {} instants): {coupled:.4e} s at the least, {:.2} x the step used",
+            outcome.coupled_steps.len(),
+            coupled / prepared.dt
+        );
+    }
     println!("wrote {}", dir.display());
     Ok(())
 }

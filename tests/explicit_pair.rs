@@ -91,6 +91,72 @@ fn step_above_the_critical_step_is_caught() {
     );
 }
 
+/// The pair's own stable step where the contact is — the power iteration on bodies plus penalty
+/// springs (`coupled_critical_step`) — against runs continued from that state: at 0.95 of it the
+/// run stays stable, at 1.1 it diverges within a few hundred steps (an unstable mode of the
+/// central difference grows by 2.4× per step at 1.1×). With no spring closed it is the bodies'
+/// own power iteration (to its convergence, 1e-3); closed springs lower it, and the step the run
+/// uses (set by the contact springs' bound for every contact state) stays below it. Penalty
+/// factor 16, so that the springs and not the bodies' elements limit the step on this coarse
+/// mesh (at factor 1 the bodies do: 2.76e-8 s against the springs' bound 3.04e-8 s).
+#[test]
+fn coupled_step_is_where_the_meshing_pair_goes_unstable() {
+    let case = coarse_case();
+    fn start(p: &PreparedScene) -> (PairIntegrator<'_>, PairState) {
+        let mut integrator = PairIntegrator::new(&p.model, p.drive, p.dt, 0.0);
+        let mut state = p.model.initial_state(0.0);
+        integrator.initialize(&mut state);
+        (integrator, state)
+    }
+    let soft = prepared(&case, 600.0, 2.0e-4, 1.0e-4, 1.0);
+    let bodies = soft.dt_bodies[0].min(soft.dt_bodies[1]);
+    let (integrator, state) = start(&soft);
+    let at_rest = integrator.coupled_critical_step(&state, 100);
+    assert!(
+        (at_rest / bodies - 1.0).abs() < 1e-3,
+        "unloaded: {at_rest:e} against the bodies' {bodies:e}"
+    );
+    let p = prepared(&case, 600.0, 2.0e-4, 1.0e-4, 16.0);
+    // Into mesh, under the full load, at the run's own step.
+    let in_mesh = || {
+        let (mut integrator, mut state) = start(&p);
+        while state.time < 1.5e-4 {
+            integrator.step(&mut state).unwrap();
+        }
+        (integrator, state)
+    };
+    let (mut unstable, mut state) = in_mesh();
+    assert!(unstable.last_contact.active > 0, "in mesh");
+    let coupled = unstable.coupled_critical_step(&state, 100);
+    eprintln!(
+        "coupled {coupled:.4e} s with {} points in contact; bodies {bodies:.4e}, contact bound {:.4e}, step {:.4e}",
+        unstable.last_contact.active, p.dt_contact, p.dt
+    );
+    assert!(
+        coupled < 0.95 * bodies,
+        "the closed springs lower the stable step"
+    );
+    assert!(
+        coupled > p.dt,
+        "the run's step is stable where the contact is"
+    );
+    let continue_at = |integrator: &mut PairIntegrator, state: &mut PairState, steps: usize| {
+        for k in 1..=steps {
+            integrator.step(state)?;
+            if k % 10 == 0 {
+                integrator.update_energy(state)?;
+            }
+        }
+        Ok::<(), String>(())
+    };
+    unstable.dt = 1.1 * coupled;
+    let diverged = continue_at(&mut unstable, &mut state, 1000);
+    assert!(diverged.is_err(), "1.1 x the coupled step runs on");
+    let (mut stable, mut state) = in_mesh();
+    stable.dt = 0.95 * coupled;
+    continue_at(&mut stable, &mut state, 3000).unwrap();
+}
+
 /// The pair with the driver held at the pitch-point position and the load torque ramped over
 /// 0.15 ms.
 fn static_scene(case: &Case, duration: f64, penalty: f64) -> PreparedScene {

@@ -2,8 +2,7 @@
 //! reported per element per step; and of the meshing pair's whole step.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use geardyn::explicit::body::{ExplicitBody, ExplicitMaterial};
-use geardyn::fe::{MassLumping, PlaneState};
+use geardyn::explicit::body::ExplicitBody;
 use geardyn::ltca::engaging_teeth;
 use geardyn::mesh::mesh_gear;
 use geardyn::samples;
@@ -41,14 +40,7 @@ fn explicit(c: &mut Criterion) {
             ),
         ),
     ];
-    let material = ExplicitMaterial {
-        youngs_modulus: case.material.youngs_modulus,
-        poisson_ratio: case.material.poisson_ratio,
-        density: case.material.density,
-        plane: PlaneState::Strain,
-        thickness: gear.spec.face_width,
-        lumping: MassLumping::default(),
-    };
+    let material = samples::paper36_explicit_material();
     let mut group = c.benchmark_group("explicit_paper36_kernel");
     for (name, mesh) in &meshes {
         let body = ExplicitBody::with_symmetry(

@@ -11,6 +11,12 @@ pub fn paper36_case() -> Case {
     Case::embedded_default().expect("the embedded default case is valid")
 }
 
+/// The explicit bodies' material of the paper's pair (steel, plane strain, 25.4 mm face width,
+/// the default mass lumping).
+pub fn paper36_explicit_material() -> crate::explicit::body::ExplicitMaterial {
+    crate::explicit::scene::explicit_material(&paper36_case(), crate::fe::MassLumping::default())
+}
+
 /// Rack and the two gear specs of the paper's pair.
 pub fn paper36_specs() -> (BasicRack, GearSpec, GearSpec) {
     let spec = paper36_case().pair_spec;

@@ -143,17 +143,10 @@ fn gear_rotated_by_any_angle_has_zero_strain_energy() {
 /// sliver at 1 mm flanks, and fails this at 0.65 of the teeth's step.
 #[test]
 fn no_element_below_the_teeth_sets_the_explicit_step() {
-    use geardyn::explicit::body::{ExplicitBody, ExplicitMaterial};
+    use geardyn::explicit::body::ExplicitBody;
     let case = samples::paper36_case();
     let gear = &case.pair.gears[0];
-    let material = ExplicitMaterial {
-        youngs_modulus: 206e9,
-        poisson_ratio: 0.3,
-        density: 7850.0,
-        plane: PlaneState::Strain,
-        thickness: 0.0254,
-        lumping: Default::default(),
-    };
+    let material = samples::paper36_explicit_material();
     for (fine, coarse) in [(1.0e-3, 3.0e-3), (1.5e-3, 3.0e-3), (0.5e-3, 1.5e-3)] {
         let mesh = samples::paper36_gear_mesh(fine, coarse);
         let (below, teeth): (Vec<[usize; 8]>, Vec<[usize; 8]>) =

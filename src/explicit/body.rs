@@ -642,14 +642,7 @@ mod tests {
     #[test]
     fn portable_and_dispatched_kernels_agree() {
         let mesh = crate::samples::paper36_gear_mesh(1.5e-3, 3.0e-3);
-        let material = ExplicitMaterial {
-            youngs_modulus: 206e9,
-            poisson_ratio: 0.3,
-            density: 7850.0,
-            plane: PlaneState::Strain,
-            thickness: 0.0254,
-            lumping: MassLumping::default(),
-        };
+        let material = crate::samples::paper36_explicit_material();
         let (s, c) = 0.4_f64.sin_cos();
         let x: Vec<f64> = mesh
             .nodes

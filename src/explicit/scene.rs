@@ -113,6 +113,19 @@ pub fn scene_teeth(case: &Case, driver_rotation: f64) -> ([Vec<usize>; 2], Vec<(
     ([fine1, fine2], tooth_pairs)
 }
 
+/// The explicit bodies' material: the case's steel, plane state and face width (both gears share
+/// it), with the given mass lumping.
+pub fn explicit_material(case: &Case, lumping: MassLumping) -> ExplicitMaterial {
+    ExplicitMaterial {
+        youngs_modulus: case.material.youngs_modulus,
+        poisson_ratio: case.material.poisson_ratio,
+        density: case.material.density,
+        plane: case.file.fe.plane,
+        thickness: case.pair.gears[0].spec.face_width,
+        lumping,
+    }
+}
+
 /// A scene ready to run: the pair model and its time step.
 pub struct PreparedScene {
     pub model: ExplicitPair,
@@ -168,14 +181,7 @@ pub fn prepare(
         mesh_gear(&case.pair.gears[1], &variant.modifications[1], &spec(1)),
     ];
     let mesh_wall_s = started.elapsed().as_secs_f64();
-    let material = ExplicitMaterial {
-        youngs_modulus: case.material.youngs_modulus,
-        poisson_ratio: case.material.poisson_ratio,
-        density: case.material.density,
-        plane: case.file.fe.plane,
-        thickness: case.pair.gears[0].spec.face_width,
-        lumping: settings.mass_lumping,
-    };
+    let material = explicit_material(case, settings.mass_lumping);
     let model = ExplicitPair::new(
         &case.pair,
         meshes,

@@ -688,3 +688,46 @@ fn fe_writes_histories_summary_and_keeps_a_diverged_run() {
     assert!(!no_scene.status.success());
     assert!(String::from_utf8_lossy(&no_scene.stderr).contains("low-unmodified"));
 }
+
+/// The headline numbers of `ltca`, `sweep` and a short `fe` on the embedded case, against the
+/// values the same commands gave before the study layer was split out of the binary
+/// (tests/fixtures/headline_before_study_layer.json, recorded with the binary of 9ce0694). The
+/// computation is deterministic (ordered reductions), so 1e-9 relative leaves room only for
+/// the last bits of a reordered sum, not for a changed model.
+#[test]
+fn headline_numbers_are_unchanged_by_the_study_layer() {
+    let recorded: serde_json::Value =
+        serde_json::from_str(include_str!("fixtures/headline_before_study_layer.json")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let commands: [(&str, &[&str]); 3] = [
+        ("ltca", &["ltca", "--positions", "16"]),
+        ("sweep", &["sweep", "--rpm", "1000:9000:5"]),
+        (
+            "fe",
+            &["fe", "--scene", "high-unmodified", "--duration-s", "2e-5"],
+        ),
+    ];
+    for (name, args) in commands {
+        let out = dir.path().join(name);
+        run_ok(geardyn().args(args).arg("--out").arg(&out));
+        let summary = read_summary(&out);
+        for (path, expected) in recorded[name].as_object().unwrap() {
+            let mut value = &summary;
+            for part in path.split('/') {
+                value = match part.parse::<usize>() {
+                    Ok(i) => &value[i],
+                    Err(_) => &value[part],
+                };
+            }
+            let (got, want) = (
+                value.as_f64().unwrap_or(f64::NAN),
+                expected.as_f64().unwrap(),
+            );
+            let scale = want.abs().max(f64::MIN_POSITIVE);
+            assert!(
+                (got - want).abs() <= 1e-9 * scale,
+                "{name} {path}: {got} against {want} recorded"
+            );
+        }
+    }
+}

@@ -9,12 +9,11 @@ use geardyn::samples;
 use std::hint::black_box;
 
 fn explicit(c: &mut Criterion) {
-    use geardyn::explicit::scene::FeSettings;
     use geardyn::mesh::MeshSpec;
     let case = samples::paper36_case();
     let gear = &case.pair.gears[0];
     let mods = case.relief_variant("none").unwrap().modifications;
-    let settings = FeSettings::from_case(&case);
+    let settings = case.fe;
     // The LTCA's mesh (0.2 mm flanks on the three engaging teeth: few congruent copies, so the
     // element matrices stream from memory) and the 3000 rpm scenes' body (the explicit sizes,
     // every tooth fine: each matrix serves 36 elements).
@@ -87,7 +86,6 @@ fn explicit(c: &mut Criterion) {
 /// (rayon), contact search and forces, hubs.
 fn pair_step(c: &mut Criterion) {
     use geardyn::explicit::pair::PairIntegrator;
-    use geardyn::explicit::scene::{prepare, FeSettings};
     let case = samples::paper36_case();
     let mut group = c.benchmark_group("explicit_pair_paper36_default_mesh");
     group.sample_size(10);
@@ -109,7 +107,7 @@ fn pair_step(c: &mut Criterion) {
         if let Some(ramp) = ramp {
             scene.ramp_time = ramp;
         }
-        let prepared = prepare(&case, &scene, &FeSettings::from_case(&case)).unwrap();
+        let prepared = geardyn::study::fe::prepare(&case, &scene).unwrap();
         let mut integrator = PairIntegrator::new(
             &prepared.model,
             prepared.drive,

@@ -5,7 +5,7 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use geardyn::fe::assembly::{stiffness_triplets, FactorizedStiffness};
 use geardyn::fe::elasticity_matrix;
-use geardyn::ltca::{body::BodyMaterial, engaging_teeth, LtcaModel};
+use geardyn::ltca::engaging_teeth;
 use geardyn::mesh::mesh_gear;
 use geardyn::samples;
 use std::hint::black_box;
@@ -14,11 +14,7 @@ fn ltca(c: &mut Criterion) {
     let case = samples::paper36_case();
     let teeth = engaging_teeth(&case.pair);
     let mods = case.relief_variant("none").unwrap().modifications;
-    let material = BodyMaterial {
-        youngs_modulus: case.material.youngs_modulus,
-        poisson_ratio: case.material.poisson_ratio,
-        plane: case.file.fe.plane,
-    };
+    let material = case.ltca_material();
     let mut group = c.benchmark_group("ltca_paper36_default_mesh");
     group.sample_size(10);
 
@@ -41,16 +37,10 @@ fn ltca(c: &mut Criterion) {
             FactorizedStiffness::new(2 * mesh.nodes.len(), &triplets, &fixed).unwrap()
         })
     });
-    let specs = || {
-        [
-            case.mesh_spec(teeth[0].clone()),
-            case.mesh_spec(teeth[1].clone()),
-        ]
-    };
     group.bench_function("setup_both_gears", |b| {
-        b.iter(|| LtcaModel::new(black_box(&case.pair), &mods, specs(), material).unwrap())
+        b.iter(|| geardyn::study::ltca::model(black_box(&case), &mods).unwrap())
     });
-    let model = LtcaModel::new(&case.pair, &mods, specs(), material).unwrap();
+    let model = geardyn::study::ltca::model(&case, &mods).unwrap();
     group.bench_function("cycle_64_positions", |b| {
         b.iter(|| model.run(64, black_box(143.6), &|_| {}).unwrap())
     });

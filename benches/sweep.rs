@@ -3,30 +3,17 @@
 //! down-sweep), and the 600-point Floquet map.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use geardyn::fe::PlaneState;
-use geardyn::lumped::{MeshModel, PeriodicTable};
-use geardyn::samples;
-use geardyn::stiffness::potential_energy::potential_energy_table;
+use geardyn::case::{Case, Override};
+use geardyn::study::lumped::setup;
 use geardyn::sweep::{floquet_map, sweep};
 use std::hint::black_box;
 
 fn lumped(c: &mut Criterion) {
-    let pair = samples::paper36_pair();
-    let table = potential_energy_table(&pair, 64, 206e9, 0.3, PlaneState::Strain);
-    let period = pair.gears[0].angular_pitch();
-    let mut model = MeshModel {
-        effective_mass: 0.57,
-        stiffness: PeriodicTable {
-            period,
-            values: table.stiffness,
-        },
-        unloaded_te: PeriodicTable::constant(period, 0.0),
-        damping: 0.0,
-        force: 143.6 / pair.gears[1].base_radius,
-        backlash: Some(50e-6),
-        bearings: None,
-    };
-    model.damping = model.damping_from_ratio(0.05);
+    // The embedded case's lumped model on the potential-energy stiffness (torque drive,
+    // ζ = 0.05), with 50 µm of backlash so the separating branch is exercised.
+    let case = Case::load_with(None, &[Override::set("lumped.stiffness", "pe")]).unwrap();
+    let mut model = setup(&case).unwrap().model;
+    model.backlash = Some(50e-6);
     let rpms: Vec<f64> = (0..600)
         .map(|i| 100.0 + (12000.0 - 100.0) * i as f64 / 599.0)
         .collect();

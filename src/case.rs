@@ -11,11 +11,15 @@ use std::f64::consts::PI;
 use std::path::Path;
 use thiserror::Error;
 
+use crate::explicit::body::ExplicitMaterial;
+use crate::explicit::scene::{FeSettings, Scene};
 use crate::fe::{MassLumping, PlaneState};
 use crate::geometry::{
     BasicRack, FlankModification, FlankReliefSpec, GearPair, GearSpec, GeometryError, PairSpec,
     ReliefShape, ReliefSpec, ReliefStart,
 };
+use crate::ltca::body::BodyMaterial;
+use crate::lumped::Drive;
 
 /// The seed paper's pair, embedded in the binary and used when no case file is given.
 pub const EMBEDDED_DEFAULT: &str = include_str!("../data/cases/paper36.toml");
@@ -45,6 +49,8 @@ pub enum CaseError {
         #[source]
         source: GeometryError,
     },
+    #[error("--set {key}: {message}")]
+    Override { key: String, message: String },
     #[error("case file {path}: relief_variant \"{variant}\": {source}")]
     Relief {
         path: String,
@@ -101,8 +107,8 @@ pub struct LumpedSection {
     pub stiffness: String,
     /// "torque" (both gears free, the relative coordinate) or "speed" (driver at the prescribed
     /// speed, as in the explicit FE).
-    #[serde(default = "default_drive")]
-    pub drive: String,
+    #[serde(default)]
+    pub drive: Drive,
     /// Mesh damping ratio ζ: c = 2ζ√(k̄ m_e).
     #[serde(default = "default_damping_ratio")]
     pub damping_ratio: f64,
@@ -128,7 +134,7 @@ impl Default for LumpedSection {
     fn default() -> Self {
         Self {
             stiffness: default_stiffness_source(),
-            drive: default_drive(),
+            drive: Drive::default(),
             damping_ratio: default_damping_ratio(),
             mesh_damping_n_s_per_m: None,
             inertia_kg_mm2: None,
@@ -142,9 +148,6 @@ impl Default for LumpedSection {
 
 fn default_stiffness_source() -> String {
     "ltca".into()
-}
-fn default_drive() -> String {
-    "torque".into()
 }
 fn default_damping_ratio() -> f64 {
     0.05
@@ -253,8 +256,12 @@ fn default_output_interval() -> f64 {
 #[serde(deny_unknown_fields)]
 pub struct SceneSection {
     pub name: String,
-    /// Operating point (speed and torque) by name.
-    pub operating_point: String,
+    /// Operating point (speed and torque) by name; `speed_rpm` and `torque_nm` override it.
+    pub operating_point: Option<String>,
+    /// Driver speed [rpm]; default: the operating point's.
+    pub speed_rpm: Option<f64>,
+    /// Load torque on the driven gear [N·m]; default: the operating point's.
+    pub torque_nm: Option<f64>,
     /// Relief variant by name.
     #[serde(default = "default_relief_name")]
     pub relief: String,
@@ -472,21 +479,84 @@ pub struct Case {
     pub operating_points: Vec<OperatingPoint>,
     pub relief_variants: Vec<ReliefVariant>,
     pub friction_coefficients: Vec<f64>,
+    /// Plane state of the 2D bodies (`fe.plane`).
+    pub plane: PlaneState,
+    /// The explicit FE's settings (`[fe]`, SI).
+    pub fe: FeSettings,
+    /// The lumped model's settings (`[lumped]`, SI).
+    pub lumped: LumpedSettings,
     pub scenes: Vec<Scene>,
 }
 
-/// A checked explicit FE scene, SI.
+/// Where the lumped model's mesh stiffness comes from (`lumped.stiffness`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Scene {
-    pub name: String,
-    /// Driver speed Ω [rad/s] after the ramp.
-    pub driver_speed: f64,
-    /// Load torque on the driven gear [N·m] after the ramp.
-    pub torque: f64,
-    pub relief: String,
-    pub friction: f64,
-    pub duration: f64,
-    pub ramp_time: f64,
+pub enum StiffnessSource {
+    /// The case's FE bodies, quasi-static LTCA of the first relief variant.
+    Ltca,
+    /// The potential-energy (Ishikawa/Sainsot) method.
+    PotentialEnergy,
+    /// ISO 6336-1 method B, constant c_γα·b.
+    Iso,
+    /// A stiffness file (path as resolved: relative paths of a case file from its folder).
+    Csv(std::path::PathBuf),
+}
+
+impl std::str::FromStr for StiffnessSource {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Self, String> {
+        Self::parse(text).ok_or_else(|| {
+            format!(
+                "unknown stiffness source {text:?}: use one of {:?} or a .csv file with columns roll_angle_deg, mesh_stiffness_n_per_m[, unloaded_te_um]",
+                Self::KINDS
+            )
+        })
+    }
+}
+
+impl StiffnessSource {
+    /// The names a case file and the command line use.
+    pub const KINDS: [&'static str; 3] = ["ltca", "pe", "iso"];
+
+    /// How a case file names it.
+    pub fn name(&self) -> String {
+        match self {
+            Self::Ltca => "ltca".into(),
+            Self::PotentialEnergy => "pe".into(),
+            Self::Iso => "iso".into(),
+            Self::Csv(path) => path.display().to_string(),
+        }
+    }
+
+    /// Parses `ltca`, `pe`, `iso` or a path ending in `.csv`; None otherwise.
+    pub fn parse(text: &str) -> Option<Self> {
+        match text {
+            "ltca" => Some(Self::Ltca),
+            "pe" => Some(Self::PotentialEnergy),
+            "iso" => Some(Self::Iso),
+            path if path.ends_with(".csv") => Some(Self::Csv(path.into())),
+            _ => None,
+        }
+    }
+}
+
+/// The `[lumped]` section in SI, checked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LumpedSettings {
+    pub stiffness: StiffnessSource,
+    pub drive: Drive,
+    /// Mesh damping ratio ζ.
+    pub damping_ratio: f64,
+    /// Mesh damping coefficient c [N·s/m], when given instead of the ratio.
+    pub mesh_damping: Option<f64>,
+    /// Rotary inertias of the gears [kg·m²]; None: ρ b ∫r² dA of the bodies.
+    pub inertias: Option<[f64; 2]>,
+    pub bearings: bool,
+    /// Bearing stiffness along the line of action [N/m].
+    pub bearing_stiffness: [f64; 2],
+    pub bearing_damping_ratio: f64,
+    /// Translating masses [kg]; None: ρ b A of the bodies.
+    pub gear_masses: Option<[f64; 2]>,
 }
 
 impl Case {
@@ -676,13 +746,23 @@ impl Case {
         }
 
         let lumped = &file.lumped;
-        if !(lumped.drive == "torque" || lumped.drive == "speed") {
-            return Err(invalid(
-                "lumped.drive",
-                format!("{:?}", lumped.drive),
-                "use \"torque\" or \"speed\"",
-            ));
-        }
+        let stiffness_source = match StiffnessSource::parse(&lumped.stiffness) {
+            // A file named in a case file is relative to the case file's folder.
+            Some(StiffnessSource::Csv(path)) if path.is_relative() && source != EMBEDDED_SOURCE => {
+                StiffnessSource::Csv(match Path::new(source).parent() {
+                    Some(dir) => dir.join(path),
+                    None => path,
+                })
+            }
+            Some(kind) => kind,
+            None => {
+                return Err(invalid(
+                    "lumped.stiffness",
+                    format!("{:?}", lumped.stiffness),
+                    "use \"ltca\", \"pe\", \"iso\" or a .csv file with columns roll_angle_deg, mesh_stiffness_n_per_m[, unloaded_te_um]",
+                ))
+            }
+        };
         if !(0.0..1.0).contains(&lumped.damping_ratio) {
             return Err(invalid(
                 "lumped.damping_ratio",
@@ -789,21 +869,60 @@ impl Case {
                     "names must be unique",
                 ));
             }
-            let Some(op) = operating_points
-                .iter()
-                .find(|o| o.name == sc.operating_point)
-            else {
-                return Err(invalid(
-                    &key("operating_point"),
-                    format!("{:?}", sc.operating_point),
-                    &format!(
-                        "name one of the operating points: {:?}",
-                        operating_points
-                            .iter()
-                            .map(|o| o.name.as_str())
-                            .collect::<Vec<_>>()
-                    ),
-                ));
+            let op = match &sc.operating_point {
+                Some(name) => match operating_points.iter().find(|o| &o.name == name) {
+                    Some(op) => Some(op),
+                    None => {
+                        return Err(invalid(
+                            &key("operating_point"),
+                            format!("{name:?}"),
+                            &format!(
+                                "name one of the operating points: {:?}",
+                                operating_points
+                                    .iter()
+                                    .map(|o| o.name.as_str())
+                                    .collect::<Vec<_>>()
+                            ),
+                        ))
+                    }
+                },
+                None => None,
+            };
+            let driver_speed = match (sc.speed_rpm, op) {
+                (Some(rpm), _) if !(rpm > 0.0 && rpm.is_finite()) => {
+                    return Err(invalid(
+                        &key("speed_rpm"),
+                        rpm.to_string(),
+                        "must be a finite number > 0",
+                    ))
+                }
+                (Some(rpm), _) => rpm * 2.0 * PI / 60.0,
+                (None, Some(op)) => op.driver_speed,
+                (None, None) => {
+                    return Err(invalid(
+                        &key("operating_point"),
+                        "none".into(),
+                        "name an operating point, or give speed_rpm and torque_nm",
+                    ))
+                }
+            };
+            let torque = match (sc.torque_nm, op) {
+                (Some(t), _) if !(t > 0.0 && t.is_finite()) => {
+                    return Err(invalid(
+                        &key("torque_nm"),
+                        t.to_string(),
+                        "must be a finite number > 0 (the load torque on the driven gear)",
+                    ))
+                }
+                (Some(t), _) => t,
+                (None, Some(op)) => op.torque,
+                (None, None) => {
+                    return Err(invalid(
+                        &key("operating_point"),
+                        "none".into(),
+                        "name an operating point, or give speed_rpm and torque_nm",
+                    ))
+                }
             };
             if !relief_variants.iter().any(|v| v.name == sc.relief) {
                 return Err(invalid(
@@ -841,8 +960,8 @@ impl Case {
             }
             scenes.push(Scene {
                 name: sc.name.clone(),
-                driver_speed: op.driver_speed,
-                torque: op.torque,
+                driver_speed,
+                torque,
                 relief: sc.relief.clone(),
                 friction: sc.friction,
                 duration: sc.duration_s,
@@ -850,9 +969,33 @@ impl Case {
             });
         }
 
+        let fe_settings = FeSettings {
+            step_factor: fe.step_factor,
+            penalty_factor: fe.penalty_factor,
+            mass_lumping: fe.mass_lumping,
+            high_frequency_damping_ratio: fe.high_frequency_damping_ratio,
+            mesh_damping_ratio: fe.mesh_damping_ratio,
+            output_interval: fe.output_interval_us * 1e-6,
+            fine_size: explicit_fine * 1e-3,
+            coarse_size: explicit_coarse * 1e-3,
+        };
+        let lumped_settings = LumpedSettings {
+            stiffness: stiffness_source,
+            drive: lumped.drive,
+            damping_ratio: lumped.damping_ratio,
+            mesh_damping: lumped.mesh_damping_n_s_per_m,
+            inertias: lumped.inertia_kg_mm2.map(|i| i.map(|v| v * 1e-6)),
+            bearings: lumped.bearings,
+            bearing_stiffness: lumped.bearing_stiffness_n_per_m,
+            bearing_damping_ratio: lumped.bearing_damping_ratio,
+            gear_masses: lumped.gear_mass_kg,
+        };
         Ok(Case {
             source: source.into(),
             scenes,
+            plane: file.fe.plane,
+            fe: fe_settings,
+            lumped: lumped_settings,
             text: text.into(),
             friction_coefficients: file.contact.friction_coefficients.clone(),
             file,
@@ -886,6 +1029,262 @@ impl Case {
     pub fn relief_variant(&self, name: &str) -> Option<&ReliefVariant> {
         self.relief_variants.iter().find(|v| v.name == name)
     }
+
+    /// The elastic bodies of the LTCA: the case's material and plane state.
+    pub fn ltca_material(&self) -> BodyMaterial {
+        BodyMaterial {
+            youngs_modulus: self.material.youngs_modulus,
+            poisson_ratio: self.material.poisson_ratio,
+            plane: self.plane,
+        }
+    }
+
+    /// The explicit bodies: the case's steel, plane state and face width (both gears share it),
+    /// with the mass lumping of `fe.mass_lumping`.
+    pub fn explicit_material(&self) -> ExplicitMaterial {
+        ExplicitMaterial {
+            youngs_modulus: self.material.youngs_modulus,
+            poisson_ratio: self.material.poisson_ratio,
+            density: self.material.density,
+            plane: self.plane,
+            thickness: self.pair.gears[0].spec.face_width,
+            lumping: self.fe.mass_lumping,
+        }
+    }
+
+    /// Reads the case at `path` (None: the embedded default), applies `overrides` to its TOML
+    /// and checks the result as one case file: every value, overridden or not, passes the same
+    /// checks with the same messages. Without overrides the text is kept as written (comments
+    /// included); with them it is the effective case, re-written.
+    pub fn load_with(path: Option<&Path>, overrides: &[Override]) -> Result<Self, CaseError> {
+        let (text, source) = match path {
+            Some(p) => {
+                let shown = p.display().to_string();
+                let text = std::fs::read_to_string(p).map_err(|source| CaseError::Io {
+                    path: shown.clone(),
+                    source,
+                })?;
+                (text, shown)
+            }
+            None => (EMBEDDED_DEFAULT.to_string(), EMBEDDED_SOURCE.to_string()),
+        };
+        if overrides.is_empty() {
+            return Self::from_toml_str(&text, &source);
+        }
+        let mut table: toml::Table = toml::from_str(&text).map_err(|e| CaseError::Parse {
+            path: source.clone(),
+            message: e.to_string().trim_end().to_string(),
+        })?;
+        for o in overrides {
+            o.apply(&mut table)?;
+        }
+        let effective = toml::to_string(&table).map_err(|e| CaseError::Parse {
+            path: source.clone(),
+            message: e.to_string(),
+        })?;
+        let shown: Vec<String> = overrides.iter().map(|o| o.to_string()).collect();
+        let header = format!(
+            "# {source} with {}\n",
+            shown
+                .iter()
+                .map(|s| format!("--set {s}"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        );
+        Self::from_toml_str(&format!("{header}{effective}"), &source)
+    }
+}
+
+/// One change to a case file's TOML before it is checked (`--set KEY=VALUE` and the commands'
+/// shorthands for it).
+///
+/// KEY is a dotted path, e.g. `fe.plane` or `mesh.fine_element_mm`; an array of tables is
+/// indexed by position or by the `name` of its element: `scene[0].duration_s`,
+/// `scene[low-unmodified].duration_s`, `relief_variant[tip20-root10].gear1.tip.amount_um`.
+/// VALUE is a TOML value (`0.05`, `true`, `[1, 2]`, `"x"`); anything that is not one is taken
+/// as a string, so `fe.plane=stress` needs no quotes.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Override {
+    Set {
+        key: String,
+        value: toml::Value,
+    },
+    /// Removes a key (back to its default).
+    Remove {
+        key: String,
+    },
+    /// Appends a table to an array of tables (e.g. a new `[[scene]]`).
+    Append {
+        array: String,
+        table: toml::Table,
+    },
+}
+
+impl std::fmt::Display for Override {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Override::Set { key, value } => write!(f, "{key}={value}"),
+            Override::Remove { key } => write!(f, "{key} removed"),
+            Override::Append { array, table } => {
+                write!(f, "{array}[+]={}", toml::Value::Table(table.clone()))
+            }
+        }
+    }
+}
+
+impl std::str::FromStr for Override {
+    type Err = String;
+
+    /// Parses `KEY=VALUE`.
+    fn from_str(text: &str) -> Result<Self, String> {
+        let Some((key, value)) = text.split_once('=') else {
+            return Err(format!(
+                "{text:?} is not KEY=VALUE: write e.g. fe.plane=stress or mesh.fine_element_mm=0.05"
+            ));
+        };
+        let key = key.trim();
+        if key.is_empty() {
+            return Err(format!("{text:?} has no key before '='"));
+        }
+        Ok(Override::Set {
+            key: key.to_string(),
+            value: parse_value(value.trim()),
+        })
+    }
+}
+
+impl Override {
+    /// `key = value` for a value that serializes to TOML (numbers, strings, booleans).
+    pub fn set(key: impl Into<String>, value: impl Into<toml::Value>) -> Self {
+        Override::Set {
+            key: key.into(),
+            value: value.into(),
+        }
+    }
+
+    fn apply(&self, root: &mut toml::Table) -> Result<(), CaseError> {
+        let error = |key: &str, message: String| CaseError::Override {
+            key: key.to_string(),
+            message,
+        };
+        match self {
+            Override::Set { key, value } => {
+                let (parent, last) = walk(root, key, true)?;
+                parent.insert(last, value.clone());
+            }
+            Override::Remove { key } => {
+                if let Ok((parent, last)) = walk(root, key, false) {
+                    parent.remove(&last);
+                }
+            }
+            Override::Append { array, table } => {
+                let (parent, last) = walk(root, array, true)?;
+                match parent
+                    .entry(last)
+                    .or_insert_with(|| toml::Value::Array(Vec::new()))
+                {
+                    toml::Value::Array(items) => items.push(toml::Value::Table(table.clone())),
+                    _ => return Err(error(array, "is not an array of tables".into())),
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A TOML value, or the text as a string when it is not one.
+fn parse_value(text: &str) -> toml::Value {
+    toml::from_str::<toml::Table>(&format!("v = {text}"))
+        .ok()
+        .and_then(|mut t| t.remove("v"))
+        .unwrap_or_else(|| toml::Value::String(text.to_string()))
+}
+
+/// The table that holds the last segment of `key`, and that segment; missing tables on the way
+/// are created when `create`.
+fn walk<'a>(
+    root: &'a mut toml::Table,
+    key: &str,
+    create: bool,
+) -> Result<(&'a mut toml::Table, String), CaseError> {
+    let error = |message: String| CaseError::Override {
+        key: key.to_string(),
+        message,
+    };
+    let segments: Vec<&str> = key.split('.').collect();
+    if segments.iter().any(|s| s.trim().is_empty()) {
+        return Err(error("has an empty part: write e.g. fe.plane".into()));
+    }
+    let mut table = root;
+    for (depth, segment) in segments.iter().enumerate() {
+        let (name, index) = match segment.split_once('[') {
+            Some((name, rest)) => match rest.strip_suffix(']') {
+                Some(index) => (name, Some(index)),
+                None => return Err(error(format!("{segment:?}: close the index with ']'"))),
+            },
+            None => (*segment, None),
+        };
+        let last = depth + 1 == segments.len();
+        if last && index.is_none() {
+            return Ok((table, name.to_string()));
+        }
+        let entry = if create {
+            table
+                .entry(name.to_string())
+                .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+        } else {
+            table
+                .get_mut(name)
+                .ok_or_else(|| error(format!("the case has no {name:?}")))?
+        };
+        let value = match (entry, index) {
+            (toml::Value::Array(items), Some(index)) => {
+                let count = items.len();
+                let position = match index.parse::<usize>() {
+                    Ok(i) if i < count => i,
+                    Ok(i) => {
+                        return Err(error(format!(
+                            "{name} has {count} entries: index {i} is out of range"
+                        )))
+                    }
+                    Err(_) => {
+                        let names: Vec<String> = items
+                            .iter()
+                            .filter_map(|v| v.get("name").and_then(|n| n.as_str()))
+                            .map(str::to_string)
+                            .collect();
+                        items
+                            .iter()
+                            .position(|v| v.get("name").and_then(|n| n.as_str()) == Some(index))
+                            .ok_or_else(|| {
+                                error(format!("no {name} is named {index:?}; they are {names:?}"))
+                            })?
+                    }
+                };
+                &mut items[position]
+            }
+            (_, Some(_)) => {
+                return Err(error(format!(
+                    "{name} is not an array of tables: drop the index"
+                )))
+            }
+            (value, None) => value,
+        };
+        if last {
+            return Err(error(
+                "names a whole table: give a key inside it, e.g. scene[0].duration_s".into(),
+            ));
+        }
+        match value {
+            toml::Value::Table(inner) => table = inner,
+            _ => {
+                return Err(error(format!(
+                    "{segment} is a value, not a table: it has no keys below it"
+                )))
+            }
+        }
+    }
+    unreachable!("the loop returns at the last segment")
 }
 
 /// Converts one gear's relief section to SI requests.
@@ -1002,5 +1401,122 @@ mod tests {
             err.contains("gear1 is undercut") && err.contains("teeth = 5"),
             "{err}"
         );
+    }
+
+    fn set(text: &str) -> Override {
+        text.parse().unwrap()
+    }
+
+    /// Overrides reach nested keys, arrays of tables by index or by name, and keys the file
+    /// does not hold (defaults); the effective text says what was set.
+    #[test]
+    fn overrides_change_the_case_before_it_is_checked() {
+        let case = Case::load_with(
+            None,
+            &[
+                set("fe.plane=stress"),
+                set("mesh.fine_element_mm=0.5"),
+                set("scene[low-modified].duration_s=0.02"),
+                set("scene[0].friction=0.1"),
+                set("relief_variant[tip20-root10].gear1.tip.amount_um=15"),
+                set("lumped.drive=speed"),
+            ],
+        )
+        .unwrap();
+        assert_eq!(case.plane, PlaneState::Stress);
+        assert_eq!(case.file.mesh.fine_element_mm, 0.5);
+        assert_eq!(case.scene("low-modified").unwrap().duration, 0.02);
+        assert_eq!(case.scenes[0].friction, 0.1);
+        let tip = case.relief_variant("tip20-root10").unwrap().modifications[0].tip;
+        assert!((tip.unwrap().amount - 15e-6).abs() < 1e-18);
+        assert_eq!(case.lumped.drive, Drive::Speed);
+        assert!(
+            case.text.contains("--set fe.plane=\"stress\""),
+            "{}",
+            case.text
+        );
+        let again = Case::from_toml_str(&case.text, "effective").unwrap();
+        assert_eq!(again.file, case.file);
+    }
+
+    #[test]
+    fn a_bad_override_gets_the_case_files_message() {
+        let message = |o: &str| Case::load_with(None, &[set(o)]).unwrap_err().to_string();
+        let unknown = message("fe.plnae=stress");
+        assert!(
+            unknown.contains("plnae") && unknown.contains("unknown field"),
+            "{unknown}"
+        );
+        let out_of_range = message("mesh.fine_element_mm=3");
+        assert!(
+            out_of_range.contains("mesh.fine_element_mm = 3 is invalid"),
+            "{out_of_range}"
+        );
+        let wrong_type = message("fe.step_factor=fast");
+        assert!(wrong_type.contains("step_factor"), "{wrong_type}");
+        let no_scene = message("scene[nowhere].duration_s=1");
+        assert!(
+            no_scene.contains("nowhere") && no_scene.contains("low-unmodified"),
+            "{no_scene}"
+        );
+        let index = message("operating_point[7].torque_nm=1");
+        assert!(index.contains("out of range"), "{index}");
+        assert!("fe.plane".parse::<Override>().is_err());
+    }
+
+    /// A removed key falls back to its default; an appended scene is checked like the others.
+    #[test]
+    fn removed_keys_and_appended_scenes() {
+        let mut scene = toml::Table::new();
+        scene.insert("name".into(), "extra".into());
+        scene.insert("speed_rpm".into(), 300.0.into());
+        scene.insert("torque_nm".into(), 100.0.into());
+        scene.insert("duration_s".into(), 0.01.into());
+        scene.insert("ramp_s".into(), 0.001.into());
+        let case = Case::load_with(
+            None,
+            &[
+                Override::Remove {
+                    key: "fe.step_factor".into(),
+                },
+                Override::Append {
+                    array: "scene".into(),
+                    table: scene.clone(),
+                },
+            ],
+        )
+        .unwrap();
+        assert_eq!(case.fe.step_factor, default_step_factor());
+        let extra = case.scene("extra").unwrap();
+        assert!((extra.driver_speed - 10.0 * PI).abs() < 1e-12);
+        assert_eq!(extra.torque, 100.0);
+        scene.remove("torque_nm");
+        let err = Case::load_with(
+            None,
+            &[Override::Append {
+                array: "scene".into(),
+                table: scene,
+            }],
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            err.contains("operating_point") && err.contains("torque_nm"),
+            "{err}"
+        );
+    }
+
+    /// The command line's enumerated values are the case file's spellings.
+    #[test]
+    fn command_line_and_case_file_spell_enumerations_alike() {
+        use clap::ValueEnum;
+        fn same<T: ValueEnum + Serialize>() {
+            for v in T::value_variants() {
+                let clap = v.to_possible_value().unwrap().get_name().to_string();
+                assert_eq!(serde_json::to_value(v).unwrap(), clap);
+            }
+        }
+        same::<Drive>();
+        same::<MassLumping>();
     }
 }

@@ -1,12 +1,15 @@
 //! # geardyn — spur-gear mesh dynamics
 //!
 //! One gear pair, three fidelities, one currency: the periodic mesh stiffness k(θ).
-//! This crate holds the numerical kernels (no IO) and the IO edges (`case`, `report`);
-//! the `geardyn` binary only wires them.
+//! This crate holds the numerical kernels (no IO, no case schema: geometry, mesh, fe, contact,
+//! ltca, explicit, stiffness, lumped, sweep, signal), the studies that drive them, and the IO
+//! edges (`case`, `report`); the `geardyn` binary only parses arguments and wires them.
 //!
 //! * [`case`] — TOML case files (engineering units at the edge, SI inside), validation,
 //!   the embedded default case (the seed paper's pair).
 //! * [`geometry`] — rack-generated involute/trochoid teeth, relief, the meshing pair.
+//! * [`study`] — one module per command: a checked case and typed options in, a typed result
+//!   with a `Serialize` summary out; the models are built through its constructors.
 //! * [`report`] — atomic file output, JSON summaries, tables and drawings.
 //! * [`samples`] — canonical cases reused by tests, benches and docs.
 
@@ -27,4 +30,5 @@ pub mod report;
 pub mod samples;
 pub mod signal;
 pub mod stiffness;
+pub mod study;
 pub mod sweep;

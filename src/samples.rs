@@ -12,9 +12,9 @@ pub fn paper36_case() -> Case {
 }
 
 /// The explicit bodies' material of the paper's pair (steel, plane strain, 25.4 mm face width,
-/// the default mass lumping).
+/// the case's mass lumping, corner-twelfth).
 pub fn paper36_explicit_material() -> crate::explicit::body::ExplicitMaterial {
-    crate::explicit::scene::explicit_material(&paper36_case(), crate::fe::MassLumping::default())
+    paper36_case().explicit_material()
 }
 
 /// Rack and the two gear specs of the paper's pair.

@@ -6,6 +6,10 @@
 //! The mean is removed, a Hann window w applied, and |X_k|·2/Σw gives the amplitude of a sinusoid
 //! at bin k in the signal's units (exact at bin centres; up to −1.4 dB between bins).
 //!
+//! # Peaks
+//! A line is a local maximum of the amplitude spectrum (≥ its right neighbour, > its left one)
+//! above 1e-9 of the largest line; the strongest come first.
+//!
 //! # db5 DWT (periodization)
 //! With the 10-tap decomposition filters h (low-pass, Daubechies 1992, *Ten Lectures*, table 6.1)
 //! and g[j] = (−1)^{j+1} h[9 − j] (high-pass):
@@ -148,6 +152,56 @@ pub fn hann_amplitude_spectrum(x: &[f64], dt: f64) -> Vec<(f64, f64)> {
             let scale = if k == 0 { 1.0 } else { 2.0 };
             (k as f64 / (n as f64 * dt), scale * buffer[k].norm() / sum)
         })
+        .collect()
+}
+
+/// Single-sided amplitude spectrum of a record covering `periods` whole mesh periods:
+/// amplitudes 2|X_k|/N at k = 1 … N/2, line k at k/periods mesh orders.
+pub fn amplitude_spectrum(record: &[f64]) -> Vec<f64> {
+    let n = record.len();
+    let mut buffer: Vec<Complex<f64>> = record.iter().map(|x| Complex::new(*x, 0.0)).collect();
+    FftPlanner::new().plan_fft_forward(n).process(&mut buffer);
+    buffer[1..=n / 2]
+        .iter()
+        .map(|c| 2.0 * c.norm() / n as f64)
+        .collect()
+}
+
+/// The `count` largest local maxima of an amplitude spectrum: (line index from 1, amplitude).
+/// Lines below 1e-9 of the largest are rounding noise and are left out.
+pub fn strongest_lines(spectrum: &[f64], count: usize) -> Vec<(usize, f64)> {
+    let floor = 1e-9 * spectrum.iter().copied().fold(0.0, f64::max);
+    let at = |i: isize| {
+        if i < 0 {
+            0.0
+        } else {
+            spectrum.get(i as usize).copied().unwrap_or(0.0)
+        }
+    };
+    let mut lines: Vec<(usize, f64)> = (0..spectrum.len())
+        .filter(|&i| {
+            let a = spectrum[i];
+            a > floor && a > at(i as isize - 1) && a >= at(i as isize + 1)
+        })
+        .map(|i| (i + 1, spectrum[i]))
+        .collect();
+    lines.sort_by(|a, b| b.1.total_cmp(&a.1));
+    lines.truncate(count);
+    lines
+}
+
+/// The strongest local maxima of a spectrum (bins 0 … N/2) above `min_hz`: (frequency,
+/// amplitude), by [`strongest_lines`].
+pub fn spectrum_peaks(spectrum: &[(f64, f64)], min_hz: f64, count: usize) -> Vec<(f64, f64)> {
+    if spectrum.len() < 2 {
+        return Vec::new();
+    }
+    let amplitudes: Vec<f64> = spectrum[1..].iter().map(|p| p.1).collect();
+    strongest_lines(&amplitudes, amplitudes.len())
+        .into_iter()
+        .map(|(line, amplitude)| (spectrum[line].0, amplitude))
+        .filter(|(frequency, _)| *frequency >= min_hz)
+        .take(count)
         .collect()
 }
 

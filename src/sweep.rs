@@ -11,9 +11,9 @@
 //! needed).
 
 use rayon::prelude::*;
-use rustfft::{num_complex::Complex, FftPlanner};
 
 use crate::lumped::{floquet_max_multiplier, record_periods, steady_state, MeshModel, State};
+use crate::signal::{amplitude_spectrum, strongest_lines};
 
 /// Least samples per mesh period (an integer number, so the FFT sees whole periods).
 pub const STEPS_PER_PERIOD: usize = 128;
@@ -23,7 +23,7 @@ pub const STEPS_PER_PERIOD: usize = 128;
 /// periods per mesh period) stay resolved and stable (RK4 needs ωh < 2.8; 32 steps give
 /// ωh = 0.2).
 pub fn steps_per_period(model: &MeshModel, driver_speed: f64) -> usize {
-    let mesh_omega = 2.0 * std::f64::consts::PI * driver_speed / model.stiffness.period;
+    let mesh_omega = 2.0 * std::f64::consts::PI * driver_speed / model.mesh.period();
     let ratio = model.highest_frequency() / mesh_omega;
     STEPS_PER_PERIOD.max((32.0 * ratio).ceil() as usize)
 }
@@ -56,41 +56,6 @@ pub struct SweepPoint {
     pub converged: bool,
 }
 
-/// Single-sided amplitude spectrum of a record covering `periods` whole mesh periods:
-/// amplitudes 2|X_k|/N at k = 1 … N/2, line k at k/periods mesh orders.
-pub fn amplitude_spectrum(record: &[f64]) -> Vec<f64> {
-    let n = record.len();
-    let mut buffer: Vec<Complex<f64>> = record.iter().map(|x| Complex::new(*x, 0.0)).collect();
-    FftPlanner::new().plan_fft_forward(n).process(&mut buffer);
-    buffer[1..=n / 2]
-        .iter()
-        .map(|c| 2.0 * c.norm() / n as f64)
-        .collect()
-}
-
-/// The `count` largest local maxima of an amplitude spectrum: (line index from 1, amplitude).
-/// Lines below 1e-9 of the largest are rounding noise and are left out.
-pub fn strongest_lines(spectrum: &[f64], count: usize) -> Vec<(usize, f64)> {
-    let floor = 1e-9 * spectrum.iter().copied().fold(0.0, f64::max);
-    let at = |i: isize| {
-        if i < 0 {
-            0.0
-        } else {
-            spectrum.get(i as usize).copied().unwrap_or(0.0)
-        }
-    };
-    let mut lines: Vec<(usize, f64)> = (0..spectrum.len())
-        .filter(|&i| {
-            let a = spectrum[i];
-            a > floor && a > at(i as isize - 1) && a >= at(i as isize + 1)
-        })
-        .map(|i| (i + 1, spectrum[i]))
-        .collect();
-    lines.sort_by(|a, b| b.1.total_cmp(&a.1));
-    lines.truncate(count);
-    lines
-}
-
 fn analyse(model: &MeshModel, rpm: f64, start: State) -> (SweepPoint, State) {
     let speed = rpm * 2.0 * std::f64::consts::PI / 60.0;
     let tolerance = 1e-7;
@@ -111,7 +76,7 @@ fn analyse(model: &MeshModel, rpm: f64, start: State) -> (SweepPoint, State) {
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
             (a.min(*x), b.max(*x))
         });
-    let mesh_hz = speed / model.stiffness.period;
+    let mesh_hz = speed / model.mesh.period();
     let (record, periods) = if s.converged {
         (s.displacement.clone(), 1)
     } else {

@@ -597,6 +597,9 @@ fn fe_writes_histories_summary_and_keeps_a_diverged_run() {
             ])
             .arg(&out),
     );
+    // The shortened scene is the one in the effective case.
+    let effective = geardyn::case::Case::load(&out.join("case.toml")).unwrap();
+    assert_eq!(effective.scene("high-unmodified").unwrap().duration, 2e-5);
     let summary = read_summary(&out);
     for key in [
         "dte_mean_rad",
@@ -728,6 +731,51 @@ fn headline_numbers_are_unchanged_by_the_study_layer() {
                 (got - want).abs() <= 1e-9 * scale,
                 "{name} {path}: {got} against {want} recorded"
             );
+        }
+    }
+}
+
+/// `--set` changes any value of the case before it is checked; the output folder's case.toml is
+/// the effective case (it loads and holds the new values); a bad key or value gets the message
+/// a case file gets.
+#[test]
+fn set_overrides_the_case_and_case_toml_is_the_effective_case() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("ltca");
+    run_ok(
+        geardyn()
+            .args(["ltca", "--set", "fe.plane=stress", "--set"])
+            .args(["mesh.fine_element_mm=0.5", "--positions", "4"])
+            .args(["--relief", "none", "--torque-nm", "100", "--out"])
+            .arg(&out),
+    );
+    let text = std::fs::read_to_string(out.join("case.toml")).unwrap();
+    let effective = geardyn::case::Case::from_toml_str(&text, "case.toml").unwrap();
+    assert_eq!(effective.plane, geardyn::fe::PlaneState::Stress);
+    assert_eq!(effective.file.mesh.fine_element_mm, 0.5);
+    assert_eq!(effective.operating_points[0].torque, 100.0);
+    let summary = read_summary(&out);
+    assert_eq!(summary["plane"], "stress");
+    assert_eq!(summary["fine_element_mm"], 0.5);
+    assert_eq!(summary["torque_nm"], 100.0);
+    for (set, needles) in [
+        ("fe.plnae=stress", &["plnae", "unknown field"][..]),
+        (
+            "mesh.fine_element_mm=3",
+            &["mesh.fine_element_mm = 3 is invalid"][..],
+        ),
+        ("fe.step_factor=fast", &["step_factor", "fast"][..]),
+        ("fe.plane", &["KEY=VALUE"][..]),
+    ] {
+        let output = geardyn()
+            .args(["geometry", "--set", set, "--out"])
+            .arg(dir.path().join("bad"))
+            .output()
+            .unwrap();
+        assert!(!output.status.success(), "{set}");
+        let message = String::from_utf8_lossy(&output.stderr);
+        for needle in needles {
+            assert!(message.contains(needle), "{set}: {message}");
         }
     }
 }

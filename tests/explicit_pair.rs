@@ -3,32 +3,36 @@
 //! the border between stable and divergent runs, the static DTE against the LTCA on the same
 //! mesh, and a freely spinning body that stays unstrained.
 
-use geardyn::case::Case;
+use geardyn::case::{Case, Override};
 use geardyn::explicit::pair::{PairIntegrator, PairState, Ramp};
-use geardyn::explicit::scene::{prepare, run, FeSettings, PreparedScene};
+use geardyn::explicit::scene::{run, PreparedScene};
+use geardyn::study;
 
 /// The paper's pair with a coarse mesh.
 fn coarse_case() -> Case {
-    let text = geardyn::case::EMBEDDED_DEFAULT
-        .replace("fine_element_mm = 0.2 ", "fine_element_mm = 1.5 ")
-        .replace("coarse_element_mm = 1.5 ", "coarse_element_mm = 3.0 ")
-        .replace(
-            "explicit_fine_element_mm = 1.0",
-            "explicit_fine_element_mm = 1.5",
-        );
-    Case::from_toml_str(&text, "coarse").unwrap()
+    Case::load_with(
+        None,
+        &[
+            Override::set("mesh.fine_element_mm", 1.5),
+            Override::set("mesh.coarse_element_mm", 3.0),
+            Override::set("fe.explicit_fine_element_mm", 1.5),
+        ],
+    )
+    .unwrap()
 }
 
+/// The low-speed scene at `rpm` for `duration` with a cosine ramp, no damping, and the contact
+/// penalty factor `penalty`.
 fn prepared(case: &Case, rpm: f64, duration: f64, ramp: f64, penalty: f64) -> PreparedScene {
     let mut scene = case.scene("low-unmodified").unwrap().clone();
     scene.driver_speed = rpm * std::f64::consts::TAU / 60.0;
     scene.duration = duration;
     scene.ramp_time = ramp;
-    let mut settings = FeSettings::from_case(case);
-    settings.penalty_factor = penalty;
-    settings.high_frequency_damping_ratio = 0.0;
-    settings.mesh_damping_ratio = 0.0;
-    let mut p = prepare(case, &scene, &settings).unwrap();
+    let mut case = case.clone();
+    case.fe.penalty_factor = penalty;
+    case.fe.high_frequency_damping_ratio = 0.0;
+    case.fe.mesh_damping_ratio = 0.0;
+    let mut p = study::fe::prepare(&case, &scene).unwrap();
     p.drive.ramp = Ramp::Cosine;
     p
 }
@@ -198,21 +202,8 @@ fn static_dte_matches_the_ltca_on_the_same_mesh() {
         (force / static_force - 1.0).abs() < 2e-3,
         "settled: {force} N vs {static_force} N"
     );
-    let teeth = geardyn::ltca::engaging_teeth(&case.pair);
-    let ltca = geardyn::ltca::LtcaModel::new(
-        &case.pair,
-        &case.relief_variant("none").unwrap().modifications,
-        [
-            case.mesh_spec(teeth[0].clone()),
-            case.mesh_spec(teeth[1].clone()),
-        ],
-        geardyn::ltca::body::BodyMaterial {
-            youngs_modulus: case.material.youngs_modulus,
-            poisson_ratio: case.material.poisson_ratio,
-            plane: case.file.fe.plane,
-        },
-    )
-    .unwrap();
+    let ltca =
+        study::ltca::model(&case, &case.relief_variant("none").unwrap().modifications).unwrap();
     let ste = ltca.solve_position(0, 64, 143.6).unwrap().ste;
     eprintln!(
         "static FE DTE {dte:.5e} rad, LTCA STE {ste:.5e} rad, ratio {:.4}",

@@ -5,33 +5,17 @@
 use std::sync::OnceLock;
 
 use geardyn::case::Case;
-use geardyn::fe::PlaneState;
-use geardyn::ltca::{body::BodyMaterial, engaging_teeth, LtcaError, LtcaModel, PositionResult};
+use geardyn::ltca::{LtcaError, LtcaModel, PositionResult};
 use geardyn::samples;
 
 const TORQUE: f64 = 143.6;
 const POSITIONS: usize = 16;
 
+/// The case's LTCA model with 0.4 mm flank elements.
 fn model(case: &Case, variant: &str) -> LtcaModel {
-    let teeth = engaging_teeth(&case.pair);
-    let spec = |t: Vec<usize>| {
-        let mut s = case.mesh_spec(t);
-        s.fine_size = 0.4e-3;
-        s
-    };
-    let material = BodyMaterial {
-        youngs_modulus: 206e9,
-        poisson_ratio: 0.3,
-        plane: PlaneState::Strain,
-    };
     let mods = case.relief_variant(variant).unwrap().modifications;
-    LtcaModel::new(
-        &case.pair,
-        &mods,
-        [spec(teeth[0].clone()), spec(teeth[1].clone())],
-        material,
-    )
-    .unwrap()
+    let coarse = case.file.mesh.coarse_element_mm * 1e-3;
+    geardyn::study::ltca::model_with_sizes(case, &mods, 0.4e-3, coarse).unwrap()
 }
 
 fn cycle(variant: &'static str) -> &'static (LtcaModel, Vec<PositionResult>) {

@@ -1,7 +1,8 @@
 //! The 1-DOF mesh model against analytic solutions: the forced response of a constant-stiffness
 //! mesh (FRF), the Mathieu instability tongue from Floquet theory, and brute-force integration.
 
-use geardyn::lumped::{floquet_max_multiplier, steady_state, MeshModel, PeriodicTable, State};
+use geardyn::lumped::{floquet_max_multiplier, steady_state, MeshModel, State};
+use geardyn::stiffness::{MeshStiffness, PeriodicTable};
 use std::f64::consts::PI;
 
 const PERIOD: f64 = 2.0 * PI / 36.0; // one base pitch of the paper's driver, in roll angle
@@ -11,10 +12,14 @@ const K_MEAN: f64 = 4.0e8;
 fn model(stiffness: PeriodicTable, te_amplitude: f64, zeta: f64) -> MeshModel {
     let mut m = MeshModel {
         effective_mass: MASS,
-        stiffness,
-        unloaded_te: PeriodicTable::from_fn(PERIOD, 256, |t| {
-            te_amplitude * (2.0 * PI * t / PERIOD).cos()
-        }),
+        mesh: MeshStiffness::from_tables(
+            "analytic",
+            None,
+            stiffness,
+            PeriodicTable::from_fn(PERIOD, 256, |t| {
+                te_amplitude * (2.0 * PI * t / PERIOD).cos()
+            }),
+        ),
         damping: 0.0,
         force: 2670.0,
         backlash: None,
@@ -388,7 +393,7 @@ fn integrator_failure_table_matches_theory() {
     );
     // A finely sampled TE: the table's linear interpolation has slope kinks that would cost
     // RK4 its order just as separation does (they shrink as 1/N²).
-    smooth.unloaded_te = PeriodicTable::from_fn(PERIOD, 1 << 14, |t| {
+    smooth.mesh.unloaded_te = PeriodicTable::from_fn(PERIOD, 1 << 14, |t| {
         0.2 * static_deflection * (2.0 * PI * t / PERIOD).cos()
     });
     let mut separating = model(

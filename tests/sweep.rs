@@ -2,7 +2,8 @@
 //! excitation the teeth separate near resonance and the up- and down-sweeps part (jump with
 //! hysteresis, softening: the resonance bends to lower speed).
 
-use geardyn::lumped::{MeshModel, PeriodicTable};
+use geardyn::lumped::MeshModel;
+use geardyn::stiffness::{MeshStiffness, PeriodicTable};
 use geardyn::sweep::{peaks, sweep};
 use std::f64::consts::PI;
 
@@ -11,10 +12,14 @@ const PERIOD: f64 = 2.0 * PI / 36.0;
 fn model(te_amplitude: f64, backlash: Option<f64>) -> MeshModel {
     let mut m = MeshModel {
         effective_mass: 0.57,
-        stiffness: PeriodicTable::constant(PERIOD, 4e8),
-        unloaded_te: PeriodicTable::from_fn(PERIOD, 256, |t| {
-            te_amplitude * (2.0 * PI * t / PERIOD).cos()
-        }),
+        mesh: MeshStiffness::from_tables(
+            "analytic",
+            None,
+            PeriodicTable::constant(PERIOD, 4e8),
+            PeriodicTable::from_fn(PERIOD, 256, |t| {
+                te_amplitude * (2.0 * PI * t / PERIOD).cos()
+            }),
+        ),
         damping: 0.0,
         force: 2670.0,
         backlash,
@@ -89,7 +94,8 @@ fn backlash_gives_a_jump_with_hysteresis() {
 /// the third harmonic come out at their frequencies with their amplitudes, strongest first.
 #[test]
 fn spectrum_finds_sub_harmonics_and_harmonics() {
-    use geardyn::sweep::{amplitude_spectrum, strongest_lines, WINDOW_PERIODS};
+    use geardyn::signal::{amplitude_spectrum, strongest_lines};
+    use geardyn::sweep::WINDOW_PERIODS;
     let per_period = 128;
     let n = per_period * WINDOW_PERIODS;
     let record: Vec<f64> = (0..n)

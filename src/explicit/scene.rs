@@ -34,14 +34,33 @@
 
 use std::time::Instant;
 
-use crate::case::{Case, Scene};
 use crate::explicit::body::ExplicitMaterial;
 use crate::explicit::pair::{Drive, ExplicitPair, PairEnergy, PairIntegrator};
 use crate::explicit::solver::critical_step;
 use crate::fe::{FeError, MassLumping};
+use crate::geometry::{FlankModification, GearPair};
 use crate::mesh::mesh_gear;
+use crate::stiffness::MeshStiffness;
 
-/// Settings of an explicit run (from the case's `[fe]` section).
+/// An explicit FE scene, SI: one run of the meshing pair.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Scene {
+    pub name: String,
+    /// Driver speed Ω [rad/s] after the ramp.
+    pub driver_speed: f64,
+    /// Load torque on the driven gear [N·m] after the ramp.
+    pub torque: f64,
+    /// Relief variant's name (the modifications are passed to [`prepare`]).
+    pub relief: String,
+    /// Coulomb friction coefficient μ.
+    pub friction: f64,
+    /// Simulated time [s].
+    pub duration: f64,
+    /// Ramp of driver speed and load torque from zero [s].
+    pub ramp_time: f64,
+}
+
+/// Settings of an explicit run, SI (the case's `[fe]` section).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FeSettings {
     pub step_factor: f64,
@@ -57,31 +76,11 @@ pub struct FeSettings {
     pub coarse_size: f64,
 }
 
-impl FeSettings {
-    pub fn from_case(case: &Case) -> Self {
-        let fe = &case.file.fe;
-        FeSettings {
-            step_factor: fe.step_factor,
-            penalty_factor: fe.penalty_factor,
-            mass_lumping: fe.mass_lumping,
-            high_frequency_damping_ratio: fe.high_frequency_damping_ratio,
-            mesh_damping_ratio: fe.mesh_damping_ratio,
-            output_interval: fe.output_interval_us * 1e-6,
-            fine_size: fe
-                .explicit_fine_element_mm
-                .unwrap_or(case.file.mesh.fine_element_mm)
-                * 1e-3,
-            coarse_size: fe
-                .explicit_coarse_element_mm
-                .unwrap_or(case.file.mesh.coarse_element_mm)
-                * 1e-3,
-        }
-    }
-}
-
 /// The teeth each gear needs fine and the tooth pairs in contact, for a driver rotation.
-pub fn scene_teeth(case: &Case, driver_rotation: f64) -> ([Vec<usize>; 2], Vec<(usize, usize)>) {
-    let pair = &case.pair;
+pub fn scene_teeth(
+    pair: &GearPair,
+    driver_rotation: f64,
+) -> ([Vec<usize>; 2], Vec<(usize, usize)>) {
     let (z1, z2) = (
         pair.gears[0].teeth() as usize,
         pair.gears[1].teeth() as usize,
@@ -113,19 +112,6 @@ pub fn scene_teeth(case: &Case, driver_rotation: f64) -> ([Vec<usize>; 2], Vec<(
     ([fine1, fine2], tooth_pairs)
 }
 
-/// The explicit bodies' material: the case's steel, plane state and face width (both gears share
-/// it), with the given mass lumping.
-pub fn explicit_material(case: &Case, lumping: MassLumping) -> ExplicitMaterial {
-    ExplicitMaterial {
-        youngs_modulus: case.material.youngs_modulus,
-        poisson_ratio: case.material.poisson_ratio,
-        density: case.material.density,
-        plane: case.file.fe.plane,
-        thickness: case.pair.gears[0].spec.face_width,
-        lumping,
-    }
-}
-
 /// A scene ready to run: the pair model and its time step.
 pub struct PreparedScene {
     pub model: ExplicitPair,
@@ -151,9 +137,12 @@ pub struct PreparedScene {
     pub setup_wall_s: f64,
 }
 
-/// Meshes and assembles the pair for `scene`, measures its critical step.
+/// Meshes the pair (relief `modifications`) for `scene` and assembles it, measures its critical
+/// step.
 pub fn prepare(
-    case: &Case,
+    pair: &GearPair,
+    modifications: &[FlankModification; 2],
+    material: ExplicitMaterial,
     scene: &Scene,
     settings: &FeSettings,
 ) -> Result<PreparedScene, FeError> {
@@ -167,23 +156,19 @@ pub fn prepare(
     };
     let (rotation, _, _) = drive.driver_motion(scene.duration);
     let rotation = rotation - drive.start_rotation;
-    let (fine, tooth_pairs) = scene_teeth(case, rotation);
-    let variant = case
-        .relief_variant(&scene.relief)
-        .expect("the case checked the scene's relief");
+    let (fine, tooth_pairs) = scene_teeth(pair, rotation);
     let spec = |g: usize| crate::mesh::MeshSpec {
         fine_size: settings.fine_size,
         coarse_size: settings.coarse_size,
         fine_teeth: fine[g].clone(),
     };
     let meshes = [
-        mesh_gear(&case.pair.gears[0], &variant.modifications[0], &spec(0)),
-        mesh_gear(&case.pair.gears[1], &variant.modifications[1], &spec(1)),
+        mesh_gear(&pair.gears[0], &modifications[0], &spec(0)),
+        mesh_gear(&pair.gears[1], &modifications[1], &spec(1)),
     ];
     let mesh_wall_s = started.elapsed().as_secs_f64();
-    let material = explicit_material(case, settings.mass_lumping);
     let model = ExplicitPair::new(
-        &case.pair,
+        pair,
         meshes,
         material,
         tooth_pairs,
@@ -210,9 +195,9 @@ pub fn prepare(
     // k_t = k_m R_b2², c_t = 2ζ√(k_t I₂); k_m the ISO 6336 mean mesh stiffness (its error enters
     // c_t as a square root).
     let mesh_damping_stiffness =
-        crate::stiffness::iso_6336_method_b(&case.pair, scene.torque, case.material.youngs_modulus)
+        crate::stiffness::iso_6336_method_b(pair, scene.torque, material.youngs_modulus)
             .mean_n_per_m;
-    let rb2 = case.pair.gears[1].base_radius;
+    let rb2 = pair.gears[1].base_radius;
     let mesh_damping = 2.0
         * settings.mesh_damping_ratio
         * (mesh_damping_stiffness * rb2 * rb2 * model.driven_inertia()).sqrt();
@@ -424,9 +409,10 @@ pub struct DteAnalysis {
     pub dte_min_rad: f64,
     pub dte_max_rad: f64,
     pub dte_peak_to_peak_rad: f64,
-    /// k(θ) = T/(θ_DTE R_b2²) binned over one base pitch: (driver roll angle [rad], k [N/m]),
-    /// empty bins left out.
-    pub stiffness: Vec<(f64, f64)>,
+    /// k(θ) = T/(θ_DTE R_b2²) binned over one base pitch (empty bins left out, the table
+    /// interpolates across them); no unloaded TE. None when no bin has a sample.
+    #[serde(skip)]
+    pub stiffness: Option<MeshStiffness>,
     /// Mean of the table, and T/(mean θ_DTE R_b2²) (the paper's k0).
     pub mesh_stiffness_mean_n_per_m: f64,
     pub mesh_stiffness_from_mean_dte_n_per_m: f64,
@@ -481,7 +467,7 @@ pub fn analyse_dte(
         sums[bin].1 += 1;
     }
     let roll_pitch = pair.roll_angle_at(1, pair.contact_points.pitch);
-    let stiffness: Vec<(f64, f64)> = sums
+    let binned: Vec<(f64, f64)> = sums
         .iter()
         .enumerate()
         .filter(|(_, (_, c))| *c > 0)
@@ -492,8 +478,19 @@ pub fn analyse_dte(
             )
         })
         .collect();
-    let covered = stiffness.len() as f64 / bins as f64;
-    let k_mean = stiffness.iter().map(|p| p.1).sum::<f64>() / stiffness.len().max(1) as f64;
+    let covered = binned.len() as f64 / bins as f64;
+    let k_mean = binned.iter().map(|p| p.1).sum::<f64>() / binned.len().max(1) as f64;
+    let angles: Vec<f64> = binned.iter().map(|p| p.0).collect();
+    let values: Vec<f64> = binned.iter().map(|p| p.1).collect();
+    let stiffness = MeshStiffness::from_samples(
+        "explicit FE DTE (k = T/(theta_DTE Rb2^2), nominal torque)",
+        Some(torque),
+        pitch,
+        &angles,
+        &values,
+        &vec![0.0; angles.len()],
+    )
+    .ok();
     Some(DteAnalysis {
         window: (history.time[start], *history.time.last()?),
         dte_mean_rad: mean,

@@ -169,7 +169,18 @@ pub fn area(nodes: &[Point2<f64>; 8]) -> f64 {
 /// frequency of the mesh (the explicit step) and, in a penalty contact, the frequency of the
 /// light surface nodes against their contact springs. The row sums of the Q8 consistent mass
 /// are negative at the corners, so row-sum lumping is not usable.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+/// (The case file and the command line spell it alike: `corner-twelfth`, `hrz`.)
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum MassLumping {
     /// Diagonal of the consistent mass scaled to the element mass (Hinton, Rock & Zienkiewicz
@@ -185,6 +196,16 @@ pub enum MassLumping {
     /// a tooth-sized cantilever's first four modes within 1.8 % at 1 mm elements, HRZ 1.2 %).
     #[default]
     CornerTwelfth,
+}
+
+impl MassLumping {
+    /// How a case file names it.
+    pub fn name(self) -> &'static str {
+        match self {
+            MassLumping::Hrz => "hrz",
+            MassLumping::CornerTwelfth => "corner-twelfth",
+        }
+    }
 }
 
 /// Lumped (diagonal) mass per node (the same for both directions), by `lumping`.

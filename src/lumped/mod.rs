@@ -34,95 +34,46 @@ pub mod schemes;
 
 use nalgebra::{DMatrix, SymmetricEigen};
 
-/// A periodic function of the driver roll angle sampled on one period (linear interpolation).
-#[derive(Debug, Clone, PartialEq)]
-pub struct PeriodicTable {
-    /// Period in roll angle [rad] (2π/z₁ for mesh quantities).
-    pub period: f64,
-    /// Values at θ = j·period/N, j = 0 … N−1.
-    pub values: Vec<f64>,
+use crate::stiffness::{MeshStiffness, PeriodicTable};
+
+/// How the pair is driven: the boundary condition of the relative coordinate p. (The case file
+/// and the command line spell it alike: `torque`, `speed`.)
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum Drive {
+    /// Both gears free, input and load torques: the torsional 2-DOF reduces exactly to p with
+    /// m_e = I₁I₂/(I₁r_b2² + I₂r_b1²).
+    #[default]
+    Torque,
+    /// The driver turns at the prescribed speed, as in the explicit FE: m = I₂/r_b2².
+    Speed,
 }
 
-impl PeriodicTable {
-    pub fn constant(period: f64, value: f64) -> Self {
-        Self {
-            period,
-            values: vec![value],
+impl Drive {
+    /// The effective mass of p for gear inertias I₁, I₂ [kg·m²] and base radii r_b1, r_b2 [m].
+    pub fn effective_mass(self, inertias: [f64; 2], base_radii: [f64; 2]) -> f64 {
+        let ([i1, i2], [rb1, rb2]) = (inertias, base_radii);
+        match self {
+            Drive::Torque => i1 * i2 / (i1 * rb2 * rb2 + i2 * rb1 * rb1),
+            Drive::Speed => i2 / (rb2 * rb2),
         }
     }
 
-    /// Samples `f` at N points of one period.
-    pub fn from_fn(period: f64, samples: usize, f: impl Fn(f64) -> f64) -> Self {
-        Self {
-            period,
-            values: (0..samples)
-                .map(|j| f(j as f64 * period / samples as f64))
-                .collect(),
+    pub fn name(self) -> &'static str {
+        match self {
+            Drive::Torque => "torque",
+            Drive::Speed => "speed",
         }
-    }
-
-    /// Resamples an increasing, non-uniform set of samples (θᵢ, vᵢ) of one period onto a
-    /// uniform table of as many points, starting at θ₀, by periodic linear interpolation (the
-    /// last sample joins the first one period later). Errors name what is wrong.
-    pub fn from_samples(period: f64, angles: &[f64], values: &[f64]) -> Result<Self, String> {
-        let n = angles.len();
-        if n == 0 || n != values.len() {
-            return Err(format!(
-                "{n} angles and {} values: give one value per angle, at least one",
-                values.len()
-            ));
-        }
-        if let Some(i) = (1..n).find(|&i| !(angles[i] > angles[i - 1])) {
-            return Err(format!(
-                "angles must increase strictly: row {} ({}) follows {}",
-                i + 1,
-                angles[i],
-                angles[i - 1]
-            ));
-        }
-        if !(angles[n - 1] - angles[0] < period) {
-            return Err(format!(
-                "the angles span {} rad, not less than one period ({period} rad): give one mesh period without repeating its end",
-                angles[n - 1] - angles[0]
-            ));
-        }
-        let value_at = |theta: f64| {
-            let u = theta - angles[0];
-            let i = angles.partition_point(|a| *a - angles[0] <= u).max(1) - 1;
-            let (a0, v0) = (angles[i] - angles[0], values[i]);
-            let (a1, v1) = if i + 1 < n {
-                (angles[i + 1] - angles[0], values[i + 1])
-            } else {
-                (period, values[0])
-            };
-            v0 + (v1 - v0) * (u - a0) / (a1 - a0)
-        };
-        Ok(Self::from_fn(period, n, |theta| {
-            value_at(angles[0] + theta)
-        }))
-    }
-
-    pub fn mean(&self) -> f64 {
-        self.values.iter().sum::<f64>() / self.values.len() as f64
-    }
-
-    pub fn max(&self) -> f64 {
-        self.values
-            .iter()
-            .copied()
-            .fold(f64::NEG_INFINITY, f64::max)
-    }
-
-    /// Value at roll angle θ (any θ; periodic, linear between samples).
-    pub fn at(&self, theta: f64) -> f64 {
-        let n = self.values.len();
-        if n == 1 {
-            return self.values[0];
-        }
-        let u = (theta / self.period).rem_euclid(1.0) * n as f64;
-        let i = (u.floor() as usize).min(n - 1);
-        let t = u - i as f64;
-        self.values[i] * (1.0 - t) + self.values[(i + 1) % n] * t
     }
 }
 
@@ -145,10 +96,8 @@ pub struct Bearings {
 pub struct MeshModel {
     /// Effective mass m_e of the relative rotation p = r_b1θ₁ − r_b2θ₂ [kg].
     pub effective_mass: f64,
-    /// Mesh stiffness k(θ) [N/m].
-    pub stiffness: PeriodicTable,
-    /// Unloaded transmission error e(θ) along the line of action [m].
-    pub unloaded_te: PeriodicTable,
+    /// Mesh stiffness k(θ) and unloaded transmission error e(θ) along the line of action.
+    pub mesh: MeshStiffness,
     /// Viscous mesh damping c [N·s/m].
     pub damping: f64,
     /// Static mesh force F = T/r_b2 [N].
@@ -218,12 +167,12 @@ impl State {
 impl MeshModel {
     /// Damping coefficient for a damping ratio ζ at the mean stiffness: c = 2ζ√(k̄ m_e).
     pub fn damping_from_ratio(&self, ratio: f64) -> f64 {
-        2.0 * ratio * (self.stiffness.mean() * self.effective_mass).sqrt()
+        2.0 * ratio * (self.mesh.mean() * self.effective_mass).sqrt()
     }
 
     /// Natural frequency of the mean stiffness on rigid bearings, ω_n = √(k̄/m_e) [rad/s].
     pub fn natural_frequency(&self) -> f64 {
-        (self.stiffness.mean() / self.effective_mass).sqrt()
+        (self.mesh.mean() / self.effective_mass).sqrt()
     }
 
     /// Indices of the flattened state that move: (p, ṗ), or all six with bearings.
@@ -263,15 +212,15 @@ impl MeshModel {
     /// state, separation included).
     pub fn highest_frequency(&self) -> f64 {
         *self
-            .mode_frequencies(self.stiffness.max())
+            .mode_frequencies(self.mesh.max())
             .last()
             .expect("at least one mode")
     }
 
     /// Elastic mesh force k(θ) f(δ − e(θ)) at mesh deflection δ (≥ 0 on the drive side).
     pub fn mesh_force(&self, theta: f64, deflection: f64) -> f64 {
-        let delta = deflection - self.unloaded_te.at(theta);
-        let k = self.stiffness.at(theta);
+        let delta = deflection - self.mesh.unloaded_te.at(theta);
+        let k = self.mesh.stiffness.at(theta);
         match self.backlash {
             None => k * delta,
             Some(_) if delta > 0.0 => k * delta,
@@ -283,7 +232,7 @@ impl MeshModel {
     /// The static state under F at the mean stiffness (TE and backlash left out): δ = F/k̄,
     /// y₁ = −F/k_b1, y₂ = F/k_b2.
     pub fn static_state(&self) -> State {
-        let delta = self.force / self.stiffness.mean();
+        let delta = self.force / self.mesh.mean();
         match &self.bearings {
             None => State::from((delta, 0.0)),
             Some(b) => {
@@ -321,7 +270,10 @@ impl MeshModel {
         MeshModel {
             backlash: None,
             force: 0.0,
-            unloaded_te: PeriodicTable::constant(self.stiffness.period, 0.0),
+            mesh: MeshStiffness {
+                unloaded_te: PeriodicTable::constant(self.mesh.period(), 0.0),
+                ..self.mesh.clone()
+            },
             ..self.clone()
         }
     }
@@ -370,7 +322,7 @@ pub fn steady_state(
     tolerance: f64,
     max_periods: usize,
 ) -> SteadyState {
-    let static_deflection = (model.force / model.stiffness.mean()).abs().max(1e-30);
+    let static_deflection = (model.force / model.mesh.mean()).abs().max(1e-30);
     let mut state = initial.into();
     let mut out = SteadyState {
         periods: 0,
@@ -472,7 +424,7 @@ fn integrate_period(
     start: State,
     mut sample: impl FnMut(usize, f64, &State),
 ) -> State {
-    let h = model.stiffness.period / driver_speed / steps as f64;
+    let h = model.mesh.period() / driver_speed / steps as f64;
     let mut state = start;
     let derivative = |t: f64, s: &State| model.derivative(driver_speed * t, s);
     for j in 0..steps {
@@ -501,7 +453,7 @@ pub struct RunUp {
 
 pub fn run_up(model: &MeshModel, from: f64, to: f64, duration: f64, max_samples: usize) -> RunUp {
     let alpha = (to - from) / duration;
-    let fastest_mesh_period = model.stiffness.period / from.abs().max(to.abs()).max(1e-12);
+    let fastest_mesh_period = model.mesh.period() / from.abs().max(to.abs()).max(1e-12);
     let natural_period = 2.0 * std::f64::consts::PI / model.highest_frequency();
     let h_max = (natural_period / 32.0).min(fastest_mesh_period / 64.0);
     let steps = (duration / h_max).ceil() as usize;
@@ -584,9 +536,9 @@ pub fn reference_periods(
         187.0 / 2100.0,
         1.0 / 40.0,
     ];
-    let end = periods as f64 * model.stiffness.period / driver_speed;
+    let end = periods as f64 * model.mesh.period() / driver_speed;
     let rhs = |t: f64, s: &State| model.derivative(driver_speed * t, s);
-    let scale_x = (model.force / model.stiffness.mean()).abs().max(1e-12);
+    let scale_x = (model.force / model.mesh.mean()).abs().max(1e-12);
     let scale_v = scale_x * model.highest_frequency();
     let (mut t, mut y) = (0.0, start.into());
     let mut h = 0.01 * 2.0 * std::f64::consts::PI / model.highest_frequency();

@@ -19,7 +19,8 @@
 //! contact loss and impact. Fixed steps straddle the kinks; the observed order of convergence on
 //! a separating response shows what that costs each scheme.
 
-use super::{reference_periods, rk4_step, MeshModel, PeriodicTable, State};
+use super::{reference_periods, rk4_step, MeshModel, State};
+use crate::stiffness::{MeshStiffness, PeriodicTable};
 
 /// The fixed-step schemes compared.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -111,7 +112,10 @@ fn newmark_step(model: &MeshModel, driver_speed: f64, t: f64, s: &State, h: f64)
     let (x0, v0) = (s.q[0], s.v[0]);
     let a0 = model.derivative(driver_speed * t, s).v[0];
     let theta = driver_speed * (t + h);
-    let (k, e) = (model.stiffness.at(theta), model.unloaded_te.at(theta));
+    let (k, e) = (
+        model.mesh.stiffness.at(theta),
+        model.mesh.unloaded_te.at(theta),
+    );
     let (m, c) = (model.effective_mass, model.damping);
     let u0 = x0 + h * v0 + h * h / 4.0 * a0 - e;
     // Branches (slope, offset) of f(u) = slope·u + offset and their ranges in u.
@@ -150,7 +154,10 @@ pub fn observed_amplification(scheme: Scheme, model: &MeshModel, h: f64) -> (f64
         force: 0.0,
         damping: 0.0,
         backlash: None,
-        unloaded_te: PeriodicTable::constant(model.stiffness.period, 0.0),
+        mesh: MeshStiffness {
+            unloaded_te: PeriodicTable::constant(model.mesh.period(), 0.0),
+            ..model.mesh.clone()
+        },
         ..model.clone()
     };
     let column = |s: State| {
@@ -217,7 +224,7 @@ pub fn end_state_error(
     periods: usize,
 ) -> f64 {
     let start = model.static_state();
-    let h = model.stiffness.period / driver_speed / steps_per_period as f64;
+    let h = model.mesh.period() / driver_speed / steps_per_period as f64;
     let mut state = start;
     if scheme == Scheme::CentralDifference {
         // Start the half-step velocity: v_{−½} = v₀ − ½h a₀.
@@ -234,7 +241,7 @@ pub fn end_state_error(
         state.v = std::array::from_fn(|i| state.v[i] - 0.5 * h * a[i]);
     }
     let (reference, _) = reference_periods(model, driver_speed, start, periods, 1e-11);
-    let scale = (model.force / model.stiffness.mean()).abs();
+    let scale = (model.force / model.mesh.mean()).abs();
     let omega = model.natural_frequency();
     (state.q[0] - reference.q[0])
         .abs()
@@ -300,7 +307,7 @@ pub fn failure_table(
     periods: usize,
 ) -> Vec<SchemeReport> {
     let steps_for = |model: &MeshModel, per_natural: f64| {
-        let mesh_period = model.stiffness.period / driver_speed;
+        let mesh_period = model.mesh.period() / driver_speed;
         let natural_period = 2.0 * std::f64::consts::PI / model.natural_frequency();
         (per_natural * mesh_period / natural_period).ceil() as usize
     };

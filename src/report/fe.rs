@@ -3,26 +3,11 @@
 
 use std::path::Path;
 
-use crate::explicit::scene::{DteAnalysis, History, PreparedScene};
+use crate::case::Case;
+use crate::explicit::scene::{DteAnalysis, History, PreparedScene, Scene};
 use crate::report::plot::{save_chart, LinePlot, PlotError};
-use crate::signal;
-
-/// Derived signals of a history: de-noised DTE, level-1 db5 detail of the contact force.
-pub struct Derived {
-    pub dte_denoised: Vec<f64>,
-    pub force_detail: Vec<f64>,
-}
-
-pub fn derive(history: &History) -> Derived {
-    Derived {
-        dte_denoised: signal::denoise(&history.dte, 5),
-        force_detail: if history.force_total.len() >= 2 {
-            signal::level1_detail(&history.force_total)
-        } else {
-            vec![0.0; history.force_total.len()]
-        },
-    }
-}
+use crate::report::{stiffness_csv, OutputDir, ReportError};
+use crate::study::fe::{Derived, FeStudy};
 
 /// Writes history.csv: one row per recorded sample.
 pub fn write_history(
@@ -92,34 +77,6 @@ pub fn write_history(
         row
     });
     super::write_csv(path, &header_refs, rows)
-}
-
-/// DTE spectrum over the statistics window (Hann), amplitudes in rad.
-pub fn dte_spectrum(history: &History, from: f64) -> Vec<(f64, f64)> {
-    let Some(start) = history.time.iter().position(|t| *t >= from) else {
-        return Vec::new();
-    };
-    if history.time.len() - start < 8 {
-        return Vec::new();
-    }
-    let dt = (history.time[history.time.len() - 1] - history.time[start])
-        / (history.time.len() - 1 - start) as f64;
-    signal::hann_amplitude_spectrum(&history.dte[start..], dt)
-}
-
-/// The strongest local maxima of a spectrum (bins 0 … N/2) above `min_hz`: (frequency,
-/// amplitude), by the sweep's [`crate::sweep::strongest_lines`].
-pub fn spectrum_peaks(spectrum: &[(f64, f64)], min_hz: f64, count: usize) -> Vec<(f64, f64)> {
-    if spectrum.len() < 2 {
-        return Vec::new();
-    }
-    let amplitudes: Vec<f64> = spectrum[1..].iter().map(|p| p.1).collect();
-    crate::sweep::strongest_lines(&amplitudes, amplitudes.len())
-        .into_iter()
-        .map(|(line, amplitude)| (spectrum[line].0, amplitude))
-        .filter(|(frequency, _)| *frequency >= min_hz)
-        .take(count)
-        .collect()
 }
 
 /// The plots of a run.
@@ -239,7 +196,7 @@ pub fn plot_run(
             },
         )?;
     }
-    if let Some(a) = analysis {
+    if let Some(k) = analysis.and_then(|a| a.stiffness.as_ref()) {
         save_chart(
             dir,
             "stiffness",
@@ -249,9 +206,9 @@ pub fn plot_run(
                 y_label: "mesh stiffness [N/m]".into(),
                 series: vec![(
                     "from DTE".into(),
-                    a.stiffness
+                    k.samples()
                         .iter()
-                        .map(|(r, k)| (r.to_degrees(), *k))
+                        .map(|(r, k, _)| (r.to_degrees(), *k))
                         .collect(),
                 )],
             },
@@ -260,35 +217,93 @@ pub fn plot_run(
     Ok(())
 }
 
-/// Cost and step numbers of a prepared scene, for the summary.
-pub fn step_summary(prepared: &PreparedScene) -> serde_json::Value {
-    let edges: Vec<f64> = prepared
-        .model
-        .flanks
-        .iter()
-        .flat_map(|f| f.penalty.iter().copied())
-        .collect();
-    let mean = edges.iter().sum::<f64>() / edges.len().max(1) as f64;
-    let (lo, hi) = edges
-        .iter()
-        .fold((f64::INFINITY, 0.0_f64), |(a, b), k| (a.min(*k), b.max(*k)));
-    let penalty = serde_json::json!({"mean": mean, "min": lo, "max": hi});
-    serde_json::json!({
-        "dt_s": prepared.dt,
-        "dt_critical_s": prepared.dt_critical,
-        "dt_critical_bodies_s": prepared.dt_bodies,
-        "dt_critical_contact_s": prepared.dt_contact,
-        "dt_paper_formula_s": prepared.dt_paper,
-        "dt_element_eigenvalue_bound_s": prepared.dt_element_bound,
-        "stiffness_damping_beta_s": prepared.beta_k,
-        "mesh_damping_n_m_s": prepared.mesh_damping,
-        "mesh_damping_sized_with_stiffness_n_per_m": prepared.mesh_damping_stiffness,
-        "driven_inertia_kg_m2": prepared.model.driven_inertia(),
-        "penalty_stiffness_per_edge_n_per_m": penalty,
-        "elements": prepared.model.elements(),
-        "nodes": prepared.model.meshes.iter().map(|m| m.nodes.len()).sum::<usize>(),
-        "fine_teeth": [prepared.model.meshes[0].fine_teeth.clone(), prepared.model.meshes[1].fine_teeth.clone()],
-        "tooth_pairs": prepared.model.tooth_pairs,
-        "setup_wall_s": prepared.setup_wall_s,
-    })
+/// Writes every file of a run (also of a diverged one: what it computed).
+pub fn write(out: OutputDir, case: &Case, study: &FeStudy) -> Result<(), ReportError> {
+    out.case(case)?;
+    let io = |name: &str| {
+        let path = out.path(name).display().to_string();
+        move |source| ReportError::Io { path, source }
+    };
+    let history = &study.history;
+    write_history(
+        &out.path("history.csv"),
+        history,
+        &study.derived,
+        &study.pair_names,
+    )
+    .map_err(io("history.csv"))?;
+    out.csv(
+        "dte_spectrum.csv",
+        &["frequency_hz", "amplitude_rad"],
+        study
+            .spectrum
+            .iter()
+            .map(|(f, a)| vec![format!("{f:.4}"), format!("{a:.6e}")]),
+    )?;
+    if let Some(k) = study.analysis.as_ref().and_then(|a| a.stiffness.as_ref()) {
+        stiffness_csv::write_stiffness_csv(&out.path("stiffness.csv"), k)
+            .map_err(io("stiffness.csv"))?;
+    }
+    plot_run(
+        out.0,
+        &format!("{}: {}", case.name(), study.scene.name),
+        history,
+        &study.derived,
+        &study.spectrum,
+        study.analysis.as_ref(),
+        &study.pair_names,
+    )?;
+    out.json("summary.json", &study.summary)
+}
+
+/// The prepared scene's line for the terminal: model size and time step.
+pub fn prepared_console(case: &Case, prepared: &PreparedScene, scene: &Scene) -> String {
+    let settings = &case.fe;
+    format!(
+        "{} elements ({} tooth pairs, flank elements {:.2} mm, body {:.2} mm); dt_cr = {:.4e} s (bodies {:.4e} / {:.4e}, contact {:.4e}; paper's L/c {:.4e}), dt = {:.4e} s, {} steps\n",
+        prepared.model.elements(),
+        prepared.model.tooth_pairs.len(),
+        settings.fine_size * 1e3,
+        settings.coarse_size * 1e3,
+        prepared.dt_critical,
+        prepared.dt_bodies[0],
+        prepared.dt_bodies[1],
+        prepared.dt_contact,
+        prepared.dt_paper,
+        prepared.dt,
+        (scene.duration / prepared.dt).ceil()
+    )
+}
+
+/// The run's lines for the terminal.
+pub fn console(study: &FeStudy) -> String {
+    let s = &study.summary;
+    let nan = f64::NAN;
+    let ltca =
+        |check: &Option<crate::study::fe::LtcaCheck>,
+         f: fn(&crate::study::fe::LtcaCheck) -> f64| { check.as_ref().map_or(nan, f) };
+    let mut text = format!(
+        "{} steps in {:.1} s ({:.1} ns per element-step on {} threads); DTE mean {:.4e} rad (LTCA at the same positions: {:.4e} on this mesh, {:.4e} on the case's), peak-to-peak {:.4e} rad (LTCA {:.4e}, {:.4e}); k mean {:.4e} N/m; energy error {:.2e} of the net work, {:.2e} of the transmitted work\n",
+        s.steps,
+        s.wall_s,
+        s.ns_per_element_step,
+        s.threads,
+        s.dte_mean_rad.unwrap_or(nan),
+        ltca(&s.ltca_same_mesh, |l| l.ste_mean_rad),
+        ltca(&s.ltca_case_mesh, |l| l.ste_mean_rad),
+        s.dte_peak_to_peak_rad.unwrap_or(nan),
+        ltca(&s.ltca_same_mesh, |l| l.ste_peak_to_peak_rad),
+        ltca(&s.ltca_case_mesh, |l| l.ste_peak_to_peak_rad),
+        s.mesh_stiffness_mean_n_per_m.unwrap_or(nan),
+        s.energy_error_rel,
+        s.energy_error_rel_transmitted
+    );
+    if let Some(coupled) = s.dt_critical_coupled_s {
+        text.push_str(&format!(
+            "stable step where the contact was (bodies and penalty springs, power iteration at {} instants): {coupled:.4e} s at the least, {:.2} x the step used\n",
+            s.dt_critical_coupled_checks.len(),
+            coupled / s.step.dt_s
+        ));
+    }
+    text
 }

@@ -1,77 +1,143 @@
-//! The LTCA report: per-position CSV rows and the headline numbers. Units at this edge: µm, mm,
-//! degrees, N, N/m.
+//! The LTCA report: per-position CSV (`ltca_<variant>.csv`, itself a stiffness file), STE,
+//! stiffness and load-sharing plots, the potential-energy table and `summary.json`. Units at
+//! this edge: µm, mm, degrees, N, N/m.
 
-use serde::Serialize;
-
+use crate::case::Case;
 use crate::ltca::PositionResult;
-use crate::stiffness::StiffnessTable;
+use crate::report::plot::LinePlot;
+use crate::report::{OutputDir, ReportError};
+use crate::study::ltca::LtcaStudy;
 
-/// Headline numbers of one relief variant.
-#[derive(Debug, Clone, Serialize)]
-pub struct LtcaVariantSummary {
-    pub relief_variant: String,
-    pub mesh_stiffness_mean_n_per_m: f64,
-    pub mesh_stiffness_min_n_per_m: f64,
-    pub mesh_stiffness_max_n_per_m: f64,
-    /// Linear loaded STE r_b2·φ along the line of action.
-    pub ste_mean_um: f64,
-    pub ste_peak_to_peak_um: f64,
-    pub unloaded_te_peak_to_peak_um: f64,
-    /// Largest total-force error |Σ F aₖ − T| relative, and largest KKT residual over the cycle.
-    pub max_kkt_residual: f64,
-    pub elements: [usize; 2],
-    pub free_dofs: [usize; 2],
-    pub factorization_s: f64,
-    pub condensation_s: f64,
-    pub cycle_s: f64,
+/// Writes every file of the study.
+pub fn write(out: OutputDir, case: &Case, study: &LtcaStudy) -> Result<(), ReportError> {
+    out.case(case)?;
+    let rb2 = case.pair.gears[1].base_radius;
+    let torque = study.torque;
+    let deg = |r: &PositionResult| r.roll_angle.to_degrees();
+    let mut ste_series = Vec::new();
+    let mut k_series = Vec::new();
+    for cycle in &study.cycles {
+        let header = position_header(&cycle.tooth_pairs);
+        out.csv(
+            &format!("ltca_{}.csv", cycle.name),
+            &header.iter().map(String::as_str).collect::<Vec<_>>(),
+            position_rows(&cycle.results, rb2),
+        )?;
+        let results = &cycle.results;
+        ste_series.push((
+            format!("{} loaded", cycle.name),
+            results
+                .iter()
+                .map(|r| (deg(r), r.ste * rb2 * 1e6))
+                .collect(),
+        ));
+        if !cycle.modifications.iter().all(|m| m.is_none()) {
+            ste_series.push((
+                format!("{} unloaded", cycle.name),
+                results
+                    .iter()
+                    .map(|r| (deg(r), r.unloaded_te * rb2 * 1e6))
+                    .collect(),
+            ));
+        }
+        k_series.push((
+            cycle.name.clone(),
+            results.iter().map(|r| (deg(r), r.mesh_stiffness)).collect(),
+        ));
+        out.chart(
+            &format!("load_sharing_{}", cycle.name),
+            &LinePlot {
+                title: format!(
+                    "{}: load per tooth pair, relief \"{}\", T = {torque} N·m",
+                    case.name(),
+                    cycle.name
+                ),
+                x_label: "driver roll angle [deg]".into(),
+                y_label: "normal force [N]".into(),
+                series: cycle
+                    .tooth_pairs
+                    .iter()
+                    .enumerate()
+                    .map(|(i, (t1, t2))| {
+                        (
+                            format!("pair {t1}/{t2}"),
+                            results.iter().map(|r| (deg(r), r.pair_forces[i])).collect(),
+                        )
+                    })
+                    .collect(),
+            },
+        )?;
+    }
+    out.chart(
+        "ste",
+        &LinePlot {
+            title: format!(
+                "{}: static transmission error, T = {torque} N·m",
+                case.name()
+            ),
+            x_label: "driver roll angle [deg]".into(),
+            y_label: "transmission error along the LOA [um]".into(),
+            series: ste_series,
+        },
+    )?;
+    let pe_curve: Vec<(f64, f64)> = study
+        .potential_energy
+        .samples()
+        .iter()
+        .map(|(x, k, _)| (x.to_degrees(), *k))
+        .collect();
+    k_series.push(("potential energy (unmodified)".into(), pe_curve.clone()));
+    let (x0, x1) = (pe_curve[0].0, pe_curve[pe_curve.len() - 1].0);
+    k_series.push((
+        "ISO 6336-1 c_gamma_alpha * b".into(),
+        vec![(x0, study.iso.mean_n_per_m), (x1, study.iso.mean_n_per_m)],
+    ));
+    out.csv(
+        "stiffness_potential_energy.csv",
+        &["roll_angle_deg", "mesh_stiffness_n_per_m"],
+        pe_curve
+            .iter()
+            .map(|(x, k)| vec![format!("{x:.6}"), format!("{k:.6e}")]),
+    )?;
+    out.chart(
+        "stiffness",
+        &LinePlot {
+            title: format!("{}: mesh stiffness, T = {torque} N·m", case.name()),
+            x_label: "driver roll angle [deg]".into(),
+            y_label: "mesh stiffness [N/m]".into(),
+            series: k_series,
+        },
+    )?;
+    out.json("summary.json", &study.summary)
 }
 
-/// Summary of a variant's cycle.
-pub fn variant_summary(
-    name: &str,
-    results: &[PositionResult],
-    base_radius_driven: f64,
-    elements: [usize; 2],
-    free_dofs: [usize; 2],
-    times: (f64, f64, f64),
-) -> LtcaVariantSummary {
-    let table = stiffness_table(results);
-    let ste: Vec<f64> = results
-        .iter()
-        .map(|r| r.ste * base_radius_driven * 1e6)
-        .collect();
-    let te0: Vec<f64> = results
-        .iter()
-        .map(|r| r.unloaded_te * base_radius_driven * 1e6)
-        .collect();
-    let spread = |v: &[f64]| {
-        v.iter().copied().fold(f64::NEG_INFINITY, f64::max)
-            - v.iter().copied().fold(f64::INFINITY, f64::min)
-    };
-    LtcaVariantSummary {
-        relief_variant: name.into(),
-        mesh_stiffness_mean_n_per_m: table.mean(),
-        mesh_stiffness_min_n_per_m: table.min(),
-        mesh_stiffness_max_n_per_m: table.max(),
-        ste_mean_um: ste.iter().sum::<f64>() / ste.len() as f64,
-        ste_peak_to_peak_um: spread(&ste),
-        unloaded_te_peak_to_peak_um: spread(&te0),
-        max_kkt_residual: results.iter().map(|r| r.kkt_residual).fold(0.0, f64::max),
-        elements,
-        free_dofs,
-        factorization_s: times.0,
-        condensation_s: times.1,
-        cycle_s: times.2,
+/// The study's lines for the terminal.
+pub fn console(study: &LtcaStudy) -> String {
+    let mut text = String::new();
+    for s in study.cycles.iter().map(|c| &c.summary) {
+        text.push_str(&format!(
+            "{:<16} k mean {:.4e} min {:.4e} max {:.4e} N/m, STE mean {:.3} um p-p {:.3} um, KKT <= {:.1e}\n",
+            s.relief_variant,
+            s.mesh_stiffness_mean_n_per_m,
+            s.mesh_stiffness_min_n_per_m,
+            s.mesh_stiffness_max_n_per_m,
+            s.ste_mean_um,
+            s.ste_peak_to_peak_um,
+            s.max_kkt_residual
+        ));
     }
-}
-
-/// The periodic stiffness table of an LTCA cycle.
-pub fn stiffness_table(results: &[PositionResult]) -> StiffnessTable {
-    StiffnessTable {
-        source: "ltca".into(),
-        roll_angles: results.iter().map(|r| r.roll_angle).collect(),
-        stiffness: results.iter().map(|r| r.mesh_stiffness).collect(),
-    }
+    let pe = &study.potential_energy;
+    text.push_str(&format!(
+        "potential energy: mean {:.4e} N/m (min {:.4e}, max {:.4e})\n",
+        pe.mean(),
+        pe.min(),
+        pe.max()
+    ));
+    text.push_str(&format!(
+        "ISO 6336-1 method B: c_gamma_alpha*b = {:.4e} N/m, c'*b = {:.4e} N/m\n",
+        study.iso.mean_n_per_m, study.iso.single_pair_n_per_m
+    ));
+    text
 }
 
 /// CSV header for [`position_rows`] with `pairs` tooth pairs.

@@ -6,12 +6,72 @@
 pub mod fe;
 pub mod geometry;
 pub mod ltca;
+pub mod lumped;
+pub mod mesh;
 pub mod plot;
 pub mod stiffness_csv;
 pub mod vtk;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
+
+/// A file could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    #[error("cannot write {path}: {source}")]
+    Io {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error(transparent)]
+    Plot(#[from] plot::PlotError),
+}
+
+/// The folder one command writes into; every file is written atomically and a failure names it.
+#[derive(Debug, Clone, Copy)]
+pub struct OutputDir<'a>(pub &'a Path);
+
+impl OutputDir<'_> {
+    pub fn path(&self, name: &str) -> PathBuf {
+        self.0.join(name)
+    }
+
+    fn named(&self, name: &str) -> impl Fn(std::io::Error) -> ReportError + '_ {
+        let path = self.path(name).display().to_string();
+        move |source| ReportError::Io {
+            path: path.clone(),
+            source,
+        }
+    }
+
+    pub fn bytes(&self, name: &str, bytes: &[u8]) -> Result<(), ReportError> {
+        write_atomic(&self.path(name), bytes).map_err(self.named(name))
+    }
+
+    pub fn json<T: serde::Serialize>(&self, name: &str, value: &T) -> Result<(), ReportError> {
+        write_json(&self.path(name), value).map_err(self.named(name))
+    }
+
+    pub fn csv(
+        &self,
+        name: &str,
+        header: &[&str],
+        rows: impl IntoIterator<Item = Vec<String>>,
+    ) -> Result<(), ReportError> {
+        write_csv(&self.path(name), header, rows).map_err(self.named(name))
+    }
+
+    /// `stem.svg` and `stem.png` of a chart.
+    pub fn chart(&self, stem: &str, picture: &impl plot::Drawing) -> Result<(), ReportError> {
+        Ok(plot::save_chart(self.0, stem, picture)?)
+    }
+
+    /// The effective case (after overrides), so the run can be repeated from its folder.
+    pub fn case(&self, case: &crate::case::Case) -> Result<(), ReportError> {
+        self.bytes("case.toml", case.text.as_bytes())
+    }
+}
 
 /// Writes `bytes` to `path` atomically: a temporary file in the same folder, flushed, then
 /// renamed over `path`.

@@ -1,4 +1,6 @@
-//! The periodic mesh-stiffness table k(roll angle) and the reference stiffness models.
+//! The mesh stiffness k(θ) with its unloaded transmission error e(θ) ([`MeshStiffness`], the
+//! chain's one currency) and the reference stiffness models (ISO 6336-1, the potential-energy
+//! method).
 //!
 //! # ISO 6336-1:2019, method B (§9)
 //! ```text
@@ -13,9 +15,13 @@
 //! face width b they are in N/µm. The standard's model is a solid steel disc gear; it ignores
 //! the bore and the rim/web compliance the FE carries down to the bore.
 
+pub mod mesh;
 pub mod potential_energy;
 
+pub use mesh::{MeshStiffness, PeriodicTable};
+
 use crate::geometry::GearPair;
+use crate::ltca::PositionResult;
 
 /// ISO 6336-1 method B stiffness of a spur pair (SI: N/m).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -31,18 +37,39 @@ pub struct IsoStiffness {
 }
 
 impl IsoStiffness {
-    /// The mean mesh stiffness c_γα·b as a (constant) table over one base pitch, like the FE's.
-    pub fn table(&self, pair: &GearPair, positions: usize) -> StiffnessTable {
-        let rb1 = pair.gears[0].base_radius;
-        let pitch = pair.contact_points.pitch;
-        StiffnessTable {
-            source: "iso6336".into(),
-            roll_angles: (0..positions)
-                .map(|j| pitch / rb1 + j as f64 / positions as f64 * pair.gears[0].angular_pitch())
-                .collect(),
-            stiffness: vec![self.mean_n_per_m; positions],
-        }
+    /// The mean mesh stiffness c_γα·b as a constant over one base pitch, no unloaded TE.
+    pub fn mesh_stiffness(&self, pair: &GearPair, torque: f64) -> MeshStiffness {
+        let mut k = MeshStiffness::constant(
+            "iso6336 (constant c_gamma_alpha)",
+            pair.gears[0].angular_pitch(),
+            self.mean_n_per_m,
+        );
+        k.load_torque = Some(torque);
+        k.origin = pair.roll_angle_at(1, pair.contact_points.pitch);
+        k
     }
+}
+
+/// The LTCA's k(θ) and unloaded TE e(θ) = r_b2 φ₀ over its cycle (positions from the pitch
+/// point over one base pitch) at load torque `torque`.
+pub fn from_ltca(
+    pair: &GearPair,
+    results: &[PositionResult],
+    torque: f64,
+    source: impl Into<String>,
+) -> Result<MeshStiffness, String> {
+    let rb2 = pair.gears[1].base_radius;
+    let angles: Vec<f64> = results.iter().map(|r| r.roll_angle).collect();
+    let k: Vec<f64> = results.iter().map(|r| r.mesh_stiffness).collect();
+    let e: Vec<f64> = results.iter().map(|r| r.unloaded_te * rb2).collect();
+    MeshStiffness::from_samples(
+        source,
+        Some(torque),
+        pair.gears[0].angular_pitch(),
+        &angles,
+        &k,
+        &e,
+    )
 }
 
 /// ISO 6336-1 method B for spur gears (β = 0, K_A = 1) at load torque `torque` on gear 2,
@@ -81,33 +108,6 @@ pub fn iso_6336_method_b(pair: &GearPair, torque: f64, youngs_modulus: f64) -> I
         mean_n_per_m: c_gamma * face_width_mm * 1e6,
         c_th_prime: c_th,
         load_factor,
-    }
-}
-
-/// A periodic mesh-stiffness table over one base pitch: k at the driver's roll angles.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct StiffnessTable {
-    /// Where the table comes from ("ltca", "iso6336", "dte", …).
-    pub source: String,
-    /// Driver roll angles ξ₁ [rad], ascending, spanning one base pitch (2π/z₁) without repeating
-    /// the end point.
-    pub roll_angles: Vec<f64>,
-    /// Mesh stiffness at each roll angle [N/m].
-    pub stiffness: Vec<f64>,
-}
-
-impl StiffnessTable {
-    pub fn mean(&self) -> f64 {
-        self.stiffness.iter().sum::<f64>() / self.stiffness.len() as f64
-    }
-    pub fn min(&self) -> f64 {
-        self.stiffness.iter().copied().fold(f64::INFINITY, f64::min)
-    }
-    pub fn max(&self) -> f64 {
-        self.stiffness
-            .iter()
-            .copied()
-            .fold(f64::NEG_INFINITY, f64::max)
     }
 }
 

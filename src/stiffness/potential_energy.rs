@@ -23,7 +23,7 @@
 use crate::fe::PlaneState;
 use crate::geometry::{FlankModification, Gear, GearPair, OutlineResolution, Segment, Side};
 
-use super::StiffnessTable;
+use super::{MeshStiffness, PeriodicTable};
 
 /// Sainsot et al. (2004), Table 1: rows L*, M*, P*, Q*; columns A, B, C, D, E, F.
 const SAINSOT: [[f64; 6]; 4] = [
@@ -177,7 +177,7 @@ pub fn potential_energy_table(
     youngs_modulus: f64,
     poisson_ratio: f64,
     plane: PlaneState,
-) -> StiffnessTable {
+) -> MeshStiffness {
     let shapes = [
         ToothShape::new(&pair.gears[0]),
         ToothShape::new(&pair.gears[1]),
@@ -199,23 +199,22 @@ pub fn potential_energy_table(
         1.0 / compliance
     };
     let rb1 = pair.gears[0].base_radius;
-    let mut roll_angles = Vec::with_capacity(positions);
-    let mut stiffness = Vec::with_capacity(positions);
-    for j in 0..positions {
-        let rotation = j as f64 / positions as f64 * pair.gears[0].angular_pitch();
+    let period = pair.gears[0].angular_pitch();
+    let stiffness = PeriodicTable::from_fn(period, positions, |rotation| {
         let s0 = c.pitch + rb1 * rotation;
-        let k: f64 = (-2..=2)
+        (-2..=2)
             .map(|n| s0 + n as f64 * pair.base_pitch)
             .filter(|s| *s >= c.icp && *s <= c.fcp)
             .map(pair_stiffness)
-            .sum();
-        roll_angles.push(s0 / rb1);
-        stiffness.push(k);
-    }
-    StiffnessTable {
+            .sum()
+    });
+    // Linear in the load (Hertz linearized): no load; no relief: no unloaded TE.
+    MeshStiffness {
         source: "potential-energy".into(),
-        roll_angles,
+        load_torque: None,
+        origin: c.pitch / rb1,
         stiffness,
+        unloaded_te: PeriodicTable::constant(period, 0.0),
     }
 }
 
@@ -273,6 +272,6 @@ mod tests {
         let pair = samples::paper36_pair();
         let table = potential_energy_table(&pair, 64, 206e9, 0.3, PlaneState::Strain);
         assert!(table.max() > 1.3 * table.min());
-        assert_eq!(table.stiffness.len(), 64);
+        assert_eq!(table.stiffness.values.len(), 64);
     }
 }

@@ -1,0 +1,368 @@
+//! Reports of the lumped-model studies: the speed sweep (`sweep.csv`, response, dynamic factor,
+//! harmonics, stability and waterfall plots, the run-up), the Floquet map (`stability.csv`) and
+//! the integrator table. Units at this edge: µm, rpm, Hz.
+
+use crate::case::Case;
+use crate::report::plot::{ColourMap, LinePlot};
+use crate::report::{stiffness_csv, OutputDir, ReportError};
+use crate::study::lumped::LumpedSetup;
+use crate::study::stability::StabilityStudy;
+use crate::study::sweep::SweepStudy;
+use crate::study::validate::IntegratorSummary;
+use crate::sweep::{SweepPoint, HARMONICS, PEAKS};
+
+/// The model's line for the terminal: stiffness, inertias, m_e, f_n, backlash and the model.
+pub fn setup_console(setup: &LumpedSetup) -> String {
+    let model = &setup.model;
+    format!(
+        "stiffness {}: mean {:.4e} N/m; I1 = {:.1} kg·mm², I2 = {:.1} kg·mm², m_e = {:.4} kg; f_n = {:.1} Hz; {}\nmodel: {}\n",
+        model.mesh.source,
+        model.mesh.mean(),
+        setup.inertias[0] * 1e6,
+        setup.inertias[1] * 1e6,
+        model.effective_mass,
+        setup.natural_frequency_hz,
+        match model.backlash {
+            Some(j) => format!("backlash {:.2} um (separation modelled)", j * 1e6),
+            None => "zero backlash (no separation: the back flank engages at once)".into(),
+        },
+        setup.model_note
+    )
+}
+
+/// Writes every file of a sweep.
+pub fn write_sweep(out: OutputDir, case: &Case, study: &SweepStudy) -> Result<(), ReportError> {
+    out.case(case)?;
+    let model = &study.setup.model;
+    // The stiffness the sweep used, in the file format every source reads back.
+    stiffness_csv::write_stiffness_csv(&out.path("stiffness.csv"), &model.mesh).map_err(|e| {
+        ReportError::Io {
+            path: out.path("stiffness.csv").display().to_string(),
+            source: e,
+        }
+    })?;
+    let mut header: Vec<String> = [
+        "driver_rpm",
+        "mesh_hz",
+        "dte_rms_up_um",
+        "dte_rms_down_um",
+        "dte_pp_up_um",
+        "dynamic_factor_up",
+        "dynamic_factor_down",
+        "separated_up",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    header.extend((1..=HARMONICS).map(|h| format!("h{h}_um")));
+    header.extend(["floquet_max_multiplier", "periods_up", "converged_up"].map(String::from));
+    for k in 1..=PEAKS {
+        header.extend([format!("peak{k}_hz"), format!("peak{k}_um")]);
+    }
+    let rows = study.up.iter().zip(&study.down).map(|(u, d)| {
+        let mut row = vec![
+            format!("{:.3}", u.driver_speed_rpm),
+            format!("{:.3}", u.mesh_frequency_hz),
+            format!("{:.6}", u.dte_rms * 1e6),
+            format!("{:.6}", d.dte_rms * 1e6),
+            format!("{:.6}", u.dte_peak_to_peak * 1e6),
+            format!("{:.6}", u.dynamic_factor),
+            format!("{:.6}", d.dynamic_factor),
+            u.separated.to_string(),
+        ];
+        row.extend(u.harmonics.iter().map(|h| format!("{:.6}", h * 1e6)));
+        row.extend([
+            format!("{:.6}", u.floquet),
+            u.periods.to_string(),
+            u.converged.to_string(),
+        ]);
+        for k in 0..PEAKS {
+            match u.peaks.get(k) {
+                Some((hz, a)) => row.extend([format!("{hz:.3}"), format!("{:.6}", a * 1e6)]),
+                None => row.extend([String::new(), String::new()]),
+            }
+        }
+        row
+    });
+    out.csv(
+        "sweep.csv",
+        &header.iter().map(String::as_str).collect::<Vec<_>>(),
+        rows,
+    )?;
+
+    let (up, down) = (&study.up, &study.down);
+    let curve = |points: &[SweepPoint], f: &dyn Fn(&SweepPoint) -> f64| -> Vec<(f64, f64)> {
+        points.iter().map(|p| (p.driver_speed_rpm, f(p))).collect()
+    };
+    let source = &model.mesh.source;
+    let zeta = study.setup.damping_ratio;
+    let plots = [
+        (
+            "response",
+            "DTE rms along the LOA [um]",
+            vec![
+                ("up-sweep".to_string(), curve(up, &|p| p.dte_rms * 1e6)),
+                ("down-sweep".to_string(), curve(down, &|p| p.dte_rms * 1e6)),
+            ],
+        ),
+        (
+            "dynamic_factor",
+            "max dynamic mesh force / static",
+            vec![
+                ("up-sweep".to_string(), curve(up, &|p| p.dynamic_factor)),
+                ("down-sweep".to_string(), curve(down, &|p| p.dynamic_factor)),
+            ],
+        ),
+        (
+            "harmonics",
+            "DTE amplitude at mesh harmonic [um]",
+            (0..HARMONICS)
+                .map(|h| {
+                    (
+                        format!("order {} x z1", h + 1),
+                        curve(up, &|p| p.harmonics[h] * 1e6),
+                    )
+                })
+                .collect(),
+        ),
+        (
+            "stability",
+            "largest Floquet multiplier |lambda| (> 1 unstable)",
+            vec![("max |lambda|".to_string(), curve(up, &|p| p.floquet))],
+        ),
+    ];
+    for (stem, label, series) in plots {
+        out.chart(
+            stem,
+            &LinePlot {
+                title: format!("{}: {stem}, stiffness {source}, zeta = {zeta}", case.name()),
+                x_label: "driver speed [rpm]".into(),
+                y_label: label.into(),
+                series,
+            },
+        )?;
+    }
+
+    // Waterfall: DTE amplitude at each mesh harmonic, at its frequency, over speed.
+    let rpms = &study.rpms;
+    let step_rpm = if rpms.len() > 1 {
+        rpms[1] - rpms[0]
+    } else {
+        1.0
+    };
+    let mesh_hz_per_rpm = case.pair.gears[0].teeth() as f64 / 60.0;
+    out.chart(
+        "waterfall",
+        &ColourMap {
+            title: format!(
+                "{}: DTE mesh harmonics (log colour, 3 decades), stiffness {source}",
+                case.name()
+            ),
+            x_label: "driver speed [rpm]".into(),
+            y_label: "frequency [Hz]".into(),
+            cells: up
+                .iter()
+                .flat_map(|p| {
+                    p.harmonics.iter().enumerate().map(move |(h, a)| {
+                        (p.driver_speed_rpm, (h + 1) as f64 * p.mesh_frequency_hz, *a)
+                    })
+                })
+                .collect(),
+            cell_size: (
+                step_rpm,
+                0.8 * step_rpm * mesh_hz_per_rpm * HARMONICS as f64,
+            ),
+            decades: 3.0,
+        },
+    )?;
+    if let Some((duration, r)) = &study.run_up {
+        let static_x = model.force / model.mesh.mean();
+        let rpm_of = |speed: f64| speed * 60.0 / std::f64::consts::TAU;
+        out.csv(
+            "runup.csv",
+            &[
+                "time_s",
+                "driver_rpm",
+                "dte_about_static_um",
+                "mesh_force_n",
+            ],
+            (0..r.time.len()).map(|i| {
+                vec![
+                    format!("{:.9}", r.time[i]),
+                    format!("{:.4}", rpm_of(r.driver_speed[i])),
+                    format!("{:.6}", (r.displacement[i] - static_x) * 1e6),
+                    format!("{:.4}", r.mesh_force[i]),
+                ]
+            }),
+        )?;
+        let (from, to) = (rpms[0], rpms[rpms.len() - 1]);
+        out.chart(
+            "runup",
+            &LinePlot {
+                title: format!(
+                    "{}: run-up {from:.0} -> {to:.0} rpm in {duration} s, stiffness {source}",
+                    case.name()
+                ),
+                x_label: "driver speed [rpm]".into(),
+                y_label: "DTE about the static deflection [um]".into(),
+                series: vec![(
+                    "run-up".into(),
+                    (0..r.time.len())
+                        .step_by((r.time.len() / 20_000).max(1))
+                        .map(|i| {
+                            (
+                                rpm_of(r.driver_speed[i]),
+                                (r.displacement[i] - static_x) * 1e6,
+                            )
+                        })
+                        .collect(),
+                )],
+            },
+        )?;
+    }
+    out.json("summary.json", &study.summary)
+}
+
+/// The sweep's lines for the terminal.
+pub fn sweep_console(study: &SweepStudy) -> String {
+    let s = &study.summary;
+    let mut text = String::new();
+    if let Some((_, r)) = &study.run_up {
+        text.push_str(&format!(
+            "run-up: {} RK4 steps, {} samples in runup.csv\n",
+            r.steps,
+            r.time.len()
+        ));
+    }
+    text.push_str(&format!(
+        "{} points in {:.2} s (stiffness {:.2} s); resonances at {:?} rpm; primary {} rpm (f_mesh = f_n at {:.0} rpm); max dynamic factor {:.3}\n",
+        s.points,
+        s.wall_s,
+        s.stiffness_wall_s,
+        s.resonance_rpm,
+        s.primary_resonance_rpm
+            .map_or("none".into(), |r| format!("{r:.0}")),
+        study.primary_rpm_expected,
+        s.max_dynamic_factor
+    ));
+    text
+}
+
+/// Writes the Floquet map.
+pub fn write_stability(
+    out: OutputDir,
+    case: &Case,
+    study: &StabilityStudy,
+) -> Result<(), ReportError> {
+    out.case(case)?;
+    let z1 = case.pair.gears[0].teeth() as f64;
+    let rpms = &study.rpms;
+    out.csv(
+        "stability.csv",
+        &["driver_rpm", "mesh_hz", "floquet_max_multiplier"],
+        rpms.iter().zip(&study.multipliers).map(|(r, m)| {
+            vec![
+                format!("{r:.3}"),
+                format!("{:.3}", r / 60.0 * z1),
+                format!("{m:.8}"),
+            ]
+        }),
+    )?;
+    out.chart(
+        "stability",
+        &LinePlot {
+            title: format!(
+                "{}: Floquet stability, stiffness {}, zeta = {}",
+                case.name(),
+                study.summary.stiffness_source,
+                study.summary.damping_ratio
+            ),
+            x_label: "driver speed [rpm]".into(),
+            y_label: "largest Floquet multiplier |lambda|".into(),
+            series: vec![
+                (
+                    "max |lambda|".into(),
+                    rpms.iter()
+                        .copied()
+                        .zip(study.multipliers.iter().copied())
+                        .collect(),
+                ),
+                (
+                    "stability limit |lambda| = 1".into(),
+                    vec![(rpms[0], 1.0), (rpms[rpms.len() - 1], 1.0)],
+                ),
+            ],
+        },
+    )?;
+    out.json("summary.json", &study.summary)
+}
+
+/// The Floquet map's line for the terminal.
+pub fn stability_console(study: &StabilityStudy) -> String {
+    let s = &study.summary;
+    format!(
+        "{} speeds in {:.3} s; unstable ranges {:?} rpm; principal regions expected near {:?} rpm; max |lambda| {:.4}\n",
+        s.points,
+        s.wall_s,
+        s.unstable_rpm_ranges,
+        s.parametric_region_centres_rpm
+            .iter()
+            .map(|r| r.round())
+            .collect::<Vec<_>>(),
+        s.max_multiplier
+    )
+}
+
+/// Writes the integrator table (CSV and Markdown) and its summary; returns the Markdown.
+pub fn write_integrators(
+    out: OutputDir,
+    summary: &IntegratorSummary,
+) -> Result<String, ReportError> {
+    let limit = |l: Option<f64>| {
+        l.map_or("none (unconditionally stable)".to_string(), |v| {
+            format!("{v:.6}")
+        })
+    };
+    let header = [
+        "scheme",
+        "stability_limit_predicted_wh",
+        "stability_limit_observed_wh",
+        "accuracy_1pct_predicted_wh",
+        "accuracy_1pct_observed_wh",
+        "formal_order",
+        "observed_order_smooth",
+        "observed_order_separating",
+        "error_smooth_32",
+        "error_separating_32",
+    ];
+    let rows: Vec<Vec<String>> = summary
+        .schemes
+        .iter()
+        .map(|r| {
+            vec![
+                r.scheme.to_string(),
+                limit(r.predicted_limit),
+                limit(r.observed_limit),
+                format!("{:.6}", r.predicted_accuracy_limit),
+                format!("{:.6}", r.observed_accuracy_limit),
+                format!("{:.1}", r.formal_order),
+                format!("{:.3}", r.observed_order_smooth),
+                format!("{:.3}", r.observed_order_separating),
+                format!("{:.3e}", r.error_smooth),
+                format!("{:.3e}", r.error_separating),
+            ]
+        })
+        .collect();
+    out.csv("integrators.csv", &header, rows.clone())?;
+    let mut markdown = format!(
+        "| {} |\n|{}\n",
+        header.join(" | "),
+        "---|".repeat(header.len())
+    );
+    for row in &rows {
+        markdown.push_str(&format!("| {} |\n", row.join(" | ")));
+    }
+    out.bytes("integrators.md", markdown.as_bytes())?;
+    out.json("summary.json", summary)?;
+    Ok(markdown)
+}

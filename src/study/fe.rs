@@ -1,0 +1,587 @@
+//! The explicit FE study (`geardyn fe`): a scene of the case prepared, run and analysed — DTE
+//! statistics, its spectrum and peaks, the stiffness from the DTE, impacts (db5 level-1 detail of
+//! the contact force), the energy account, and the LTCA at the positions the statistics window
+//! covers, on the run's mesh and on the case's mesh.
+//!
+//! The command's options are shorthands for overrides of the case ([`overrides`]),
+//! so a scene's numbers are checked once, by the case.
+
+use serde::Serialize;
+
+use crate::case::{Case, Override};
+use crate::explicit::pair::PairEnergy;
+use crate::explicit::scene::{
+    analyse_dte, statistics_start, CoupledStep, DteAnalysis, FeSettings, History, LowpassDte,
+    PreparedScene, Scene,
+};
+use crate::fe::{MassLumping, PlaneState};
+use crate::signal;
+
+use super::StudyError;
+
+/// The `fe` command's options, each a shorthand for an override of the case (`scene[NAME].…`,
+/// a new `[[scene]]`, or `fe.…`); the command line's flags are these fields.
+#[derive(Debug, Clone, Default, PartialEq, clap::Args)]
+pub struct FeShorthands {
+    /// A scene of the case ([[scene]]), e.g. low-unmodified; the options below override it.
+    #[arg(long, value_name = "NAME")]
+    pub scene: Option<String>,
+    /// Driver speed [rpm] (without --scene: required).
+    #[arg(long, value_name = "RPM")]
+    pub speed_rpm: Option<f64>,
+    /// Simulated time [s] (without --scene: required); shortens or lengthens a scene.
+    #[arg(long, value_name = "SECONDS")]
+    pub duration_s: Option<f64>,
+    /// Load torque on the driven gear [N·m]; default: the scene's, or the first operating point.
+    #[arg(long, value_name = "T")]
+    pub torque_nm: Option<f64>,
+    /// Relief variant; default: the scene's, or the first variant.
+    #[arg(long, value_name = "NAME")]
+    pub relief: Option<String>,
+    /// Coulomb friction coefficient; default: the scene's, or 0.
+    #[arg(long, value_name = "MU")]
+    pub friction: Option<f64>,
+    /// Ramp time of speed and torque [s]; default: the scene's, or min(0.01, duration/10).
+    #[arg(long, value_name = "SECONDS")]
+    pub ramp_s: Option<f64>,
+    /// Time step over the critical step (fe.step_factor, default 0.9); above 1 the run diverges.
+    #[arg(long, value_name = "BETA")]
+    pub step_factor: Option<f64>,
+    /// Contact penalty over the master element's largest diagonal stiffness (fe.penalty_factor).
+    #[arg(long, value_name = "F")]
+    pub penalty_factor: Option<f64>,
+    /// Damping ratio of the mesh mode, a dashpot on the DTE rate (fe.mesh_damping_ratio).
+    #[arg(long, value_name = "ZETA")]
+    pub mesh_damping_ratio: Option<f64>,
+    /// Flank element size of the explicit mesh [mm] (fe.explicit_fine_element_mm).
+    #[arg(long, value_name = "MM")]
+    pub fine_element_mm: Option<f64>,
+    /// Largest element size of the explicit mesh: other teeth, body [mm]
+    /// (fe.explicit_coarse_element_mm).
+    #[arg(long, value_name = "MM")]
+    pub coarse_element_mm: Option<f64>,
+    /// Lumped mass of the bodies (fe.mass_lumping).
+    #[arg(long, value_enum)]
+    pub mass_lumping: Option<MassLumping>,
+}
+
+/// The overrides that make `shorthands` part of the case, and the scene's name. `base` is the
+/// case as read (for the scene's own ramp and the first relief variant). Shortening a scene
+/// below twice its ramp shortens the ramp to half the duration, unless a ramp is given.
+pub fn overrides(
+    base: &Case,
+    shorthands: &FeShorthands,
+) -> Result<(Vec<Override>, String), StudyError> {
+    let s = shorthands;
+    let (mut overrides, name) = scene_overrides(base, s)?;
+    let fe = |key: &str, value: Option<f64>| value.map(|v| Override::set(format!("fe.{key}"), v));
+    overrides.extend(
+        [
+            fe("step_factor", s.step_factor),
+            fe("penalty_factor", s.penalty_factor),
+            fe("mesh_damping_ratio", s.mesh_damping_ratio),
+            fe("explicit_fine_element_mm", s.fine_element_mm),
+            fe("explicit_coarse_element_mm", s.coarse_element_mm),
+            s.mass_lumping
+                .map(|m| Override::set("fe.mass_lumping", m.name())),
+        ]
+        .into_iter()
+        .flatten(),
+    );
+    Ok((overrides, name))
+}
+
+fn scene_overrides(
+    base: &Case,
+    shorthands: &FeShorthands,
+) -> Result<(Vec<Override>, String), StudyError> {
+    let s = shorthands;
+    let names = || {
+        base.scenes
+            .iter()
+            .map(|s| s.name.as_str())
+            .collect::<Vec<_>>()
+    };
+    match &s.scene {
+        Some(name) => {
+            let scene = base.scene(name).ok_or_else(|| {
+                StudyError::Input(format!(
+                    "no scene {name:?} in the case; its scenes are: {:?}",
+                    names()
+                ))
+            })?;
+            let key = |field: &str| format!("scene[{name}].{field}");
+            let mut overrides = Vec::new();
+            if let Some(rpm) = s.speed_rpm {
+                overrides.push(Override::set(key("speed_rpm"), rpm));
+            }
+            if let Some(duration) = s.duration_s {
+                overrides.push(Override::set(key("duration_s"), duration));
+                if s.ramp_s.is_none() && scene.ramp_time > 0.5 * duration {
+                    overrides.push(Override::set(key("ramp_s"), 0.5 * duration));
+                }
+            }
+            if let Some(ramp) = s.ramp_s {
+                overrides.push(Override::set(key("ramp_s"), ramp));
+            }
+            if let Some(torque) = s.torque_nm {
+                overrides.push(Override::set(key("torque_nm"), torque));
+            }
+            if let Some(relief) = &s.relief {
+                overrides.push(Override::set(key("relief"), relief.as_str()));
+            }
+            if let Some(mu) = s.friction {
+                overrides.push(Override::set(key("friction"), mu));
+            }
+            Ok((overrides, name.clone()))
+        }
+        None => {
+            let (Some(rpm), Some(duration)) = (s.speed_rpm, s.duration_s) else {
+                return Err(StudyError::Input(format!(
+                    "give --scene NAME (one of {:?}) or both --speed-rpm and --duration-s",
+                    names()
+                )));
+            };
+            let name = format!("{rpm}rpm");
+            let relief = match &s.relief {
+                Some(r) => r.clone(),
+                None => super::relief_variant(base, None)?.name.clone(),
+            };
+            let torque = match s.torque_nm {
+                Some(t) => t,
+                None => super::load_torque(base)?,
+            };
+            let mut table = toml::Table::new();
+            table.insert("name".into(), name.clone().into());
+            table.insert("speed_rpm".into(), rpm.into());
+            table.insert("torque_nm".into(), torque.into());
+            table.insert("relief".into(), relief.into());
+            table.insert("friction".into(), s.friction.unwrap_or(0.0).into());
+            table.insert("duration_s".into(), duration.into());
+            table.insert(
+                "ramp_s".into(),
+                s.ramp_s.unwrap_or((0.1 * duration).min(0.01)).into(),
+            );
+            Ok((
+                vec![Override::Append {
+                    array: "scene".into(),
+                    table,
+                }],
+                name,
+            ))
+        }
+    }
+}
+
+/// The scene named, from the (overridden) case.
+pub fn scene<'a>(case: &'a Case, name: &str) -> Result<&'a Scene, StudyError> {
+    case.scene(name)
+        .ok_or_else(|| StudyError::Input(format!("no scene {name:?} in the case")))
+}
+
+/// Meshes and assembles the pair for `scene` with the case's `[fe]` settings and measures its
+/// critical step: the one constructor of an explicit scene (the command, tests and benches).
+pub fn prepare(case: &Case, scene: &Scene) -> Result<PreparedScene, StudyError> {
+    let variant = super::relief_variant(case, Some(&scene.relief))?;
+    Ok(crate::explicit::scene::prepare(
+        &case.pair,
+        &variant.modifications,
+        case.explicit_material(),
+        scene,
+        &case.fe,
+    )?)
+}
+
+/// Derived signals of a history: de-noised DTE, level-1 db5 detail of the contact force.
+pub struct Derived {
+    pub dte_denoised: Vec<f64>,
+    pub force_detail: Vec<f64>,
+}
+
+pub fn derive(history: &History) -> Derived {
+    Derived {
+        dte_denoised: signal::denoise(&history.dte, 5),
+        force_detail: if history.force_total.len() >= 2 {
+            signal::level1_detail(&history.force_total)
+        } else {
+            vec![0.0; history.force_total.len()]
+        },
+    }
+}
+
+/// DTE spectrum over the statistics window from `from` [s] (Hann), amplitudes in rad.
+pub fn dte_spectrum(history: &History, from: f64) -> Vec<(f64, f64)> {
+    let Some(start) = history.time.iter().position(|t| *t >= from) else {
+        return Vec::new();
+    };
+    if history.time.len() - start < 8 {
+        return Vec::new();
+    }
+    let dt = (history.time[history.time.len() - 1] - history.time[start])
+        / (history.time.len() - 1 - start) as f64;
+    signal::hann_amplitude_spectrum(&history.dte[start..], dt)
+}
+
+/// The LTCA at the positions the statistics window covers, on one mesh.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct LtcaCheck {
+    pub fine_element_mm: f64,
+    pub coarse_element_mm: f64,
+    pub ste_mean_rad: f64,
+    pub ste_max_rad: f64,
+    pub ste_min_rad: f64,
+    pub ste_peak_to_peak_rad: f64,
+    pub mesh_stiffness_mean_n_per_m: f64,
+    pub dte_over_ste_mean: f64,
+    pub dte_over_ste_peak_to_peak: f64,
+    pub dte_lowpass_over_ste_mean: Option<f64>,
+    pub dte_lowpass_over_ste_peak_to_peak: Option<f64>,
+}
+
+/// Penalty stiffness per contact edge [N/m].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PenaltyRange {
+    pub mean: f64,
+    pub min: f64,
+    pub max: f64,
+}
+
+/// Cost and step numbers of a prepared scene.
+#[derive(Debug, Clone, Serialize)]
+pub struct StepSummary {
+    pub dt_s: f64,
+    pub dt_critical_s: f64,
+    pub dt_critical_bodies_s: [f64; 2],
+    pub dt_critical_contact_s: f64,
+    pub dt_paper_formula_s: f64,
+    pub dt_element_eigenvalue_bound_s: f64,
+    pub stiffness_damping_beta_s: f64,
+    pub mesh_damping_n_m_s: f64,
+    pub mesh_damping_sized_with_stiffness_n_per_m: f64,
+    pub driven_inertia_kg_m2: f64,
+    pub penalty_stiffness_per_edge_n_per_m: PenaltyRange,
+    pub elements: usize,
+    pub nodes: usize,
+    pub fine_teeth: [Vec<usize>; 2],
+    pub tooth_pairs: Vec<(usize, usize)>,
+    pub setup_wall_s: f64,
+}
+
+impl StepSummary {
+    pub fn new(prepared: &PreparedScene) -> Self {
+        let model = &prepared.model;
+        let edges: Vec<f64> = model
+            .flanks
+            .iter()
+            .flat_map(|f| f.penalty.iter().copied())
+            .collect();
+        let (min, max) = edges
+            .iter()
+            .fold((f64::INFINITY, 0.0_f64), |(a, b), k| (a.min(*k), b.max(*k)));
+        StepSummary {
+            dt_s: prepared.dt,
+            dt_critical_s: prepared.dt_critical,
+            dt_critical_bodies_s: prepared.dt_bodies,
+            dt_critical_contact_s: prepared.dt_contact,
+            dt_paper_formula_s: prepared.dt_paper,
+            dt_element_eigenvalue_bound_s: prepared.dt_element_bound,
+            stiffness_damping_beta_s: prepared.beta_k,
+            mesh_damping_n_m_s: prepared.mesh_damping,
+            mesh_damping_sized_with_stiffness_n_per_m: prepared.mesh_damping_stiffness,
+            driven_inertia_kg_m2: model.driven_inertia(),
+            penalty_stiffness_per_edge_n_per_m: PenaltyRange {
+                mean: edges.iter().sum::<f64>() / edges.len().max(1) as f64,
+                min,
+                max,
+            },
+            elements: model.elements(),
+            nodes: model.meshes.iter().map(|m| m.nodes.len()).sum(),
+            fine_teeth: [
+                model.meshes[0].fine_teeth.clone(),
+                model.meshes[1].fine_teeth.clone(),
+            ],
+            tooth_pairs: model.tooth_pairs.clone(),
+            setup_wall_s: prepared.setup_wall_s,
+        }
+    }
+}
+
+/// A spectral peak of the DTE.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct DtePeak {
+    pub frequency_hz: f64,
+    pub amplitude_rad: f64,
+}
+
+/// Headline numbers (`summary.json`).
+#[derive(Debug, Clone, Serialize)]
+pub struct FeSummary {
+    pub case: String,
+    pub scene: Scene,
+    pub dte_mean_rad: Option<f64>,
+    pub dte_max_rad: Option<f64>,
+    pub dte_min_rad: Option<f64>,
+    pub dte_peak_to_peak_rad: Option<f64>,
+    pub mesh_stiffness_mean_n_per_m: Option<f64>,
+    pub mesh_stiffness_from_mean_dte_n_per_m: Option<f64>,
+    pub stiffness_pitch_coverage: Option<f64>,
+    pub stats_window_s: Option<[f64; 2]>,
+    pub dte_lowpass: Option<LowpassDte>,
+    pub ltca_ste_mean_rad_same_positions: Option<f64>,
+    pub ltca_mesh_stiffness_mean_n_per_m: Option<f64>,
+    pub dte_over_ltca_mean: Option<f64>,
+    pub ltca_same_mesh: Option<LtcaCheck>,
+    pub ltca_case_mesh: Option<LtcaCheck>,
+    pub mesh_frequency_hz: f64,
+    pub dte_spectrum_peaks: Vec<DtePeak>,
+    pub contact_force_max_n: f64,
+    pub impact_d1_max_n: f64,
+    pub energy: PairEnergy,
+    pub energy_error_rel: f64,
+    pub energy_error_rel_transmitted: f64,
+    pub steps: usize,
+    pub ns_per_element_step: f64,
+    pub wall_s: f64,
+    pub total_wall_s: f64,
+    pub threads: usize,
+    pub diverged: Option<String>,
+    pub dt_critical_coupled_s: Option<f64>,
+    pub dt_critical_coupled_checks: Vec<CoupledStep>,
+    pub model: String,
+    #[serde(flatten)]
+    pub step: StepSummary,
+    pub penalty_factor: f64,
+    pub step_factor: f64,
+    pub mass_lumping: MassLumping,
+    pub mesh_damping_ratio: f64,
+    pub fine_element_mm: f64,
+    pub coarse_element_mm: f64,
+}
+
+/// The study's result.
+pub struct FeStudy {
+    pub scene: Scene,
+    pub history: History,
+    pub derived: Derived,
+    pub analysis: Option<DteAnalysis>,
+    /// DTE spectrum over the statistics window: (frequency [Hz], amplitude [rad]).
+    pub spectrum: Vec<(f64, f64)>,
+    /// Names of the flank pairs (columns of the pair forces).
+    pub pair_names: Vec<String>,
+    pub summary: FeSummary,
+}
+
+/// Runs a prepared scene and analyses it; `progress` sees the fraction done. A diverged run is
+/// a result too (`summary.diverged` says why), so its partial histories can be written.
+pub fn run(
+    case: &Case,
+    scene: &Scene,
+    prepared: &PreparedScene,
+    progress: &mut dyn FnMut(f64),
+) -> Result<FeStudy, StudyError> {
+    let started = std::time::Instant::now();
+    let settings: &FeSettings = &case.fe;
+    let outcome =
+        crate::explicit::scene::run(prepared, scene.duration, settings.output_interval, progress);
+    let history = outcome.history;
+    let stats_start = statistics_start(prepared, scene);
+    let analysis = analyse_dte(&history, &prepared.model, scene.torque, stats_start);
+    let derived = derive(&history);
+    let spectrum = dte_spectrum(&history, stats_start);
+    let mesh_hz = scene.driver_speed / case.pair.gears[0].angular_pitch();
+    let peaks = signal::spectrum_peaks(&spectrum, 0.5 * mesh_hz, 8);
+    let pair_names: Vec<String> = prepared
+        .model
+        .flank_pairs
+        .iter()
+        .map(|fp| fp.name())
+        .collect();
+    let (fine_mm, coarse_mm) = (settings.fine_size * 1e3, settings.coarse_size * 1e3);
+    let ltca_same = ltca_check(case, scene, analysis.as_ref(), &history, fine_mm, coarse_mm)?;
+    let case_mesh = (
+        case.file.mesh.fine_element_mm,
+        case.file.mesh.coarse_element_mm,
+    );
+    let ltca_case_mesh =
+        if (case_mesh.0 - fine_mm).abs() > 1e-9 || (case_mesh.1 - coarse_mm).abs() > 1e-9 {
+            ltca_check(
+                case,
+                scene,
+                analysis.as_ref(),
+                &history,
+                case_mesh.0,
+                case_mesh.1,
+            )?
+        } else {
+            ltca_same
+        };
+    let max_work = history
+        .energy
+        .iter()
+        .map(|e| e.external_work.abs())
+        .fold(0.0, f64::max);
+    let max_balance = history
+        .energy
+        .iter()
+        .map(|e| e.balance().abs())
+        .fold(0.0, f64::max);
+    let energy_error_rel = if max_work > 0.0 {
+        max_balance / max_work
+    } else {
+        0.0
+    };
+    let transmitted = history.energy.last().map_or(0.0, |e| e.transmitted_work);
+    let energy_error_rel_transmitted = if transmitted > 0.0 {
+        max_balance / transmitted
+    } else {
+        0.0
+    };
+    let ns_per_element_step =
+        outcome.wall_s * 1e9 / (outcome.steps.max(1) as f64 * prepared.model.elements() as f64);
+    let get = |f: &dyn Fn(&DteAnalysis) -> f64| analysis.as_ref().map(f);
+    let summary = FeSummary {
+        case: case.name().to_string(),
+        scene: scene.clone(),
+        dte_mean_rad: get(&|a| a.dte_mean_rad),
+        dte_max_rad: get(&|a| a.dte_max_rad),
+        dte_min_rad: get(&|a| a.dte_min_rad),
+        dte_peak_to_peak_rad: get(&|a| a.dte_peak_to_peak_rad),
+        mesh_stiffness_mean_n_per_m: get(&|a| a.mesh_stiffness_mean_n_per_m),
+        mesh_stiffness_from_mean_dte_n_per_m: get(&|a| a.mesh_stiffness_from_mean_dte_n_per_m),
+        stiffness_pitch_coverage: get(&|a| a.pitch_coverage),
+        stats_window_s: analysis.as_ref().map(|a| [a.window.0, a.window.1]),
+        dte_lowpass: analysis.as_ref().and_then(|a| a.lowpass),
+        ltca_ste_mean_rad_same_positions: ltca_same.map(|l| l.ste_mean_rad),
+        ltca_mesh_stiffness_mean_n_per_m: ltca_same.map(|l| l.mesh_stiffness_mean_n_per_m),
+        dte_over_ltca_mean: ltca_same.map(|l| l.dte_over_ste_mean),
+        ltca_same_mesh: ltca_same,
+        ltca_case_mesh,
+        mesh_frequency_hz: mesh_hz,
+        dte_spectrum_peaks: peaks
+            .iter()
+            .map(|(f, a)| DtePeak {
+                frequency_hz: *f,
+                amplitude_rad: *a,
+            })
+            .collect(),
+        contact_force_max_n: history.force_total.iter().copied().fold(0.0, f64::max),
+        impact_d1_max_n: derived
+            .force_detail
+            .iter()
+            .map(|v| v.abs())
+            .fold(0.0, f64::max),
+        energy: outcome.final_energy,
+        energy_error_rel,
+        energy_error_rel_transmitted,
+        steps: outcome.steps,
+        ns_per_element_step,
+        wall_s: outcome.wall_s,
+        total_wall_s: started.elapsed().as_secs_f64() + prepared.setup_wall_s,
+        threads: rayon::current_num_threads(),
+        diverged: outcome.diverged,
+        dt_critical_coupled_s: outcome
+            .coupled_steps
+            .iter()
+            .map(|c| c.dt_critical_s)
+            .reduce(f64::min),
+        dt_critical_coupled_checks: outcome.coupled_steps,
+        model: model_description(case, prepared),
+        step: StepSummary::new(prepared),
+        penalty_factor: settings.penalty_factor,
+        step_factor: settings.step_factor,
+        mass_lumping: settings.mass_lumping,
+        mesh_damping_ratio: settings.mesh_damping_ratio,
+        fine_element_mm: fine_mm,
+        coarse_element_mm: coarse_mm,
+    };
+    Ok(FeStudy {
+        scene: scene.clone(),
+        history,
+        derived,
+        analysis,
+        spectrum,
+        pair_names,
+        summary,
+    })
+}
+
+/// What the explicit model is and what it leaves out, in one sentence.
+fn model_description(case: &Case, prepared: &PreparedScene) -> String {
+    let settings = &case.fe;
+    format!(
+        "2D {} ({} plane), corotational 8-node quadrilaterals, lumped mass ({}); rigid hubs, rigid bearings; driver at prescribed speed, driven hub with load torque and a mesh dashpot (zeta {:.3}) on the DTE rate; segment-to-segment penalty contact (two-pass, 4 Gauss points per edge and the tip corner) with Coulomb friction on drive and back flanks of {} tooth pairs; fine flank elements {:.2} mm only on the teeth that engage during the scene, {:.2} mm elsewhere",
+        if case.plane == PlaneState::Strain {
+            "plane strain"
+        } else {
+            "plane stress"
+        },
+        case.pair.gears[0].spec.face_width * 1e3,
+        match settings.mass_lumping {
+            MassLumping::CornerTwelfth => "corners 1/12, mid-sides 1/6 of each element's mass",
+            MassLumping::Hrz => "HRZ diagonal scaling",
+        },
+        settings.mesh_damping_ratio,
+        prepared.model.tooth_pairs.len(),
+        settings.fine_size * 1e3,
+        settings.coarse_size * 1e3
+    )
+}
+
+/// The LTCA (64 positions) on a mesh of `fine_mm` / `coarse_mm`, its STE over the driver
+/// positions of the statistics window (interpolated), against the run's DTE.
+fn ltca_check(
+    case: &Case,
+    scene: &Scene,
+    analysis: Option<&DteAnalysis>,
+    history: &History,
+    fine_mm: f64,
+    coarse_mm: f64,
+) -> Result<Option<LtcaCheck>, StudyError> {
+    const POSITIONS: usize = 64;
+    let Some(a) = analysis else {
+        return Ok(None);
+    };
+    let variant = super::relief_variant(case, Some(&scene.relief))?;
+    let model = super::ltca::model_with_sizes(
+        case,
+        &variant.modifications,
+        fine_mm * 1e-3,
+        coarse_mm * 1e-3,
+    )?;
+    let results = model.run(POSITIONS, scene.torque, &|_| {})?;
+    let pitch = case.pair.gears[0].angular_pitch();
+    let start = history
+        .time
+        .iter()
+        .position(|t| *t >= a.window.0)
+        .unwrap_or(0);
+    let covered: Vec<f64> = history.driver_rotation[start..]
+        .iter()
+        .map(|theta| {
+            let u = (theta / pitch).rem_euclid(1.0) * POSITIONS as f64;
+            let i = (u.floor() as usize).min(POSITIONS - 1);
+            let f = u - i as f64;
+            results[i].ste * (1.0 - f) + results[(i + 1) % POSITIONS].ste * f
+        })
+        .collect();
+    let mean = covered.iter().sum::<f64>() / covered.len() as f64;
+    let (min, max) = covered
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(*v), hi.max(*v))
+        });
+    let k_mean = results.iter().map(|r| r.mesh_stiffness).sum::<f64>() / POSITIONS as f64;
+    Ok(Some(LtcaCheck {
+        fine_element_mm: fine_mm,
+        coarse_element_mm: coarse_mm,
+        ste_mean_rad: mean,
+        ste_max_rad: max,
+        ste_min_rad: min,
+        ste_peak_to_peak_rad: max - min,
+        mesh_stiffness_mean_n_per_m: k_mean,
+        dte_over_ste_mean: a.dte_mean_rad / mean,
+        dte_over_ste_peak_to_peak: a.dte_peak_to_peak_rad / (max - min),
+        dte_lowpass_over_ste_mean: a.lowpass.map(|l| l.mean_rad / mean),
+        dte_lowpass_over_ste_peak_to_peak: a.lowpass.map(|l| l.peak_to_peak_rad / (max - min)),
+    }))
+}

@@ -1,0 +1,273 @@
+//! The LTCA study (`geardyn ltca`): the quasi-static loaded tooth contact over one base pitch for
+//! every relief variant of the case (or one), with the potential-energy and ISO 6336-1
+//! stiffness beside it.
+
+use serde::Serialize;
+
+use crate::case::Case;
+use crate::geometry::FlankModification;
+use crate::ltca::{engaging_teeth, LtcaModel, PositionResult};
+use crate::stiffness::{self, potential_energy, IsoStiffness, MeshStiffness};
+
+use super::{load_torque, Progress, StudyError};
+
+/// Both gear bodies of the case for the LTCA, meshed fine on the engaging teeth with the case's
+/// element sizes, factorized and condensed.
+pub fn model(case: &Case, modifications: &[FlankModification; 2]) -> Result<LtcaModel, StudyError> {
+    let mesh = &case.file.mesh;
+    model_with_sizes(
+        case,
+        modifications,
+        mesh.fine_element_mm * 1e-3,
+        mesh.coarse_element_mm * 1e-3,
+    )
+}
+
+/// [`model`] with other element sizes: flanks `fine_size`, the rest `coarse_size` [m].
+pub fn model_with_sizes(
+    case: &Case,
+    modifications: &[FlankModification; 2],
+    fine_size: f64,
+    coarse_size: f64,
+) -> Result<LtcaModel, StudyError> {
+    let teeth = engaging_teeth(&case.pair);
+    let spec = |fine_teeth: Vec<usize>| crate::mesh::MeshSpec {
+        fine_size,
+        coarse_size,
+        fine_teeth,
+    };
+    let specs = [spec(teeth[0].clone()), spec(teeth[1].clone())];
+    Ok(LtcaModel::new(
+        &case.pair,
+        modifications,
+        specs,
+        case.ltca_material(),
+    )?)
+}
+
+/// The LTCA's mesh stiffness k(θ), e(θ) of `modifications` at `torque` over `positions`.
+pub fn mesh_stiffness(
+    case: &Case,
+    variant_name: &str,
+    modifications: &[FlankModification; 2],
+    positions: usize,
+    torque: f64,
+) -> Result<MeshStiffness, StudyError> {
+    let results = model(case, modifications)?.run(positions, torque, &|_| {})?;
+    stiffness::from_ltca(
+        &case.pair,
+        &results,
+        torque,
+        format!("ltca (relief {variant_name})"),
+    )
+    .map_err(StudyError::Input)
+}
+
+/// Options of the study.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LtcaOptions {
+    /// Mesh positions over one base pitch.
+    pub positions: usize,
+    /// Only this relief variant; None: every variant of the case.
+    pub relief: Option<String>,
+}
+
+/// One relief variant's cycle.
+#[derive(Debug, Clone)]
+pub struct VariantCycle {
+    pub name: String,
+    pub modifications: [FlankModification; 2],
+    /// (gear-1 tooth, gear-2 tooth) of `PositionResult::pair_forces`.
+    pub tooth_pairs: Vec<(usize, usize)>,
+    pub results: Vec<PositionResult>,
+    pub mesh_stiffness: MeshStiffness,
+    pub summary: VariantSummary,
+}
+
+/// Headline numbers of one relief variant.
+#[derive(Debug, Clone, Serialize)]
+pub struct VariantSummary {
+    pub relief_variant: String,
+    pub mesh_stiffness_mean_n_per_m: f64,
+    pub mesh_stiffness_min_n_per_m: f64,
+    pub mesh_stiffness_max_n_per_m: f64,
+    /// Linear loaded STE r_b2·φ along the line of action.
+    pub ste_mean_um: f64,
+    pub ste_peak_to_peak_um: f64,
+    pub unloaded_te_peak_to_peak_um: f64,
+    /// Largest KKT residual over the cycle.
+    pub max_kkt_residual: f64,
+    pub elements: [usize; 2],
+    pub free_dofs: [usize; 2],
+    pub factorization_s: f64,
+    pub condensation_s: f64,
+    pub cycle_s: f64,
+}
+
+/// The study's headline numbers (`summary.json`): the first variant's, every variant's, and the
+/// analytic references.
+#[derive(Debug, Clone, Serialize)]
+pub struct LtcaSummary {
+    pub case: String,
+    pub torque_nm: f64,
+    pub positions: usize,
+    pub plane: crate::fe::PlaneState,
+    pub fine_element_mm: f64,
+    pub coarse_element_mm: f64,
+    pub relief_variant: String,
+    pub mesh_stiffness_mean_n_per_m: f64,
+    pub mesh_stiffness_min_n_per_m: f64,
+    pub mesh_stiffness_max_n_per_m: f64,
+    pub ste_mean_um: f64,
+    pub ste_peak_to_peak_um: f64,
+    pub iso_c_gamma_n_per_m: f64,
+    pub iso_c_prime_n_per_m: f64,
+    pub potential_energy_mean_n_per_m: f64,
+    pub potential_energy_min_n_per_m: f64,
+    pub potential_energy_max_n_per_m: f64,
+    pub elements: usize,
+    pub wall_s: f64,
+    pub variants: Vec<VariantSummary>,
+    pub model: &'static str,
+}
+
+/// The study's result.
+#[derive(Debug, Clone)]
+pub struct LtcaStudy {
+    pub torque: f64,
+    pub cycles: Vec<VariantCycle>,
+    pub potential_energy: MeshStiffness,
+    pub iso: IsoStiffness,
+    pub summary: LtcaSummary,
+}
+
+/// Runs the LTCA cycle of every variant asked for; `progress` sees the positions done.
+pub fn run(
+    case: &Case,
+    options: &LtcaOptions,
+    progress: Progress,
+) -> Result<LtcaStudy, StudyError> {
+    let started = std::time::Instant::now();
+    let torque = load_torque(case)?;
+    let variants: Vec<_> = match &options.relief {
+        Some(name) => vec![super::relief_variant(case, Some(name))?],
+        None => case.relief_variants.iter().collect(),
+    };
+    let rb2 = case.pair.gears[1].base_radius;
+    let positions = options.positions;
+    let mut cycles = Vec::new();
+    for variant in variants {
+        let stage = format!("LTCA \"{}\"", variant.name);
+        progress(&stage, 0, positions);
+        let model = model(case, &variant.modifications)?;
+        let cycle_started = std::time::Instant::now();
+        let results = model.run(positions, torque, &|done| progress(&stage, done, positions))?;
+        let cycle_s = cycle_started.elapsed().as_secs_f64();
+        let [b1, b2] = &model.bodies;
+        let summary = variant_summary(
+            &variant.name,
+            &results,
+            rb2,
+            [b1.mesh.elements.len(), b2.mesh.elements.len()],
+            [b1.free_dofs, b2.free_dofs],
+            (
+                b1.factorization_s + b2.factorization_s,
+                b1.condensation_s + b2.condensation_s,
+                cycle_s,
+            ),
+        );
+        let mesh_stiffness = stiffness::from_ltca(
+            &case.pair,
+            &results,
+            torque,
+            format!("ltca (relief {})", variant.name),
+        )
+        .map_err(StudyError::Input)?;
+        cycles.push(VariantCycle {
+            name: variant.name.clone(),
+            modifications: variant.modifications,
+            tooth_pairs: model.tooth_pairs.clone(),
+            results,
+            mesh_stiffness,
+            summary,
+        });
+    }
+    let pe = potential_energy::potential_energy_table(
+        &case.pair,
+        positions,
+        case.material.youngs_modulus,
+        case.material.poisson_ratio,
+        case.plane,
+    );
+    let iso = stiffness::iso_6336_method_b(&case.pair, torque, case.material.youngs_modulus);
+    let first = &cycles[0].summary;
+    let summary = LtcaSummary {
+        case: case.name().to_string(),
+        torque_nm: torque,
+        positions,
+        plane: case.plane,
+        fine_element_mm: case.file.mesh.fine_element_mm,
+        coarse_element_mm: case.file.mesh.coarse_element_mm,
+        relief_variant: first.relief_variant.clone(),
+        mesh_stiffness_mean_n_per_m: first.mesh_stiffness_mean_n_per_m,
+        mesh_stiffness_min_n_per_m: first.mesh_stiffness_min_n_per_m,
+        mesh_stiffness_max_n_per_m: first.mesh_stiffness_max_n_per_m,
+        ste_mean_um: first.ste_mean_um,
+        ste_peak_to_peak_um: first.ste_peak_to_peak_um,
+        iso_c_gamma_n_per_m: iso.mean_n_per_m,
+        iso_c_prime_n_per_m: iso.single_pair_n_per_m,
+        potential_energy_mean_n_per_m: pe.mean(),
+        potential_energy_min_n_per_m: pe.min(),
+        potential_energy_max_n_per_m: pe.max(),
+        elements: first.elements[0] + first.elements[1],
+        wall_s: started.elapsed().as_secs_f64(),
+        variants: cycles.iter().map(|c| c.summary.clone()).collect(),
+        model: "2D FE (Q8), bores held rigid; frictionless node-to-surface contact on the drive flanks; one base pitch",
+    };
+    Ok(LtcaStudy {
+        torque,
+        cycles,
+        potential_energy: pe,
+        iso,
+        summary,
+    })
+}
+
+/// Headline numbers of a variant's cycle.
+pub fn variant_summary(
+    name: &str,
+    results: &[PositionResult],
+    base_radius_driven: f64,
+    elements: [usize; 2],
+    free_dofs: [usize; 2],
+    times: (f64, f64, f64),
+) -> VariantSummary {
+    let k: Vec<f64> = results.iter().map(|r| r.mesh_stiffness).collect();
+    let ste: Vec<f64> = results
+        .iter()
+        .map(|r| r.ste * base_radius_driven * 1e6)
+        .collect();
+    let te0: Vec<f64> = results
+        .iter()
+        .map(|r| r.unloaded_te * base_radius_driven * 1e6)
+        .collect();
+    let spread = |v: &[f64]| {
+        v.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+            - v.iter().copied().fold(f64::INFINITY, f64::min)
+    };
+    VariantSummary {
+        relief_variant: name.into(),
+        mesh_stiffness_mean_n_per_m: k.iter().sum::<f64>() / k.len() as f64,
+        mesh_stiffness_min_n_per_m: k.iter().copied().fold(f64::INFINITY, f64::min),
+        mesh_stiffness_max_n_per_m: k.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        ste_mean_um: ste.iter().sum::<f64>() / ste.len() as f64,
+        ste_peak_to_peak_um: spread(&ste),
+        unloaded_te_peak_to_peak_um: spread(&te0),
+        max_kkt_residual: results.iter().map(|r| r.kkt_residual).fold(0.0, f64::max),
+        elements,
+        free_dofs,
+        factorization_s: times.0,
+        condensation_s: times.1,
+        cycle_s: times.2,
+    }
+}

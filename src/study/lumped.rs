@@ -1,0 +1,204 @@
+//! The lumped model of a case (shared by `sweep`, `stability` and `validate integrators`): the
+//! mesh stiffness from the case's source, the gears' inertias and the effective mass of the
+//! drive, bearings and damping.
+//!
+//! Inertias default to ρ b ∫r² dA of the gear bodies (the FE's bodies, bore to tip), masses to
+//! ρ b A; m_e follows the drive ([`Drive::effective_mass`]); the mesh damping is
+//! c = 2ζ√(k̄ m_e), or the case's coefficient when it gives one.
+
+use crate::case::{Case, Override, StiffnessSource};
+use crate::lumped::{Bearings, Drive, MeshModel};
+use crate::stiffness::{self, potential_energy, MeshStiffness};
+
+use super::{load_torque, StudyError};
+
+/// The lumped commands' flags (`sweep`, `stability`, `validate`), each a shorthand for an
+/// override of the case.
+#[derive(Debug, Clone, Default, PartialEq, clap::Args)]
+pub struct LumpedShorthands {
+    /// Stiffness source: ltca (the case's FE, first relief variant), pe (potential energy), iso
+    /// (ISO 6336-1 c_gamma_alpha, constant) or a CSV file with columns roll_angle_deg,
+    /// mesh_stiffness_n_per_m[, unloaded_te_um] over one mesh period (lumped.stiffness).
+    #[arg(long, value_name = "SOURCE")]
+    pub stiffness: Option<StiffnessSource>,
+    /// Mesh damping ratio ζ, c = 2ζ√(k̄ m) (lumped.damping_ratio; wins over a coefficient).
+    #[arg(long, value_name = "ZETA")]
+    pub damping_ratio: Option<f64>,
+    /// Load torque on the driven gear [N·m] (operating_point[0].torque_nm).
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
+    pub torque_nm: Option<f64>,
+    /// How the pair is driven (lumped.drive).
+    #[arg(long, value_enum)]
+    pub drive: Option<Drive>,
+    /// Add each gear's translation on its bearings along the line of action (lumped.bearings).
+    #[arg(long)]
+    pub bearings: bool,
+}
+
+impl LumpedShorthands {
+    /// The overrides; a stiffness file's relative path is taken from the working folder.
+    pub fn overrides(&self) -> std::io::Result<Vec<Override>> {
+        let mut overrides: Vec<Override> =
+            super::torque_override(self.torque_nm).into_iter().collect();
+        if let Some(source) = &self.stiffness {
+            let name = match source {
+                StiffnessSource::Csv(path) => std::path::absolute(path)?.display().to_string(),
+                kind => kind.name(),
+            };
+            overrides.push(Override::set("lumped.stiffness", name));
+        }
+        if let Some(zeta) = self.damping_ratio {
+            overrides.push(Override::set("lumped.damping_ratio", zeta));
+            overrides.push(Override::Remove {
+                key: "lumped.mesh_damping_n_s_per_m".into(),
+            });
+        }
+        if let Some(drive) = self.drive {
+            overrides.push(Override::set("lumped.drive", drive.name()));
+        }
+        if self.bearings {
+            overrides.push(Override::set("lumped.bearings", true));
+        }
+        Ok(overrides)
+    }
+}
+
+/// Mesh positions of the stiffness tables the lumped model is built on.
+pub const POSITIONS: usize = 64;
+
+/// The lumped model of a case and what it was built from.
+#[derive(Debug, Clone)]
+pub struct LumpedSetup {
+    pub torque: f64,
+    pub model: MeshModel,
+    /// Wall time of the stiffness source [s].
+    pub stiffness_wall_s: f64,
+    /// Rotary inertias I₁, I₂ [kg·m²].
+    pub inertias: [f64; 2],
+    pub drive: Drive,
+    pub damping_ratio: f64,
+    /// Undamped natural frequency at the mean stiffness [Hz].
+    pub natural_frequency_hz: f64,
+    /// One line saying which model was used and what it leaves out.
+    pub model_note: String,
+}
+
+/// Rotary inertias of the gears [kg·m²]: the case's, or ρ b ∫r² dA of the bodies.
+pub fn gear_inertias(case: &Case) -> [f64; 2] {
+    case.lumped.inertias.unwrap_or_else(|| {
+        std::array::from_fn(|i| {
+            let gear = &case.pair.gears[i];
+            case.material.density * gear.spec.face_width * gear.area_moments().1
+        })
+    })
+}
+
+/// The mesh stiffness from `source` at load torque `torque`.
+pub fn mesh_stiffness(
+    case: &Case,
+    source: &StiffnessSource,
+    torque: f64,
+) -> Result<MeshStiffness, StudyError> {
+    let pair = &case.pair;
+    Ok(match source {
+        StiffnessSource::Ltca => {
+            let variant = super::relief_variant(case, None)?;
+            super::ltca::mesh_stiffness(
+                case,
+                &variant.name,
+                &variant.modifications,
+                POSITIONS,
+                torque,
+            )?
+        }
+        StiffnessSource::PotentialEnergy => potential_energy::potential_energy_table(
+            pair,
+            POSITIONS,
+            case.material.youngs_modulus,
+            case.material.poisson_ratio,
+            case.plane,
+        ),
+        StiffnessSource::Iso => {
+            stiffness::iso_6336_method_b(pair, torque, case.material.youngs_modulus)
+                .mesh_stiffness(pair, torque)
+        }
+        StiffnessSource::Csv(path) => {
+            crate::report::stiffness_csv::read_stiffness_csv(path, pair.gears[0].angular_pitch())
+                .map_err(StudyError::Input)?
+        }
+    })
+}
+
+/// Builds the case's lumped model (`[lumped]`, the first operating point's torque).
+pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
+    let settings = &case.lumped;
+    let torque = load_torque(case)?;
+    let pair = &case.pair;
+    let started = std::time::Instant::now();
+    let mesh = mesh_stiffness(case, &settings.stiffness, torque)?;
+    let stiffness_wall_s = started.elapsed().as_secs_f64();
+    let inertias = gear_inertias(case);
+    let base_radii = [pair.gears[0].base_radius, pair.gears[1].base_radius];
+    let effective_mass = settings.drive.effective_mass(inertias, base_radii);
+    let backlash = (pair.backlash_normal > 1e-9).then_some(pair.backlash_normal);
+    let bearings = settings.bearings.then(|| {
+        let mass = settings.gear_masses.unwrap_or_else(|| {
+            std::array::from_fn(|i| {
+                let gear = &pair.gears[i];
+                case.material.density * gear.spec.face_width * gear.area_moments().0
+            })
+        });
+        let stiffness = settings.bearing_stiffness;
+        Bearings {
+            mass,
+            stiffness,
+            damping: std::array::from_fn(|i| {
+                2.0 * settings.bearing_damping_ratio * (stiffness[i] * mass[i]).sqrt()
+            }),
+        }
+    });
+    let mut model = MeshModel {
+        effective_mass,
+        mesh,
+        damping: 0.0,
+        force: torque / base_radii[1],
+        backlash,
+        bearings,
+    };
+    // A coefficient in the case wins over its ratio (`--damping-ratio` removes the coefficient).
+    let damping_ratio = match settings.mesh_damping {
+        Some(c) => c / model.damping_from_ratio(1.0),
+        None => settings.damping_ratio,
+    };
+    model.damping = model.damping_from_ratio(damping_ratio);
+    let natural_frequency_hz = model.natural_frequency() / std::f64::consts::TAU;
+    let drive = settings.drive.name();
+    let model_note = match &model.bearings {
+        None => format!(
+            "1-DOF along the line of action ({drive} drive; the torsional 2-DOF with rigid shafts and bearings reduced exactly: torque drive -> relative coordinate, speed drive -> driven gear only); mesh stiffness periodic in the driver roll angle"
+        ),
+        Some(b) => format!(
+            "3-DOF: relative rotation along the line of action ({drive} drive) + each gear's translation on its bearings along the line of action (k_b = {:.3e} / {:.3e} N/m, m = {:.3} / {:.3} kg); translations across the line of action left out (a frictionless spur mesh force does not excite them)",
+            b.stiffness[0], b.stiffness[1], b.mass[0], b.mass[1]
+        ),
+    };
+    Ok(LumpedSetup {
+        torque,
+        model,
+        stiffness_wall_s,
+        inertias,
+        drive: settings.drive,
+        damping_ratio,
+        natural_frequency_hz,
+        model_note,
+    })
+}
+
+/// Undamped natural frequencies of the lumped model at the mean mesh stiffness [Hz].
+pub fn mode_frequencies_hz(model: &MeshModel) -> Vec<f64> {
+    model
+        .mode_frequencies(model.mesh.mean())
+        .iter()
+        .map(|w| w / std::f64::consts::TAU)
+        .collect()
+}

@@ -1,0 +1,85 @@
+//! The stability study (`geardyn stability`): the largest Floquet multiplier of the case's
+//! linear time-periodic mesh model at every speed, the unstable ranges, and where the principal
+//! parametric regions of a cosine stiffness lie (f_mesh ≈ 2 f_i / j for each mode i).
+
+use serde::Serialize;
+
+use crate::case::Case;
+
+use super::lumped::{mode_frequencies_hz, setup, LumpedSetup};
+use super::{RpmRange, StudyError};
+
+/// Headline numbers (`summary.json`).
+#[derive(Debug, Clone, Serialize)]
+pub struct StabilitySummary {
+    pub case: String,
+    pub stiffness_source: String,
+    pub drive: crate::lumped::Drive,
+    pub model: String,
+    pub mean_stiffness_n_per_m: f64,
+    pub natural_frequency_hz: f64,
+    pub modes_hz: Vec<f64>,
+    pub damping_ratio: f64,
+    pub unstable_rpm_ranges: Vec<(f64, f64)>,
+    pub parametric_region_centres_rpm: Vec<f64>,
+    pub max_multiplier: f64,
+    pub points: usize,
+    pub wall_s: f64,
+    pub stiffness_wall_s: f64,
+}
+
+/// The study's result.
+pub struct StabilityStudy {
+    pub setup: LumpedSetup,
+    pub rpms: Vec<f64>,
+    /// Largest |λ| per speed.
+    pub multipliers: Vec<f64>,
+    pub summary: StabilitySummary,
+}
+
+/// The Floquet map of the case's lumped model over `rpm`.
+pub fn run(case: &Case, rpm: &RpmRange) -> Result<StabilityStudy, StudyError> {
+    let setup = setup(case)?;
+    let rpms = rpm.0.clone();
+    let model = &setup.model;
+    let started = std::time::Instant::now();
+    let multipliers = crate::sweep::floquet_map(model, &rpms);
+    let wall_s = started.elapsed().as_secs_f64();
+    let mut ranges: Vec<(f64, f64)> = Vec::new();
+    for (i, m) in multipliers.iter().enumerate() {
+        if *m > 1.0 {
+            match ranges.last_mut() {
+                Some(range) if i > 0 && multipliers[i - 1] > 1.0 => range.1 = rpms[i],
+                _ => ranges.push((rpms[i], rpms[i])),
+            }
+        }
+    }
+    let z1 = case.pair.gears[0].teeth() as f64;
+    let modes_hz = mode_frequencies_hz(model);
+    let theory: Vec<f64> = modes_hz
+        .iter()
+        .flat_map(|f| (1..=3).map(move |j| 2.0 * f / j as f64 * 60.0 / z1))
+        .collect();
+    let summary = StabilitySummary {
+        case: case.name().to_string(),
+        stiffness_source: model.mesh.source.clone(),
+        drive: setup.drive,
+        model: setup.model_note.clone(),
+        mean_stiffness_n_per_m: model.mesh.mean(),
+        natural_frequency_hz: setup.natural_frequency_hz,
+        modes_hz,
+        damping_ratio: setup.damping_ratio,
+        unstable_rpm_ranges: ranges,
+        parametric_region_centres_rpm: theory,
+        max_multiplier: multipliers.iter().copied().fold(0.0, f64::max),
+        points: rpms.len(),
+        wall_s,
+        stiffness_wall_s: setup.stiffness_wall_s,
+    };
+    Ok(StabilityStudy {
+        setup,
+        rpms,
+        multipliers,
+        summary,
+    })
+}

@@ -1228,7 +1228,8 @@ fn walk<'a>(
         if last && index.is_none() {
             return Ok((table, name.to_string()));
         }
-        let entry = if create {
+        // Missing tables on the way are created; a missing array of tables is an error.
+        let entry = if create && index.is_none() {
             table
                 .entry(name.to_string())
                 .or_insert_with(|| toml::Value::Table(toml::Table::new()))

@@ -20,6 +20,12 @@
 //! N is extended by repeating the last sample, as PyWavelets does). The transform is orthogonal,
 //! so the inverse is its transpose.
 //!
+//! # Level-1 detail without wrap-around
+//! For impacts the record is extended at each end by a half-sample symmetric reflection before
+//! the level-1 transform ([`level1_detail`]): the periodized transform alone joins the record's
+//! end to its start, and a force record that ends at full load and starts at zero shows that
+//! step as a detail of 0.44 × the load.
+//!
 //! # De-noising
 //! Soft thresholding of the detail coefficients of a multi-level db5 DWT at the universal
 //! threshold σ√(2 ln N), σ = median|d₁|/0.6745 (Donoho & Johnstone 1994), then the inverse DWT.
@@ -86,11 +92,45 @@ pub fn idwt_db5(approximation: &[f64], detail: &[f64]) -> Vec<f64> {
     x
 }
 
-/// The level-1 db5 detail of `x`, stretched back to the sample times (each coefficient held
-/// over its two samples), so it can be plotted against the signal: the paper's impact signature.
+/// Samples of reflection added at each end of a record before its level-1 transform: more than
+/// the filter's reach (a coefficient of sample k reads samples k − 5 … k + 5 of the extended
+/// record), and even, so the coefficients keep their pairing with the samples.
+pub const LEVEL1_PAD: usize = 10;
+
+/// The level-1 db5 detail coefficients of `x`, each held over two samples so they can be
+/// plotted against the signal: the paper's impact signature. Coefficient i weighs samples
+/// 2i − 4 … 2i + 5 and most of all 2i + 3 (|g₂| = 0.72): it is shown at samples 2i + 3 and
+/// 2i + 4, so an impact's detail stands where the impact is.
+///
+/// The record is extended at both ends by [`LEVEL1_PAD`] samples of half-sample symmetric
+/// reflection (x₋₁ = x₀, x₋₂ = x₁, …; PyWavelets' `symmetric` mode) before the periodized
+/// transform, so no coefficient reads across the wrap from the record's end to its start: a
+/// record that ends at full load no longer shows the step end → start as a detail of
+/// 0.44 × the load. A constant, linear or slowly varying record has details near zero up to
+/// its ends (db5 has five vanishing moments; the reflection leaves a kink, whose detail is of
+/// the order of the signal's change per sample).
 pub fn level1_detail(x: &[f64]) -> Vec<f64> {
-    let (_, detail) = dwt_db5(x);
-    (0..x.len()).map(|k| detail[k / 2]).collect()
+    let n = x.len();
+    if n == 0 {
+        return Vec::new();
+    }
+    let reflect = |i: usize| x[i.min(n - 1)];
+    let mut extended = Vec::with_capacity(n + 2 * LEVEL1_PAD);
+    extended.extend((0..LEVEL1_PAD).rev().map(reflect));
+    extended.extend_from_slice(x);
+    extended.extend((0..LEVEL1_PAD).map(|i| reflect(n.saturating_sub(1 + i))));
+    let (_, detail) = dwt_db5(&extended);
+    (0..n).map(|k| detail[(k + LEVEL1_PAD - 3) / 2]).collect()
+}
+
+/// Largest |level-1 detail| of `x` over the samples `from..` (the statistics window), with
+/// the whole record transformed so the window's start sees real neighbours.
+pub fn level1_detail_max(x: &[f64], from: usize) -> f64 {
+    level1_detail(x)
+        .iter()
+        .skip(from)
+        .map(|d| d.abs())
+        .fold(0.0, f64::max)
 }
 
 /// Wavelet de-noising: `levels` levels of db5 (fewer if the signal is short), soft threshold

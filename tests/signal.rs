@@ -31,3 +31,70 @@ fn db5_matches_pywavelets_periodization() {
         }
     }
 }
+
+/// A quasi-static contact-force record as the paper's 60 rpm scene has it: a 10 ms ramp to the
+/// full load F = T/r_b2, then a slow 5 % variation at the mesh frequency (36 Hz), sampled every
+/// 10 µs for 0.1 s, ending at full load.
+fn quasi_static_force(load: f64) -> Vec<f64> {
+    (0..=10_000)
+        .map(|k| {
+            let t = k as f64 * 1e-5;
+            let ramp = (t / 0.01).min(1.0);
+            load * ramp * (1.0 + 0.05 * (std::f64::consts::TAU * 36.0 * t).sin())
+        })
+        .collect()
+}
+
+/// No impact, no detail: below 1 % of the load everywhere, ends included. (Periodized alone,
+/// the transform joins the end at full load to the start at zero: 0.44 × the load.)
+#[test]
+fn a_quasi_static_force_record_has_no_level1_detail() {
+    use geardyn::signal::{dwt_db5, level1_detail_max};
+    let load = 2670.0;
+    let force = quasi_static_force(load);
+    let largest = level1_detail_max(&force, 0);
+    assert!(largest < 0.01 * load, "{largest} N");
+    let (_, periodized) = dwt_db5(&force);
+    let wrapped = periodized.iter().map(|d| d.abs()).fold(0.0, f64::max);
+    assert!(
+        wrapped > 0.4 * load,
+        "the wrap-around this guards against: {wrapped} N"
+    );
+}
+
+/// An impact one sample (10 µs) wide of size A on the quasi-static record: its largest level-1
+/// detail is A times the largest db5 high-pass tap that meets it — |g_j| over the taps j of the
+/// other parity than the sample (j + k odd) — to round-off; nothing else in the record comes
+/// near it.
+#[test]
+fn an_impact_of_known_size_gives_its_level1_detail() {
+    use geardyn::signal::{db5_high, level1_detail, level1_detail_max};
+    let (load, size) = (2670.0, 500.0);
+    for k in [6000_usize, 6001] {
+        let mut force = quasi_static_force(load);
+        force[k] += size;
+        let tap = (0..10)
+            .filter(|j| (j + k) % 2 == 1)
+            .map(|j| db5_high()[j].abs())
+            .fold(0.0, f64::max);
+        let expected = size * tap;
+        let largest = level1_detail_max(&force, 0);
+        assert!(
+            (largest - expected).abs() < 1e-6 * expected,
+            "impact at sample {k}: {largest} N against {expected} N"
+        );
+        let detail = level1_detail(&force);
+        let at = detail
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+            .unwrap()
+            .0;
+        assert!(
+            at.abs_diff(k) <= 1,
+            "the largest detail at {at}, the impact at {k}"
+        );
+        // Over a window that starts after the impact, it is gone.
+        assert!(level1_detail_max(&force, k + 8) < 0.01 * load);
+    }
+}

@@ -277,6 +277,9 @@ impl PairEnergy {
 pub struct ContactOutput {
     /// Resultant contact force on the driven gear (global frame) [N].
     pub force_on_driven: Vector2<f64>,
+    /// Moment of the contact forces on the driven gear about its centre [N·m] (counter-clockwise
+    /// positive; the load torque balances it in steady state).
+    pub moment_on_driven: f64,
     /// Magnitude of the contact force on the driven gear per flank pair [N].
     pub pair_forces: Vec<f64>,
     /// Slave nodes in contact.
@@ -475,6 +478,8 @@ impl ExplicitPair {
         out: &mut ContactOutput,
     ) {
         out.force_on_driven = Vector2::zeros();
+        out.moment_on_driven = 0.0;
+        let driven_centre = self.placement[1].centre;
         out.pair_forces.clear();
         out.pair_forces.resize(self.flank_pairs.len(), 0.0);
         out.searched.clear();
@@ -616,7 +621,10 @@ impl ExplicitPair {
                             force[mg][2 * n] -= w * f.x;
                             force[mg][2 * n + 1] -= w * f.y;
                         }
-                        on_driven += if sg == 1 { f } else { -f };
+                        let f_driven = if sg == 1 { f } else { -f };
+                        on_driven += f_driven;
+                        let arm = p - driven_centre;
+                        out.moment_on_driven += arm.x * f_driven.y - arm.y * f_driven.x;
                         out.active += 1;
                         out.max_penetration = out.max_penetration.max(-proj.gap);
                     }

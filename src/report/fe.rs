@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use crate::case::Case;
-use crate::explicit::scene::{DteAnalysis, History, PreparedScene, Scene};
+use crate::explicit::scene::{History, PreparedScene, Scene};
 use crate::report::plot::{save_chart, LinePlot, PlotError};
 use crate::report::{stiffness_csv, OutputDir, ReportError};
 use crate::study::fe::{Derived, FeStudy};
@@ -26,6 +26,7 @@ pub fn write_history(
         "contact_force_n",
         "force_circumferential_n",
         "force_radial_n",
+        "mesh_force_n",
         "contact_force_db5_d1_n",
     ]
     .iter()
@@ -60,6 +61,7 @@ pub fn write_history(
             format!("{:.4}", history.force_total[i]),
             format!("{:.4}", history.force_circumferential[i]),
             format!("{:.4}", history.force_radial[i]),
+            format!("{:.4}", history.mesh_force[i]),
             format!("{:.4}", derived.force_detail[i]),
         ];
         row.extend(history.pair_forces.iter().map(|f| format!("{:.4}", f[i])));
@@ -86,7 +88,6 @@ pub fn plot_run(
     history: &History,
     derived: &Derived,
     spectrum: &[(f64, f64)],
-    analysis: Option<&DteAnalysis>,
     pair_names: &[String],
 ) -> Result<(), PlotError> {
     let series = |values: &[f64]| -> Vec<(f64, f64)> {
@@ -196,24 +197,6 @@ pub fn plot_run(
             },
         )?;
     }
-    if let Some(k) = analysis.and_then(|a| a.stiffness.as_ref()) {
-        save_chart(
-            dir,
-            "stiffness",
-            &LinePlot {
-                title: format!("{title}: mesh stiffness from the DTE, k = T/(theta_DTE Rb2^2)"),
-                x_label: "driver roll angle [deg]".into(),
-                y_label: "mesh stiffness [N/m]".into(),
-                series: vec![(
-                    "from DTE".into(),
-                    k.samples()
-                        .iter()
-                        .map(|(r, k, _)| (r.to_degrees(), *k))
-                        .collect(),
-                )],
-            },
-        )?;
-    }
     Ok(())
 }
 
@@ -244,13 +227,13 @@ pub fn write(out: OutputDir, case: &Case, study: &FeStudy) -> Result<(), ReportE
         stiffness_csv::write_stiffness_csv(&out.path("stiffness.csv"), k)
             .map_err(io("stiffness.csv"))?;
     }
+    write_stiffness_comparison(out, case, study)?;
     plot_run(
         out.0,
         &format!("{}: {}", case.name(), study.scene.name),
         history,
         &study.derived,
         &study.spectrum,
-        study.analysis.as_ref(),
         &study.pair_names,
     )?;
     out.json("summary.json", &study.summary)
@@ -272,6 +255,75 @@ pub fn prepared_console(case: &Case, prepared: &PreparedScene, scene: &Scene) ->
         prepared.dt_paper,
         prepared.dt,
         (scene.duration / prepared.dt).ceil()
+    )
+}
+
+/// `stiffness_vs_ltca.csv` and the `stiffness` plot: k(θ) from the DTE per bin beside the
+/// LTCA's on the run's mesh and on the case's.
+fn write_stiffness_comparison(
+    out: OutputDir,
+    case: &Case,
+    study: &FeStudy,
+) -> Result<(), ReportError> {
+    let [same, converged] = &study.stiffness_comparison;
+    let Some(same) = same else {
+        return Ok(());
+    };
+    let roll_pitch = case.pair.roll_angle_at(1, case.pair.contact_points.pitch);
+    let deg = |theta: f64| (roll_pitch + theta).to_degrees();
+    let reference = |theta: f64| {
+        converged.as_ref().and_then(|c| {
+            c.bins
+                .iter()
+                .find(|b| (b.0 - theta).abs() < 1e-12)
+                .map(|b| b.2)
+        })
+    };
+    out.csv(
+        "stiffness_vs_ltca.csv",
+        &[
+            "roll_angle_deg",
+            "mesh_stiffness_fe_n_per_m",
+            "mesh_stiffness_ltca_same_mesh_n_per_m",
+            "mesh_stiffness_ltca_case_mesh_n_per_m",
+        ],
+        same.bins.iter().map(|(theta, fe, ltca)| {
+            vec![
+                format!("{:.6}", deg(*theta)),
+                format!("{fe:.6e}"),
+                format!("{ltca:.6e}"),
+                reference(*theta).map_or(String::new(), |k| format!("{k:.6e}")),
+            ]
+        }),
+    )?;
+    let curve = |pick: fn(&(f64, f64, f64)) -> f64, bins: &[(f64, f64, f64)]| -> Vec<(f64, f64)> {
+        bins.iter().map(|b| (deg(b.0), pick(b))).collect()
+    };
+    let mut series = vec![
+        ("FE, from the DTE".to_string(), curve(|b| b.1, &same.bins)),
+        (
+            format!("LTCA, same mesh ({} mm)", same.summary.fine_element_mm),
+            curve(|b| b.2, &same.bins),
+        ),
+    ];
+    if let Some(c) = converged {
+        series.push((
+            format!("LTCA, case mesh ({} mm)", c.summary.fine_element_mm),
+            curve(|b| b.2, &c.bins),
+        ));
+    }
+    out.chart(
+        "stiffness",
+        &LinePlot {
+            title: format!(
+                "{}: {}: k = W/(Rb2 theta_DTE - e), low-passed, against the LTCA",
+                case.name(),
+                study.scene.name
+            ),
+            x_label: "driver roll angle [deg]".into(),
+            y_label: "mesh stiffness [N/m]".into(),
+            series,
+        },
     )
 }
 
@@ -298,6 +350,25 @@ pub fn console(study: &FeStudy) -> String {
         s.energy_error_rel,
         s.energy_error_rel_transmitted
     );
+    if let Some(same) = &s.stiffness_vs_ltca_same_mesh {
+        text.push_str(&format!(
+            "k(theta) from the DTE: mean {:.4e} N/m over {:.0} % of a base pitch; against the LTCA on this mesh {:+.2} % in the mean, {:.2} % at the worst of {} bins",
+            s.mesh_stiffness_mean_n_per_m.unwrap_or(nan),
+            s.stiffness_pitch_coverage.unwrap_or(0.0) * 100.0,
+            same.mean_rel * 100.0,
+            same.max_abs_rel * 100.0,
+            same.bins
+        ));
+        if let Some(case_mesh) = &s.stiffness_vs_ltca_case_mesh {
+            text.push_str(&format!(
+                "; on the case's mesh ({} mm) {:+.2} %, {:.2} %",
+                case_mesh.fine_element_mm,
+                case_mesh.mean_rel * 100.0,
+                case_mesh.max_abs_rel * 100.0
+            ));
+        }
+        text.push('\n');
+    }
     if let Some(coupled) = s.dt_critical_coupled_s {
         text.push_str(&format!(
             "stable step where the contact was (bodies and penalty springs, power iteration at {} instants): {coupled:.4e} s at the least, {:.2} x the step used\n",

@@ -11,11 +11,13 @@ use serde::Serialize;
 use crate::case::{Case, Override};
 use crate::explicit::pair::PairEnergy;
 use crate::explicit::scene::{
-    analyse_dte, statistics_start, CoupledStep, DteAnalysis, FeSettings, History, LowpassDte,
-    PreparedScene, Scene,
+    analyse_dte, binned_stiffness, statistics_start, CoupledStep, DteAnalysis, FeSettings, History,
+    LowpassDte, PreparedScene, Scene, STIFFNESS_BINS,
 };
 use crate::fe::{MassLumping, PlaneState};
+use crate::ltca::PositionResult;
 use crate::signal;
+use crate::stiffness::PeriodicTable;
 
 use super::StudyError;
 
@@ -335,7 +337,11 @@ pub struct FeSummary {
     pub mesh_frequency_hz: f64,
     pub dte_spectrum_peaks: Vec<DtePeak>,
     pub contact_force_max_n: f64,
+    /// Largest |db5 level-1 detail| of the contact force over the statistics window.
     pub impact_d1_max_n: f64,
+    /// k(θ) from the DTE against the LTCA's, bin by bin, on the run's mesh and the case's.
+    pub stiffness_vs_ltca_same_mesh: Option<StiffnessDifference>,
+    pub stiffness_vs_ltca_case_mesh: Option<StiffnessDifference>,
     pub energy: PairEnergy,
     pub energy_error_rel: f64,
     pub energy_error_rel_transmitted: f64,
@@ -368,6 +374,8 @@ pub struct FeStudy {
     pub spectrum: Vec<(f64, f64)>,
     /// Names of the flank pairs (columns of the pair forces).
     pub pair_names: Vec<String>,
+    /// k(θ) from the DTE against the LTCA on the run's mesh and on the case's.
+    pub stiffness_comparison: [Option<StiffnessComparison>; 2],
     pub summary: FeSummary,
 }
 
@@ -385,10 +393,37 @@ pub fn run(
         crate::explicit::scene::run(prepared, scene.duration, settings.output_interval, progress);
     let history = outcome.history;
     let stats_start = statistics_start(prepared, scene);
-    let analysis = analyse_dte(&history, &prepared.model, scene.torque, stats_start);
+    let (fine_mm, coarse_mm) = (settings.fine_size * 1e3, settings.coarse_size * 1e3);
+    let case_mesh = (
+        case.file.mesh.fine_element_mm,
+        case.file.mesh.coarse_element_mm,
+    );
+    // The LTCA on the run's mesh gives the relief's geometric unloaded TE (exact profiles) and
+    // the same-discretization reference; on the case's mesh, the converged reference.
+    let same = ltca_cycle(case, scene, fine_mm, coarse_mm)?;
+    let converged =
+        if (case_mesh.0 - fine_mm).abs() > 1e-9 || (case_mesh.1 - coarse_mm).abs() > 1e-9 {
+            Some(ltca_cycle(case, scene, case_mesh.0, case_mesh.1)?)
+        } else {
+            None
+        };
+    let rb2 = case.pair.gears[1].base_radius;
+    let pitch = case.pair.gears[0].angular_pitch();
+    let unloaded_te = PeriodicTable {
+        period: pitch,
+        values: same.iter().map(|r| r.unloaded_te * rb2).collect(),
+    };
+    let analysis = analyse_dte(
+        &history,
+        &case.pair,
+        prepared.model.driven_inertia(),
+        scene.torque,
+        stats_start,
+        &unloaded_te,
+    );
     let derived = derive(&history);
     let spectrum = dte_spectrum(&history, stats_start);
-    let mesh_hz = scene.driver_speed / case.pair.gears[0].angular_pitch();
+    let mesh_hz = scene.driver_speed / pitch;
     let peaks = signal::spectrum_peaks(&spectrum, 0.5 * mesh_hz, 8);
     let pair_names: Vec<String> = prepared
         .model
@@ -396,25 +431,28 @@ pub fn run(
         .iter()
         .map(|fp| fp.name())
         .collect();
-    let (fine_mm, coarse_mm) = (settings.fine_size * 1e3, settings.coarse_size * 1e3);
-    let ltca_same = ltca_check(case, scene, analysis.as_ref(), &history, fine_mm, coarse_mm)?;
-    let case_mesh = (
-        case.file.mesh.fine_element_mm,
-        case.file.mesh.coarse_element_mm,
-    );
-    let ltca_case_mesh =
-        if (case_mesh.0 - fine_mm).abs() > 1e-9 || (case_mesh.1 - coarse_mm).abs() > 1e-9 {
-            ltca_check(
-                case,
-                scene,
-                analysis.as_ref(),
-                &history,
-                case_mesh.0,
-                case_mesh.1,
-            )?
-        } else {
-            ltca_same
-        };
+    let check = |results: &[PositionResult], mesh: (f64, f64)| {
+        analysis.as_ref().map(|a| {
+            (
+                ltca_check(a, &history, results, pitch, mesh),
+                compare_stiffness(a, &history, results, scene.torque, rb2, pitch, mesh),
+            )
+        })
+    };
+    let same_checks = check(&same, (fine_mm, coarse_mm));
+    let case_checks = match &converged {
+        Some(results) => check(results, case_mesh),
+        None => same_checks.clone(),
+    };
+    let ltca_same = same_checks.as_ref().map(|c| c.0);
+    let ltca_case_mesh = case_checks.as_ref().map(|c| c.0);
+    let stiffness_same = same_checks.and_then(|c| c.1);
+    let stiffness_case = case_checks.and_then(|c| c.1);
+    let stats_sample = history
+        .time
+        .iter()
+        .position(|t| *t >= stats_start)
+        .unwrap_or(history.time.len());
     let max_work = history
         .energy
         .iter()
@@ -465,11 +503,9 @@ pub fn run(
             })
             .collect(),
         contact_force_max_n: history.force_total.iter().copied().fold(0.0, f64::max),
-        impact_d1_max_n: derived
-            .force_detail
-            .iter()
-            .map(|v| v.abs())
-            .fold(0.0, f64::max),
+        impact_d1_max_n: signal::level1_detail_max(&history.force_total, stats_sample),
+        stiffness_vs_ltca_same_mesh: stiffness_same.as_ref().map(|c| c.summary),
+        stiffness_vs_ltca_case_mesh: stiffness_case.as_ref().map(|c| c.summary),
         energy: outcome.final_energy,
         energy_error_rel,
         energy_error_rel_transmitted,
@@ -501,6 +537,7 @@ pub fn run(
         analysis,
         spectrum,
         pair_names,
+        stiffness_comparison: [stiffness_same, stiffness_case],
         summary,
     })
 }
@@ -527,20 +564,17 @@ fn model_description(case: &Case, prepared: &PreparedScene) -> String {
     )
 }
 
-/// The LTCA (64 positions) on a mesh of `fine_mm` / `coarse_mm`, its STE over the driver
-/// positions of the statistics window (interpolated), against the run's DTE.
-fn ltca_check(
+/// LTCA positions per base pitch of the references (twice the stiffness bins, so a contact
+/// transition is placed within half a bin).
+pub const LTCA_POSITIONS: usize = 128;
+
+/// The LTCA cycle of the scene's relief and torque on a mesh of `fine_mm` / `coarse_mm`.
+fn ltca_cycle(
     case: &Case,
     scene: &Scene,
-    analysis: Option<&DteAnalysis>,
-    history: &History,
     fine_mm: f64,
     coarse_mm: f64,
-) -> Result<Option<LtcaCheck>, StudyError> {
-    const POSITIONS: usize = 64;
-    let Some(a) = analysis else {
-        return Ok(None);
-    };
+) -> Result<Vec<PositionResult>, StudyError> {
     let variant = super::relief_variant(case, Some(&scene.relief))?;
     let model = super::ltca::model_with_sizes(
         case,
@@ -548,21 +582,34 @@ fn ltca_check(
         fine_mm * 1e-3,
         coarse_mm * 1e-3,
     )?;
-    let results = model.run(POSITIONS, scene.torque, &|_| {})?;
-    let pitch = case.pair.gears[0].angular_pitch();
-    let start = history
-        .time
+    Ok(model.run(LTCA_POSITIONS, scene.torque, &|_| {})?)
+}
+
+/// A quantity of the LTCA cycle at driver rotation θ (periodic, linear between positions).
+fn at_rotation(
+    results: &[PositionResult],
+    pitch: f64,
+    theta: f64,
+    f: fn(&PositionResult) -> f64,
+) -> f64 {
+    let n = results.len();
+    let u = (theta / pitch).rem_euclid(1.0) * n as f64;
+    let i = (u.floor() as usize).min(n - 1);
+    let w = u - i as f64;
+    f(&results[i]) * (1.0 - w) + f(&results[(i + 1) % n]) * w
+}
+
+/// The LTCA's STE over the driver positions of the statistics window, against the run's DTE.
+fn ltca_check(
+    a: &DteAnalysis,
+    history: &History,
+    results: &[PositionResult],
+    pitch: f64,
+    (fine_mm, coarse_mm): (f64, f64),
+) -> LtcaCheck {
+    let covered: Vec<f64> = history.driver_rotation[a.window_start..]
         .iter()
-        .position(|t| *t >= a.window.0)
-        .unwrap_or(0);
-    let covered: Vec<f64> = history.driver_rotation[start..]
-        .iter()
-        .map(|theta| {
-            let u = (theta / pitch).rem_euclid(1.0) * POSITIONS as f64;
-            let i = (u.floor() as usize).min(POSITIONS - 1);
-            let f = u - i as f64;
-            results[i].ste * (1.0 - f) + results[(i + 1) % POSITIONS].ste * f
-        })
+        .map(|theta| at_rotation(results, pitch, *theta, |r| r.ste))
         .collect();
     let mean = covered.iter().sum::<f64>() / covered.len() as f64;
     let (min, max) = covered
@@ -570,8 +617,8 @@ fn ltca_check(
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
             (lo.min(*v), hi.max(*v))
         });
-    let k_mean = results.iter().map(|r| r.mesh_stiffness).sum::<f64>() / POSITIONS as f64;
-    Ok(Some(LtcaCheck {
+    let k_mean = results.iter().map(|r| r.mesh_stiffness).sum::<f64>() / results.len() as f64;
+    LtcaCheck {
         fine_element_mm: fine_mm,
         coarse_element_mm: coarse_mm,
         ste_mean_rad: mean,
@@ -583,5 +630,81 @@ fn ltca_check(
         dte_over_ste_peak_to_peak: a.dte_peak_to_peak_rad / (max - min),
         dte_lowpass_over_ste_mean: a.lowpass.map(|l| l.mean_rad / mean),
         dte_lowpass_over_ste_peak_to_peak: a.lowpass.map(|l| l.peak_to_peak_rad / (max - min)),
-    }))
+    }
+}
+
+/// k(θ) from the DTE over the LTCA's, bin by bin.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct StiffnessDifference {
+    pub fine_element_mm: f64,
+    pub coarse_element_mm: f64,
+    /// Mean of the FE's bins over the mean of the LTCA's, minus one.
+    pub mean_rel: f64,
+    /// The largest |k_FE/k_LTCA − 1| of a bin.
+    pub max_abs_rel: f64,
+    /// Bins compared (of [`STIFFNESS_BINS`]).
+    pub bins: usize,
+}
+
+/// The comparison and its bins: (driver rotation from the pitch-point position [rad], k from
+/// the DTE, k of the LTCA) [N/m].
+#[derive(Debug, Clone, PartialEq)]
+pub struct StiffnessComparison {
+    pub summary: StiffnessDifference,
+    pub bins: Vec<(f64, f64, f64)>,
+}
+
+/// The LTCA's k(θ) on the same footing as the FE's: its STE and e at the window's driver
+/// positions, low-passed by the same filter, k = (T/R_b2)/(R_b2 φ − e) (frictionless: the
+/// LTCA's mesh force is T/R_b2), binned alike; then bin by bin against the FE's table.
+fn compare_stiffness(
+    a: &DteAnalysis,
+    history: &History,
+    results: &[PositionResult],
+    torque: f64,
+    rb2: f64,
+    pitch: f64,
+    (fine_mm, coarse_mm): (f64, f64),
+) -> Option<StiffnessComparison> {
+    let filter = a.filter?;
+    let ste: Vec<f64> = history
+        .driver_rotation
+        .iter()
+        .map(|theta| at_rotation(results, pitch, *theta, |r| r.ste))
+        .collect();
+    let e: Vec<f64> = history
+        .driver_rotation
+        .iter()
+        .map(|theta| rb2 * at_rotation(results, pitch, *theta, |r| r.unloaded_te))
+        .collect();
+    let (first, ste_lp) = filter.apply(&ste, a.window_start);
+    let (_, e_lp) = filter.apply(&e, a.window_start);
+    let deflection: Vec<f64> = ste_lp.iter().zip(&e_lp).map(|(s, e)| rb2 * s - e).collect();
+    let force = vec![torque / rb2; deflection.len()];
+    let rotations = &history.driver_rotation[first..first + deflection.len()];
+    let reference = binned_stiffness(pitch, rotations, &force, &deflection);
+    let fe_bins = &a.stiffness_bins;
+    let bins: Vec<(f64, f64, f64)> = (0..STIFFNESS_BINS)
+        .filter_map(|b| {
+            let theta = b as f64 / STIFFNESS_BINS as f64 * pitch;
+            Some((theta, fe_bins[b]?, reference[b]?))
+        })
+        .collect();
+    if bins.is_empty() {
+        return None;
+    }
+    let mean = |f: fn(&(f64, f64, f64)) -> f64| bins.iter().map(f).sum::<f64>() / bins.len() as f64;
+    Some(StiffnessComparison {
+        summary: StiffnessDifference {
+            fine_element_mm: fine_mm,
+            coarse_element_mm: coarse_mm,
+            mean_rel: mean(|b| b.1) / mean(|b| b.2) - 1.0,
+            max_abs_rel: bins
+                .iter()
+                .map(|b| (b.1 / b.2 - 1.0).abs())
+                .fold(0.0, f64::max),
+            bins: bins.len(),
+        },
+        bins,
+    })
 }

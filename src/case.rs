@@ -204,9 +204,10 @@ pub struct FeSection {
     /// frequencies (kHz) the damping is ζ·ω/ω_max, a few parts per million.
     #[serde(default = "default_high_frequency_damping")]
     pub high_frequency_damping_ratio: f64,
-    /// Damping ratio of the mesh mode: a dashpot on the driven hub against the DTE rate,
-    /// c_t = 2ζ√(k_m R_b2² I₂) — the lumped model's viscous mesh damping applied to the FE
-    /// (the elastic bodies themselves carry almost no damping at the mesh frequencies).
+    /// Damping ratio of the mesh mode: a dashpot on the driven hub against the DTE rate while
+    /// the teeth touch, c_t = 2ζ√(k_m R_b2² I₂) with k_m the pair's own mean mesh stiffness —
+    /// the lumped model's viscous mesh damping applied to the FE (the elastic bodies themselves
+    /// carry almost no damping at the mesh frequencies).
     #[serde(default = "default_mesh_damping")]
     pub mesh_damping_ratio: f64,
     /// Interval of the recorded time histories [µs].

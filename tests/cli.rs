@@ -701,7 +701,8 @@ fn fe_writes_histories_summary_and_keeps_a_diverged_run() {
 /// The headline numbers of `ltca`, `sweep` and a short `fe` on the embedded case, against
 /// recorded values (tests/fixtures/headline_numbers.json). `ltca` and `sweep` were recorded with
 /// the binary of 9ce0694, before the study layer was split out of the binary; `fe` again after
-/// its signals became interval means and its LTCA references 128 positions (issue 15). The
+/// its signals became interval means, its LTCA references 128 positions and its mesh dashpot
+/// acts through the contact, sized with the LTCA (issue 15). The
 /// computation is deterministic (ordered reductions), so 1e-9 relative leaves room only for the
 /// last bits of a reordered sum, not for a changed model: a deliberate change of the numbers
 /// re-records the fixture and says why.

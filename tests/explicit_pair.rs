@@ -319,3 +319,43 @@ fn a_tooth_entering_mesh_books_no_energy() {
     eprintln!("largest balance step after the ramp {worst:.3e} J at {at:.4e} s");
     assert!(worst < 5e-5, "{worst:e} J at {at:e} s");
 }
+
+/// The mesh dashpot acts through the contact only. A pair without contact surfaces (no tooth
+/// pair), the driver turning at 300 rpm from the start, the driven gear at rest with no load:
+/// nothing touches the driven gear, so it stays at rest although its DTE rate is the whole
+/// kinematic speed. (A dashpot on the hub against the kinematic reference, as before, would
+/// drag it to 1 − e^{−c_t t/I₂} of that speed: a third within 0.1 ms here.)
+#[test]
+fn the_mesh_dashpot_transmits_nothing_across_open_teeth() {
+    use geardyn::explicit::pair::{Drive, ExplicitPair};
+    let case = coarse_case();
+    let p = prepared(&case, 300.0, 1e-4, 0.0, 1.0);
+    let model = ExplicitPair::new(
+        &case.pair,
+        p.model.meshes.clone(),
+        case.explicit_material(),
+        Vec::new(),
+        0.0,
+        1.0,
+    )
+    .unwrap();
+    let drive = Drive {
+        load_torque: 0.0,
+        ramp_time: 0.0,
+        ..p.drive
+    };
+    let mut integrator = PairIntegrator::new(&model, drive, p.dt, 0.0);
+    let inertia = model.driven_inertia();
+    integrator.mesh_damping = 4.0 * inertia / 1e-4;
+    let mut state = model.initial_state(0.0);
+    integrator.initialize(&mut state);
+    while state.time < 1e-4 {
+        integrator.step(&mut state).unwrap();
+    }
+    let kinematic = model.kinematic_hub_rotation(drive.driver_speed).abs();
+    eprintln!(
+        "driven hub speed {:.3e} rad/s after 0.1 ms, kinematic {kinematic:.3} rad/s",
+        state.hub[1]
+    );
+    assert!(state.hub[1].abs() < 1e-9 * kinematic, "{}", state.hub[1]);
+}

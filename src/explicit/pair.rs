@@ -798,8 +798,9 @@ pub struct PairIntegrator<'a> {
     /// relaxation (driver at rest) only; scenes use 0.
     pub mass_damping: f64,
     /// Mesh dashpot c_t [N m s]: torque −c_t (φ̇₂ − φ̇₂,kin) on the driven hub, against the rate
-    /// of the angular DTE (the lumped model's viscous mesh damping c_m R_b2²). Its work is
-    /// booked as damping.
+    /// of the angular DTE (the lumped model's viscous mesh damping c_m R_b2²), while any point
+    /// is in contact — through the mesh, never across open teeth. Its work is booked as
+    /// damping.
     pub mesh_damping: f64,
     pub energy: PairEnergy,
     pub steps: usize,
@@ -931,7 +932,12 @@ impl<'a> PairIntegrator<'a> {
         }
         let (_, driver_rate, _) = self.drive.driver_motion(state.time);
         let dte_rate = state.hub[1] - model.kinematic_hub_rotation(driver_rate);
-        let mesh_torque = -self.mesh_damping * dte_rate;
+        // The mesh damping acts through the contact: none while no point is in contact.
+        let mesh_torque = if self.last_contact.active > 0 {
+            -self.mesh_damping * dte_rate
+        } else {
+            0.0
+        };
         moment += mesh_torque;
         let alpha = self.mass_damping;
         state.hub[2] = moment / model.hub_inertia - alpha * state.hub[1];

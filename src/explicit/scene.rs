@@ -22,10 +22,12 @@
 //! # Mesh damping
 //! The elastic bodies' stiffness damping is tuned to the element scale (ζ at ω_max) and is a few
 //! ppm at the mesh mode, which would ring on undamped after every engagement. A dashpot on the
-//! driven hub against the DTE rate, T_d = −c_t (φ̇₂ − φ̇₂,kin), c_t = 2ζ√(k_m R_b2² I₂), gives the
-//! mesh mode the damping ratio ζ — the lumped model's viscous mesh damping c = 2ζ√(k m_e) with
-//! m_e = I₂/R_b2² (driver at prescribed speed); k_m from ISO 6336. Statistics start three decay
-//! times 3/(ζω_n) after the ramp.
+//! driven hub against the DTE rate, T_d = −c_t (φ̇₂ − φ̇₂,kin), c_t = 2ζ√(k_m R_b2² I₂), acting
+//! only while the teeth are in contact (no torque across open teeth), gives the mesh mode the
+//! damping ratio ζ — the lumped model's viscous mesh damping c = 2ζ√(k̄ m) with the driver at
+//! prescribed speed (m = I₂/R_b2²). k_m is the pair's own mean mesh stiffness (the LTCA on the
+//! same bodies, which the caller passes), so ζ is the lumped model's at the same nominal value.
+//! Statistics start three decay times 3/(ζω_n) after the ramp.
 //!
 //! # Mesh stiffness from the DTE (seed paper eq. 37, read as the lumped model's mesh law)
 //! ```text
@@ -147,13 +149,14 @@ pub struct PreparedScene {
 }
 
 /// Meshes the pair (relief `modifications`) for `scene` and assembles it, measures its critical
-/// step.
+/// step; sizes the mesh dashpot with `mesh_stiffness`, the pair's mean mesh stiffness [N/m].
 pub fn prepare(
     pair: &GearPair,
     modifications: &[FlankModification; 2],
     material: ExplicitMaterial,
     scene: &Scene,
     settings: &FeSettings,
+    mesh_stiffness: f64,
 ) -> Result<PreparedScene, FeError> {
     let started = Instant::now();
     let drive = Drive {
@@ -201,11 +204,8 @@ pub fn prepare(
         .element_eigen_critical_step()
         .min(model.bodies[1].element_eigen_critical_step());
     // Mesh dashpot: ζ of the driven gear turning against the mesh spring (driver prescribed),
-    // k_t = k_m R_b2², c_t = 2ζ√(k_t I₂); k_m the ISO 6336 mean mesh stiffness (its error enters
-    // c_t as a square root).
-    let mesh_damping_stiffness =
-        crate::stiffness::iso_6336_method_b(pair, scene.torque, material.youngs_modulus)
-            .mean_n_per_m;
+    // k_t = k_m R_b2², c_t = 2ζ√(k_t I₂).
+    let mesh_damping_stiffness = mesh_stiffness;
     let rb2 = pair.gears[1].base_radius;
     let mesh_damping = 2.0
         * settings.mesh_damping_ratio

@@ -183,14 +183,26 @@ pub fn scene<'a>(case: &'a Case, name: &str) -> Result<&'a Scene, StudyError> {
 
 /// Meshes and assembles the pair for `scene` with the case's `[fe]` settings and measures its
 /// critical step: the one constructor of an explicit scene (the command, tests and benches).
+/// The mesh dashpot is sized with the pair's own mean mesh stiffness: the LTCA of the scene's
+/// relief and torque on the explicit bodies' mesh (64 positions).
 pub fn prepare(case: &Case, scene: &Scene) -> Result<PreparedScene, StudyError> {
     let variant = super::relief_variant(case, Some(&scene.relief))?;
+    let settings = &case.fe;
+    let model = super::ltca::model_with_sizes(
+        case,
+        &variant.modifications,
+        settings.fine_size,
+        settings.coarse_size,
+    )?;
+    let results = model.run(64, scene.torque, &|_| {})?;
+    let mesh_stiffness = results.iter().map(|r| r.mesh_stiffness).sum::<f64>() / 64.0;
     Ok(crate::explicit::scene::prepare(
         &case.pair,
         &variant.modifications,
         case.explicit_material(),
         scene,
-        &case.fe,
+        settings,
+        mesh_stiffness,
     )?)
 }
 

@@ -210,6 +210,14 @@ pub struct FeSection {
     /// carry almost no damping at the mesh frequencies).
     #[serde(default = "default_mesh_damping")]
     pub mesh_damping_ratio: f64,
+    /// Mass scaling at low speeds: every mass times s so that the mesh mode falls to
+    /// `mass_scaling_margin` × the fifth mesh harmonic, when it is above that (the stable step
+    /// grows by √s; quasi-static response kept). Off by itself where the mesh frequency is high.
+    #[serde(default = "default_true")]
+    pub mass_scaling: bool,
+    /// The scaled mesh mode over the fifth mesh harmonic.
+    #[serde(default = "default_mass_scaling_margin")]
+    pub mass_scaling_margin: f64,
     /// Interval of the recorded time histories [µs].
     #[serde(default = "default_output_interval")]
     pub output_interval_us: f64,
@@ -229,6 +237,8 @@ impl Default for FeSection {
             mass_lumping: MassLumping::default(),
             high_frequency_damping_ratio: default_high_frequency_damping(),
             mesh_damping_ratio: default_mesh_damping(),
+            mass_scaling: true,
+            mass_scaling_margin: default_mass_scaling_margin(),
             output_interval_us: default_output_interval(),
             explicit_fine_element_mm: None,
             explicit_coarse_element_mm: None,
@@ -247,6 +257,12 @@ fn default_high_frequency_damping() -> f64 {
 }
 fn default_mesh_damping() -> f64 {
     0.05
+}
+fn default_true() -> bool {
+    true
+}
+fn default_mass_scaling_margin() -> f64 {
+    3.0
 }
 fn default_output_interval() -> f64 {
     10.0
@@ -970,7 +986,15 @@ impl Case {
             });
         }
 
+        if !(fe.mass_scaling_margin >= 1.5 && fe.mass_scaling_margin <= 100.0) {
+            return Err(invalid(
+                "fe.mass_scaling_margin",
+                fe.mass_scaling_margin.to_string(),
+                "must be in [1.5, 100] (default 3: the scaled mesh mode at three times the fifth mesh harmonic)",
+            ));
+        }
         let fe_settings = FeSettings {
+            mass_scaling_margin: fe.mass_scaling.then_some(fe.mass_scaling_margin),
             step_factor: fe.step_factor,
             penalty_factor: fe.penalty_factor,
             mass_lumping: fe.mass_lumping,

@@ -29,6 +29,7 @@ fn prepared(case: &Case, rpm: f64, duration: f64, ramp: f64, penalty: f64) -> Pr
     scene.duration = duration;
     scene.ramp_time = ramp;
     let mut case = case.clone();
+    case.fe.mass_scaling_margin = None;
     case.fe.penalty_factor = penalty;
     case.fe.high_frequency_damping_ratio = 0.0;
     case.fe.mesh_damping_ratio = 0.0;
@@ -358,4 +359,40 @@ fn the_mesh_dashpot_transmits_nothing_across_open_teeth() {
         state.hub[1]
     );
     assert!(state.hub[1].abs() < 1e-9 * kinematic, "{}", state.hub[1]);
+}
+
+/// Mass scaling at 60 rpm: the factor puts the mesh mode at three times the fifth mesh harmonic
+/// (36 Hz × 5 × 3 = 540 Hz), and every stable step — each body's power iteration, the contact
+/// springs' bound, the step used — grows by exactly √factor (all of M⁻¹K scales by 1/factor).
+#[test]
+fn mass_scaling_lowers_the_mesh_mode_and_lengthens_the_step_by_its_root() {
+    let case = coarse_case();
+    let unscaled = prepared(&case, 60.0, 1e-3, 1e-4, 1.0);
+    let mut scaled_case = case.clone();
+    scaled_case.fe.high_frequency_damping_ratio = 0.0;
+    scaled_case.fe.mesh_damping_ratio = 0.0;
+    let mut scene = case.scene("low-unmodified").unwrap().clone();
+    (scene.duration, scene.ramp_time) = (1e-3, 1e-4);
+    let scaled = study::fe::prepare(&scaled_case, &scene).unwrap();
+    let s = scaled.mass_scaling;
+    eprintln!("{s:?}");
+    assert_eq!(unscaled.mass_scaling.factor, 1.0);
+    assert!((s.scaled_mesh_mode_hz / 540.0 - 1.0).abs() < 1e-9, "{s:?}");
+    assert!(s.factor > 10.0, "{s:?}");
+    let root = s.factor.sqrt();
+    for (a, b) in [
+        (scaled.dt_bodies[0], unscaled.dt_bodies[0]),
+        (scaled.dt_bodies[1], unscaled.dt_bodies[1]),
+        (scaled.dt_contact, unscaled.dt_contact),
+        (scaled.dt, unscaled.dt),
+    ] {
+        assert!(
+            (a / b / root - 1.0).abs() < 1e-9,
+            "{a} / {b} against {root}"
+        );
+    }
+    assert!(
+        (scaled.model.driven_inertia() / unscaled.model.driven_inertia() / s.factor - 1.0).abs()
+            < 1e-12
+    );
 }

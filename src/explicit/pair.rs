@@ -399,6 +399,16 @@ impl ExplicitPair {
         self.bodies.iter().map(|b| b.elements.len()).sum()
     }
 
+    /// Multiplies every nodal mass and the driven hub's inertia by `factor` (mass scaling): all
+    /// natural frequencies, and the stable step's inverse, fall by √factor.
+    pub fn scale_mass(&mut self, factor: f64) {
+        for g in 0..2 {
+            self.bodies[g].mass.iter_mut().for_each(|m| *m *= factor);
+            self.inverse_mass[g].iter_mut().for_each(|w| *w /= factor);
+        }
+        self.hub_inertia *= factor;
+    }
+
     /// Polar moment of inertia of gear `g` (body and hub) about its centre [kg m²]:
     /// Σ m_i |X_i|² of the lumped nodal masses.
     pub fn inertia(&self, g: usize) -> f64 {

@@ -12,7 +12,7 @@ use crate::case::{Case, Override};
 use crate::explicit::pair::PairEnergy;
 use crate::explicit::scene::{
     analyse_dte, binned_stiffness, statistics_start, CoupledStep, DteAnalysis, FeSettings, History,
-    LowpassDte, PreparedScene, Scene, STIFFNESS_BINS,
+    LowpassDte, MassScaling, PreparedScene, Scene, STIFFNESS_BINS,
 };
 use crate::fe::{MassLumping, PlaneState};
 use crate::ltca::PositionResult;
@@ -371,6 +371,8 @@ pub struct FeSummary {
     pub penalty_factor: f64,
     pub step_factor: f64,
     pub mass_lumping: MassLumping,
+    /// Mass scaling: factor, the mesh mode unscaled and scaled, the highest mesh harmonic kept.
+    pub mass_scaling: MassScaling,
     pub mesh_damping_ratio: f64,
     pub fine_element_mm: f64,
     pub coarse_element_mm: f64,
@@ -538,6 +540,7 @@ pub fn run(
         penalty_factor: settings.penalty_factor,
         step_factor: settings.step_factor,
         mass_lumping: settings.mass_lumping,
+        mass_scaling: prepared.mass_scaling,
         mesh_damping_ratio: settings.mesh_damping_ratio,
         fine_element_mm: fine_mm,
         coarse_element_mm: coarse_mm,
@@ -557,6 +560,23 @@ pub fn run(
 /// What the explicit model is and what it leaves out, in one sentence.
 fn model_description(case: &Case, prepared: &PreparedScene) -> String {
     let settings = &case.fe;
+    let scaling = &prepared.mass_scaling;
+    let mass_scaling = if scaling.factor > 1.0 {
+        format!(
+            "; mass scaled by {:.1} (quasi-static: mesh mode {:.0} -> {:.0} Hz, {:.1} x the fifth mesh harmonic {:.0} Hz; stable step {:.2} x)",
+            scaling.factor,
+            scaling.mesh_mode_hz,
+            scaling.scaled_mesh_mode_hz,
+            scaling.scaled_mode_over_harmonic,
+            scaling.highest_harmonic_hz,
+            scaling.factor.sqrt()
+        )
+    } else {
+        format!(
+            "; masses unscaled (mesh mode {:.0} Hz, {:.2} x the fifth mesh harmonic)",
+            scaling.mesh_mode_hz, scaling.scaled_mode_over_harmonic
+        )
+    };
     format!(
         "2D {} ({} plane), corotational 8-node quadrilaterals, lumped mass ({}); rigid hubs, rigid bearings; driver at prescribed speed, driven hub with load torque and a mesh dashpot (zeta {:.3}) on the DTE rate; segment-to-segment penalty contact (two-pass, 4 Gauss points per edge and the tip corner) with Coulomb friction on drive and back flanks of {} tooth pairs; fine flank elements {:.2} mm only on the teeth that engage during the scene, {:.2} mm elsewhere",
         if case.plane == PlaneState::Strain {
@@ -573,7 +593,7 @@ fn model_description(case: &Case, prepared: &PreparedScene) -> String {
         prepared.model.tooth_pairs.len(),
         settings.fine_size * 1e3,
         settings.coarse_size * 1e3
-    )
+    ) + &mass_scaling
 }
 
 /// LTCA positions per base pitch of the references (twice the stiffness bins, so a contact

@@ -114,7 +114,7 @@ fn pair_step(c: &mut Criterion) {
             prepared.dt,
             prepared.beta_k,
         );
-        let mut state = prepared.model.initial_state(0.0);
+        let mut state = prepared.model.initial_state(&prepared.drive);
         integrator.initialize(&mut state);
         while state.time < start {
             integrator.step(&mut state).unwrap();

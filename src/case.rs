@@ -12,6 +12,7 @@ use std::path::Path;
 use thiserror::Error;
 
 use crate::explicit::body::ExplicitMaterial;
+use crate::explicit::pair::{Ramp, Start};
 use crate::explicit::scene::{FeSettings, Scene};
 use crate::fe::{MassLumping, PlaneState};
 use crate::geometry::{
@@ -287,8 +288,17 @@ pub struct SceneSection {
     pub friction: f64,
     /// Simulated time [s].
     pub duration_s: f64,
-    /// Ramp of driver speed and load torque from zero [s].
+    /// Ramp of the load torque, and of the driver speed when starting from rest [s].
     pub ramp_s: f64,
+    /// Ramp shape: "linear" (the seed paper's) or "cosine" (no jump in acceleration).
+    #[serde(default)]
+    pub ramp: Ramp,
+    /// "rest" (spin-up with the load, the seed paper's) or "at-speed" (only the load ramps).
+    #[serde(default)]
+    pub start: Start,
+    /// This scene's `fe.mass_scaling_margin` (e.g. lower for a stiffness extraction, which
+    /// needs only the quasi-static contact, not quasi-static dynamics).
+    pub mass_scaling_margin: Option<f64>,
 }
 
 fn default_relief_name() -> String {
@@ -607,6 +617,18 @@ impl Case {
             parameter: parameter.into(),
             value,
             limit: limit.into(),
+        };
+        // A mass-scaling margin: the scaled mesh mode over the fifth mesh harmonic.
+        let check_mass_scaling_margin = |parameter: &str, margin: f64| {
+            if (1.5..=100.0).contains(&margin) {
+                Ok(())
+            } else {
+                Err(invalid(
+                    parameter,
+                    margin.to_string(),
+                    "must be in [1.5, 100] (default 3: the scaled mesh mode at three times the fifth mesh harmonic; below 1.5 it comes near the harmonics and the response is no longer quasi-static)",
+                ))
+            }
         };
         if file.name.trim().is_empty() || file.name.contains(['/', '\\']) {
             return Err(invalid(
@@ -975,6 +997,9 @@ impl Case {
                     "must be ≥ 0 and shorter than duration_s",
                 ));
             }
+            if let Some(margin) = sc.mass_scaling_margin {
+                check_mass_scaling_margin(&key("mass_scaling_margin"), margin)?;
+            }
             scenes.push(Scene {
                 name: sc.name.clone(),
                 driver_speed,
@@ -983,16 +1008,13 @@ impl Case {
                 friction: sc.friction,
                 duration: sc.duration_s,
                 ramp_time: sc.ramp_s,
+                ramp: sc.ramp,
+                start: sc.start,
+                mass_scaling_margin: sc.mass_scaling_margin,
             });
         }
 
-        if !(fe.mass_scaling_margin >= 1.5 && fe.mass_scaling_margin <= 100.0) {
-            return Err(invalid(
-                "fe.mass_scaling_margin",
-                fe.mass_scaling_margin.to_string(),
-                "must be in [1.5, 100] (default 3: the scaled mesh mode at three times the fifth mesh harmonic)",
-            ));
-        }
+        check_mass_scaling_margin("fe.mass_scaling_margin", fe.mass_scaling_margin)?;
         let fe_settings = FeSettings {
             mass_scaling_margin: fe.mass_scaling.then_some(fe.mass_scaling_margin),
             step_factor: fe.step_factor,

@@ -109,7 +109,7 @@ fn coupled_step_is_where_the_meshing_pair_goes_unstable() {
     let case = coarse_case();
     fn start(p: &PreparedScene) -> (PairIntegrator<'_>, PairState) {
         let mut integrator = PairIntegrator::new(&p.model, p.drive, p.dt, 0.0);
-        let mut state = p.model.initial_state(0.0);
+        let mut state = p.model.initial_state(&p.drive);
         integrator.initialize(&mut state);
         (integrator, state)
     }
@@ -176,7 +176,7 @@ fn static_scene(case: &Case, duration: f64, penalty: f64) -> PreparedScene {
 fn relaxed(p: &PreparedScene, duration: f64) -> (PairIntegrator<'_>, PairState) {
     let mut integrator = PairIntegrator::new(&p.model, p.drive, p.dt, 0.0);
     integrator.mass_damping = 1.4 * std::f64::consts::TAU * 2800.0;
-    let mut state = p.model.initial_state(0.0);
+    let mut state = p.model.initial_state(&p.drive);
     integrator.initialize(&mut state);
     for _ in 0..(duration / p.dt) as usize {
         integrator.step(&mut state).unwrap();
@@ -348,7 +348,7 @@ fn the_mesh_dashpot_transmits_nothing_across_open_teeth() {
     let mut integrator = PairIntegrator::new(&model, drive, p.dt, 0.0);
     let inertia = model.driven_inertia();
     integrator.mesh_damping = 4.0 * inertia / 1e-4;
-    let mut state = model.initial_state(0.0);
+    let mut state = model.initial_state(&drive);
     integrator.initialize(&mut state);
     while state.time < 1e-4 {
         integrator.step(&mut state).unwrap();

@@ -174,14 +174,29 @@ pub struct ExplicitPair {
     pub penalty_factor: f64,
 }
 
-/// Shape of the ramps from rest.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Shape of the ramps from zero.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Ramp {
     /// r(t) = t/t_r (the seed paper's): the acceleration jumps at 0 and t_r.
+    #[default]
     Linear,
     /// r(t) = (1 − cos(πt/t_r))/2: no jump in acceleration, so the ramp excites the mesh mode
     /// far less (used for quasi-static comparisons).
     Cosine,
+}
+
+/// How a run starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Start {
+    /// Both gears at rest; the driver's speed ramps up with the load (the seed paper's).
+    #[default]
+    Rest,
+    /// Both gears already turning at the kinematic speeds (rigid rotation); only the load
+    /// ramps. No spin-up: the driven gear's inertia torque I₂Ω₂ṙ(t), which with mass scaling
+    /// rivals the load, is not there to ring the mesh mode.
+    AtSpeed,
 }
 
 /// Loads and drive of a run.
@@ -191,9 +206,10 @@ pub struct Drive {
     pub driver_speed: f64,
     /// Load torque T on the driven gear [N·m] after the ramp.
     pub load_torque: f64,
-    /// Ramp time t_r of speed and torque [s].
+    /// Ramp time t_r of the load torque, and of the speed when starting from rest [s].
     pub ramp_time: f64,
     pub ramp: Ramp,
+    pub start: Start,
     /// Driver rotation at t = 0 from the placement (tooth 0 at the pitch point) [rad].
     pub start_rotation: f64,
 }
@@ -221,7 +237,10 @@ impl Drive {
 
     /// Driver rotation θ₁, speed and acceleration at time t.
     pub fn driver_motion(&self, t: f64) -> (f64, f64, f64) {
-        let (r, integral, rate) = self.ramp(t);
+        let (r, integral, rate) = match self.start {
+            Start::Rest => self.ramp(t),
+            Start::AtSpeed => (1.0, t, 0.0),
+        };
         let w = self.driver_speed;
         (self.start_rotation + w * integral, w * r, w * rate)
     }
@@ -257,6 +276,8 @@ pub struct PairEnergy {
     /// Work done on the contact forces (penalty springs and friction; friction's share is its
     /// dissipation).
     pub contact: f64,
+    /// Work of the driver's hub and the load torque, plus the energy of the initial state (the
+    /// kinetic energy of a start at speed, as work done before t = 0).
     pub external_work: f64,
     /// The work the pair transmits by design: ∫ T(t) |φ̇₂,kin| dt, the load torque times the
     /// driven gear's kinematic rotation (prescribed motion only, so an unstable run cannot
@@ -430,9 +451,16 @@ impl ExplicitPair {
         -(self.pair.gears[0].teeth() as f64) / self.pair.gears[1].teeth() as f64 * driver_rotation
     }
 
-    /// Rest state, unloaded, with the driver turned by `driver_rotation` from the placement
-    /// (tooth 0 of each gear at the pitch point) and the driven gear at its kinematic rotation.
-    pub fn initial_state(&self, driver_rotation: f64) -> PairState {
+    /// Unloaded state at t = 0 of `drive`: the driver turned by its start rotation from the
+    /// placement (tooth 0 of each gear at the pitch point), the driven gear at its kinematic
+    /// rotation; at rest, or turning rigidly at the kinematic speeds ([`Start::AtSpeed`]).
+    pub fn initial_state(&self, drive: &Drive) -> PairState {
+        let driver_rotation = drive.start_rotation;
+        let driver_rate = match drive.start {
+            Start::Rest => 0.0,
+            Start::AtSpeed => drive.driver_speed,
+        };
+        let rates = [driver_rate, self.kinematic_hub_rotation(driver_rate)];
         let hub = self.kinematic_hub_rotation(driver_rotation);
         let x = std::array::from_fn(|g| {
             let placement = Placement {
@@ -448,13 +476,20 @@ impl ExplicitPair {
                 })
                 .collect::<Vec<f64>>()
         });
+        // v = ω ẑ × (x − c) of the rigid rotation.
+        let v = std::array::from_fn(|g| {
+            let (c, w) = (self.placement[g].centre, rates[g]);
+            x[g].chunks_exact(2)
+                .flat_map(|p| [-w * (p[1] - c.y), w * (p[0] - c.x)])
+                .collect::<Vec<f64>>()
+        });
         let zeros = |g: usize| vec![0.0; 2 * self.meshes[g].nodes.len()];
         PairState {
             time: 0.0,
             x,
-            v: [zeros(0), zeros(1)],
+            v,
             a: [zeros(0), zeros(1)],
-            hub: [hub, 0.0, 0.0],
+            hub: [hub, rates[1], 0.0],
         }
     }
 
@@ -1013,6 +1048,8 @@ impl<'a> PairIntegrator<'a> {
         self.accelerate(state, None, [[theta, rate, accel], state.hub]);
         self.energy.strain = body[0].strain_energy + body[1].strain_energy;
         self.energy.kinetic = self.kinetic(state);
+        // A start at speed: the initial kinetic energy is work done on the pair before t = 0.
+        self.energy.external_work = self.energy.kinetic + self.energy.strain;
     }
 
     fn kinetic(&self, state: &PairState) -> f64 {

@@ -43,7 +43,22 @@
 //! damping ratio ζ — the lumped model's viscous mesh damping c = 2ζ√(k̄ m) with the driver at
 //! prescribed speed (m = I₂/R_b2²). k_m is the pair's own mean mesh stiffness (the LTCA on the
 //! same bodies, which the caller passes), so ζ is the lumped model's at the same nominal value.
-//! Statistics start three decay times 3/(ζω_n) after the ramp.
+//!
+//! # Settling after the ramp
+//! The ramp leaves the mesh mode ringing; statistics start when that ringing has decayed to
+//! [`SETTLED_RINGING`] of the static response. For an undamped mode ω loaded by f(t) (the
+//! static response's share, 1 after the ramp), the free vibration left is |∫ f′(t) e^{−iωt} dt|
+//! of the static response. Here f = r + c ṙ: the load torque ramp r(t) and, when the gears
+//! start from rest, the driven gear's inertia torque I₂Ω₂ṙ(t) over T (c = I₂Ω₂/T), so
+//! ```text
+//! A = |R(ω)| √(1 + (c ω)²),   |R(ω)| = |∫ ṙ e^{−iωt} dt| ≤ 2/(ω t_r)          linear ramp
+//!                                                      ≤ π²/((ω t_r)² − π²)    cosine ramp (ω t_r > √2 π)
+//! t_settle = ln(A / SETTLED_RINGING) / (ζ ω),  0 when A is below it
+//! ```
+//! (the envelopes, not the exact zeros of the sinc, since ω is an estimate). With mass scaling
+//! the inertia term matters: at 60 rpm, scaled 33×, I₂Ω₂/T = 4.8 ms and cω = 16, a spin-up
+//! rings the mesh mode at 94 % of the static DTE after a 10 ms linear ramp (5.2 decay times to
+//! settle); a start at speed with a cosine ramp leaves 0.9 % (0.6 decay times).
 //!
 //! # Mesh stiffness from the DTE (seed paper eq. 37, read as the lumped model's mesh law)
 //! ```text
@@ -62,7 +77,7 @@
 use std::time::Instant;
 
 use crate::explicit::body::ExplicitMaterial;
-use crate::explicit::pair::{Drive, ExplicitPair, PairEnergy, PairIntegrator};
+use crate::explicit::pair::{Drive, ExplicitPair, PairEnergy, PairIntegrator, Ramp, Start};
 use crate::explicit::solver::critical_step;
 use crate::fe::{FeError, MassLumping};
 use crate::geometry::{FlankModification, GearPair};
@@ -83,8 +98,12 @@ pub struct Scene {
     pub friction: f64,
     /// Simulated time [s].
     pub duration: f64,
-    /// Ramp of driver speed and load torque from zero [s].
+    /// Ramp of the load torque, and of the driver speed when starting from rest [s].
     pub ramp_time: f64,
+    pub ramp: Ramp,
+    pub start: Start,
+    /// Overrides [`FeSettings::mass_scaling_margin`] when mass scaling is on.
+    pub mass_scaling_margin: Option<f64>,
 }
 
 /// Settings of an explicit run, SI (the case's `[fe]` section).
@@ -160,14 +179,44 @@ pub struct PreparedScene {
     /// Mesh dashpot on the driven hub [N m s] and the mesh stiffness it was sized with [N/m].
     pub mesh_damping: f64,
     pub mesh_damping_stiffness: f64,
-    /// Three decay times of the mesh mode, 3/(ζ ω_n) with ω_n = √(k_m R_b2²/I₂) [s]: the ringing
-    /// the end of the ramp leaves is down to e⁻³ ≈ 5 % after it (0 without mesh damping).
+    /// Free ringing of the mesh mode the ramp leaves, over the static response (module doc).
+    pub ramp_ringing: f64,
+    /// Time after the ramp for that ringing to decay to [`SETTLED_RINGING`], ln(A/0.005)/(ζ ω_n)
+    /// with ω_n = √(k_m R_b2²/I₂) [s] (0 without mesh damping, or when A is below it already).
     pub settling_time: f64,
     /// Period of the (scaled) mesh mode 2π/ω_n [s]: the span of the low-pass over the DTE.
     pub mesh_mode_period: f64,
     pub mass_scaling: MassScaling,
     pub mesh_wall_s: f64,
     pub setup_wall_s: f64,
+}
+
+/// Ringing of the mesh mode, over the static response, at which a run counts as settled.
+pub const SETTLED_RINGING: f64 = 0.005;
+
+/// Speed ratio |Ω₂/Ω₁| = z₁/z₂.
+fn rates_ratio(pair: &GearPair) -> f64 {
+    pair.gears[0].teeth() as f64 / pair.gears[1].teeth() as f64
+}
+
+/// Free ringing that the ramp of `drive` leaves in an undamped mode `omega` [rad/s], over the
+/// static response (module doc): |R(ω)| √(1 + (c ω)²), c = I₂Ω₂/T the spin-up's inertia torque
+/// per unit ramp rate over the load (0 for a start at speed), `driven_inertia` I₂.
+pub fn ramp_ringing(drive: &Drive, omega: f64, driven_inertia: f64, speed_ratio: f64) -> f64 {
+    let wt = omega * drive.ramp_time;
+    let pi2 = std::f64::consts::PI.powi(2);
+    let ramp = match drive.ramp {
+        Ramp::Linear => (2.0 / wt).min(1.0),
+        Ramp::Cosine if wt * wt > 2.0 * pi2 => pi2 / (wt * wt - pi2),
+        Ramp::Cosine => 1.0,
+    };
+    let c = match drive.start {
+        Start::Rest if drive.load_torque > 0.0 => {
+            driven_inertia * drive.driver_speed * speed_ratio / drive.load_torque
+        }
+        _ => 0.0,
+    };
+    ramp * (1.0 + (c * omega).powi(2)).sqrt()
 }
 
 /// The highest mesh harmonic a scene's response must keep (the sweeps report five).
@@ -222,7 +271,8 @@ pub fn prepare(
         driver_speed: scene.driver_speed,
         load_torque: scene.torque,
         ramp_time: scene.ramp_time,
-        ramp: crate::explicit::pair::Ramp::Linear,
+        ramp: scene.ramp,
+        start: scene.start,
         start_rotation: 0.0,
     };
     let (rotation, _, _) = drive.driver_motion(scene.duration);
@@ -250,7 +300,10 @@ pub fn prepare(
     let mesh_mode_hz =
         (mesh_stiffness * rb2 * rb2 / model.driven_inertia()).sqrt() / std::f64::consts::TAU;
     let mesh_hz = scene.driver_speed / pair.gears[0].angular_pitch();
-    let mass_scaling = MassScaling::new(mesh_mode_hz, mesh_hz, settings.mass_scaling_margin);
+    let margin = settings
+        .mass_scaling_margin
+        .map(|m| scene.mass_scaling_margin.unwrap_or(m));
+    let mass_scaling = MassScaling::new(mesh_mode_hz, mesh_hz, margin);
     if mass_scaling.factor > 1.0 {
         model.scale_mass(mass_scaling.factor);
     }
@@ -264,12 +317,16 @@ pub fn prepare(
     let zeta = settings.high_frequency_damping_ratio;
     let beta_k = 2.0 * zeta / omega_max;
     let dt_critical = dt_undamped * ((1.0 + zeta * zeta).sqrt() - zeta);
-    let dt_paper = model.bodies[0]
-        .paper_critical_step()
-        .min(model.bodies[1].paper_critical_step());
-    let dt_element_bound = model.bodies[0]
-        .element_eigen_critical_step()
-        .min(model.bodies[1].element_eigen_critical_step());
+    // Both bounds come from the material's density: with scaled masses they grow by √s too.
+    let density_scale = mass_scaling.factor.sqrt();
+    let dt_paper = density_scale
+        * model.bodies[0]
+            .paper_critical_step()
+            .min(model.bodies[1].paper_critical_step());
+    let dt_element_bound = density_scale
+        * model.bodies[0]
+            .element_eigen_critical_step()
+            .min(model.bodies[1].element_eigen_critical_step());
     // Mesh dashpot: ζ of the driven gear turning against the mesh spring (driver prescribed),
     // k_t = k_m R_b2², c_t = 2ζ√(k_t I₂).
     let mesh_damping_stiffness = mesh_stiffness;
@@ -277,13 +334,15 @@ pub fn prepare(
         * settings.mesh_damping_ratio
         * (mesh_damping_stiffness * rb2 * rb2 * model.driven_inertia()).sqrt();
     let mesh_mode = (mesh_damping_stiffness * rb2 * rb2 / model.driven_inertia()).sqrt();
-    let settling_time = if settings.mesh_damping_ratio > 0.0 {
-        3.0 / (settings.mesh_damping_ratio * mesh_mode)
+    let ringing = ramp_ringing(&drive, mesh_mode, model.driven_inertia(), rates_ratio(pair));
+    let settling_time = if settings.mesh_damping_ratio > 0.0 && ringing > SETTLED_RINGING {
+        (ringing / SETTLED_RINGING).ln() / (settings.mesh_damping_ratio * mesh_mode)
     } else {
         0.0
     };
     Ok(PreparedScene {
         dt: settings.step_factor * dt_critical,
+        ramp_ringing: ringing,
         settling_time,
         mesh_mode_period: std::f64::consts::TAU / mesh_mode,
         mass_scaling,
@@ -419,7 +478,7 @@ pub fn run(
     let model = &prepared.model;
     let mut integrator = PairIntegrator::new(model, prepared.drive, prepared.dt, prepared.beta_k);
     integrator.mesh_damping = prepared.mesh_damping;
-    let mut state = model.initial_state(prepared.drive.start_rotation);
+    let mut state = model.initial_state(&prepared.drive);
     integrator.initialize(&mut state);
     let total_steps = (duration / prepared.dt).ceil() as usize;
     let every = ((output_interval / prepared.dt).round() as usize).max(1);
@@ -836,6 +895,63 @@ mod tests {
                 "bin {j}: {e_fe} vs {}",
                 e(theta)
             );
+        }
+    }
+
+    /// The ringing a ramp leaves in an undamped oscillator x″ + ω²x = ω²f(t), f the load
+    /// torque's ramp plus the spin-up's inertia torque I₂α₂(t), both over T, integrated with a
+    /// fine step: never above `ramp_ringing` (an envelope), and equal to it (0.5 %) where the
+    /// envelope is attained — a linear ramp with sin(ωt_r/2) = ±1, a cosine ramp with
+    /// cos(ωt_r/2) = ±1 — from rest (inertia term large, as with mass scaling) and at speed.
+    #[test]
+    fn the_ramp_leaves_the_ringing_the_settling_time_assumes() {
+        let omega = std::f64::consts::TAU * 540.0;
+        let (inertia, ratio, torque) = (0.11, 1.0, 143.6);
+        let residual = |drive: &Drive| {
+            let steps_per_period = 4000.0;
+            let h = std::f64::consts::TAU / omega / steps_per_period;
+            let force = |t: f64| {
+                let (_, _, alpha) = drive.driver_motion(t);
+                (drive.load_torque_at(t) + inertia * ratio * alpha) / torque
+            };
+            let (mut x, mut v, mut t) = (0.0, 0.0, 0.0);
+            while t < drive.ramp_time + 2.0 * std::f64::consts::TAU / omega {
+                // Velocity Verlet on x'' = ω²(f − x).
+                let a0 = omega * omega * (force(t) - x);
+                x += h * v + 0.5 * h * h * a0;
+                let a1 = omega * omega * (force(t + h) - x);
+                v += 0.5 * h * (a0 + a1);
+                t += h;
+            }
+            ((x - 1.0).powi(2) + (v / omega).powi(2)).sqrt()
+        };
+        let pi = std::f64::consts::PI;
+        for (ramp, attained) in [(Ramp::Linear, 9.5 * pi), (Ramp::Cosine, 10.0 * pi)] {
+            for start in [Start::Rest, Start::AtSpeed] {
+                for (half_phase, exact) in [(attained, true), (attained + 0.4, false)] {
+                    let drive = Drive {
+                        driver_speed: std::f64::consts::TAU,
+                        load_torque: torque,
+                        ramp_time: 2.0 * half_phase / omega,
+                        ramp,
+                        start,
+                        start_rotation: 0.0,
+                    };
+                    let simulated = residual(&drive);
+                    let envelope = ramp_ringing(&drive, omega, inertia, ratio);
+                    let case = format!("{ramp:?} {start:?} ωt_r/2 = {half_phase:.2}");
+                    assert!(
+                        simulated <= envelope * 1.005,
+                        "{case}: {simulated} > {envelope}"
+                    );
+                    if exact {
+                        assert!(
+                            (simulated / envelope - 1.0).abs() < 5e-3,
+                            "{case}: {simulated} vs {envelope}"
+                        );
+                    }
+                }
+            }
         }
     }
 }

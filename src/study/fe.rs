@@ -373,6 +373,11 @@ pub struct FeSummary {
     pub mass_lumping: MassLumping,
     /// Mass scaling: factor, the mesh mode unscaled and scaled, the highest mesh harmonic kept.
     pub mass_scaling: MassScaling,
+    /// Free ringing of the mesh mode the ramp leaves, over the static response, the time it
+    /// takes to decay to 0.5 % and where the statistics start [s].
+    pub ramp_ringing: f64,
+    pub settling_time_s: f64,
+    pub statistics_start_s: f64,
     pub mesh_damping_ratio: f64,
     pub fine_element_mm: f64,
     pub coarse_element_mm: f64,
@@ -541,6 +546,9 @@ pub fn run(
         step_factor: settings.step_factor,
         mass_lumping: settings.mass_lumping,
         mass_scaling: prepared.mass_scaling,
+        ramp_ringing: prepared.ramp_ringing,
+        settling_time_s: prepared.settling_time,
+        statistics_start_s: stats_start,
         mesh_damping_ratio: settings.mesh_damping_ratio,
         fine_element_mm: fine_mm,
         coarse_element_mm: coarse_mm,

@@ -9,6 +9,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use geardyn::case::{Case, Override, StiffnessSource};
+use geardyn::explicit::scene::Scene;
 use geardyn::report::{self, OutputDir};
 use geardyn::study::{self, fe::FeShorthands, lumped::LumpedShorthands, RpmRange};
 
@@ -112,6 +113,9 @@ enum Command {
         common: CommonArgs,
         #[command(flatten)]
         model: LumpedShorthands,
+        /// The explicit FE scene of `mass-scaling` (default: stiffness).
+        #[arg(long, value_name = "NAME", default_value = "stiffness")]
+        scene: String,
     },
     /// Prints a case file: the given one, or the embedded default (start your own from it:
     /// `geardyn case > my.toml`); with --set, the effective case.
@@ -130,6 +134,9 @@ enum ValidationStudy {
     /// frequency-accuracy limits in ωh, predicted vs observed, and the order of convergence
     /// with and without tooth separation.
     Integrators,
+    /// The explicit FE's low-speed mass scaling against the same scene unscaled (--scene):
+    /// DTE mean and peak-to-peak, k(θ) bin by bin, the cost of each.
+    MassScaling,
 }
 
 #[derive(Args, Clone)]
@@ -168,7 +175,14 @@ fn main() -> ExitCode {
             study: ValidationStudy::Integrators,
             common,
             model,
+            ..
         } => validate_integrators(&common, &model),
+        Command::Validate {
+            study: ValidationStudy::MassScaling,
+            common,
+            scene,
+            ..
+        } => validate_mass_scaling(&common, &scene),
         Command::Case { case, set } => Case::load_with(case.as_deref(), &set)
             .map(|c| print!("{}", c.text))
             .map_err(Into::into),
@@ -315,31 +329,45 @@ fn validate_integrators(args: &CommonArgs, options: &LumpedShorthands) -> Result
     Ok(())
 }
 
+fn validate_mass_scaling(args: &CommonArgs, scene: &str) -> Result<()> {
+    let scaled = load(args, Vec::new())?;
+    let unscaled = load(args, vec![Override::set("fe.mass_scaling", false)])?;
+    let dir = output_dir(args, "validate-mass-scaling", &scaled)?;
+    let mut runs = Vec::new();
+    for (case, name) in [(&scaled, "scaled"), (&unscaled, "unscaled")] {
+        let out = dir.join(name);
+        runs.push(fe_run(case, study::fe::scene(case, scene)?, &out)?);
+    }
+    let result = study::validate::mass_scaling(scaled.name(), &scaled.pair, &runs[0], &runs[1])?;
+    let table = report::fe::write_mass_scaling(OutputDir(&dir), &scaled, &result)?;
+    println!("{table}wrote {}", dir.display());
+    Ok(())
+}
+
 fn fe(args: &CommonArgs, options: &FeShorthands) -> Result<()> {
     let base = load(args, Vec::new())?;
     let (overrides, scene_name) = study::fe::overrides(&base, options)?;
     let case = load(args, overrides)?;
-    let scene = study::fe::scene(&case, &scene_name)?.clone();
+    let scene = study::fe::scene(&case, &scene_name)?;
     let dir = output_dir(args, &format!("fe-{}", scene.name), &case)?;
-    eprintln!(
-        "scene {}: {:.1} rpm, {} N·m, relief {}, mu {}, {} s (ramp {} s); meshing and measuring the critical step ...",
-        scene.name,
-        scene.driver_speed * 60.0 / std::f64::consts::TAU,
-        scene.torque,
-        scene.relief,
-        scene.friction,
-        scene.duration,
-        scene.ramp_time
-    );
-    let prepared = study::fe::prepare(&case, &scene)?;
-    print!("{}", report::fe::prepared_console(&case, &prepared, &scene));
+    fe_run(&case, scene, &dir)?;
+    println!("wrote {}", dir.display());
+    Ok(())
+}
+
+/// Prepares and runs an explicit scene with progress (a bar, or a line every 10 % without a
+/// terminal) and writes it to `dir`; a diverged run is written too, then reported as an error.
+fn fe_run(case: &Case, scene: &Scene, dir: &Path) -> Result<study::fe::FeStudy> {
+    eprintln!("{}", report::fe::scene_line(scene));
+    let prepared = study::fe::prepare(case, scene)?;
+    print!("{}", report::fe::prepared_console(case, &prepared, scene));
     let bar = progress_bar("explicit FE [{bar:40}] {percent}% elapsed {elapsed}, ETA {eta}");
     bar.set_length(1000);
     // Without a terminal (a log file, CI) the bar is hidden: a line every 10 % instead.
     let plain_log = bar.is_hidden();
     let started = std::time::Instant::now();
     let mut logged = 0;
-    let result = study::fe::run(&case, &scene, &prepared, &mut |f| {
+    let result = study::fe::run(case, scene, &prepared, &mut |f| {
         bar.set_position((f * 1000.0) as u64);
         let tenth = (f * 10.0).floor() as usize;
         if plain_log && tenth > logged {
@@ -353,13 +381,13 @@ fn fe(args: &CommonArgs, options: &FeShorthands) -> Result<()> {
         }
     })?;
     bar.finish_and_clear();
-    report::fe::write(OutputDir(&dir), &case, &result)?;
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    report::fe::write(OutputDir(dir), case, &result)?;
     if let Some(message) = &result.summary.diverged {
         anyhow::bail!("{message}; partial results in {}", dir.display());
     }
     print!("{}", report::fe::console(&result));
-    println!("wrote {}", dir.display());
-    Ok(())
+    Ok(result)
 }
 
 fn progress_bar(template: &str) -> ProgressBar {

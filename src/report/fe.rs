@@ -8,6 +8,7 @@ use crate::explicit::scene::{History, PreparedScene, Scene};
 use crate::report::plot::{save_chart, LinePlot, PlotError};
 use crate::report::{stiffness_csv, OutputDir, ReportError};
 use crate::study::fe::{Derived, FeStudy};
+use crate::study::validate::MassScalingStudy;
 
 /// Writes history.csv: one row per recorded sample.
 pub fn write_history(
@@ -316,7 +317,7 @@ fn write_stiffness_comparison(
         "stiffness",
         &LinePlot {
             title: format!(
-                "{}: {}: k = W/(Rb2 theta_DTE - e), low-passed, against the LTCA",
+                "{}: {}: k = sum W / sum (Rb2 theta_DTE - e) per bin, against the LTCA",
                 case.name(),
                 study.scene.name
             ),
@@ -324,6 +325,20 @@ fn write_stiffness_comparison(
             y_label: "mesh stiffness [N/m]".into(),
             series,
         },
+    )
+}
+
+/// The scene's line before it is meshed.
+pub fn scene_line(scene: &Scene) -> String {
+    format!(
+        "scene {}: {:.1} rpm, {} N·m, relief {}, mu {}, {} s (ramp {} s); meshing and measuring the critical step ...",
+        scene.name,
+        scene.driver_speed * 60.0 / std::f64::consts::TAU,
+        scene.torque,
+        scene.relief,
+        scene.friction,
+        scene.duration,
+        scene.ramp_time
     )
 }
 
@@ -377,4 +392,175 @@ pub fn console(study: &FeStudy) -> String {
         ));
     }
     text
+}
+
+/// The mass-scaling study: `mass_scaling.csv` and `.md` (each quantity scaled, unscaled and
+/// the difference), `mass_scaling_stiffness.csv` and its plot (k per bin of both runs over the
+/// common window), `summary.json`, and the effective case. Returns the Markdown table.
+pub fn write_mass_scaling(
+    out: OutputDir,
+    case: &Case,
+    study: &MassScalingStudy,
+) -> Result<String, ReportError> {
+    let s = &study.summary;
+    let (a, b) = (&s.scaled, &s.unscaled);
+    let row = |name: &str, x: f64, y: f64, rel: f64| {
+        vec![
+            name.to_string(),
+            format!("{x:.6e}"),
+            format!("{y:.6e}"),
+            format!("{:+.3}", 100.0 * rel),
+        ]
+    };
+    let ratio = |x: f64, y: f64| x / y - 1.0;
+    let rows = vec![
+        row(
+            "DTE mean [rad]",
+            a.dte_mean_rad,
+            b.dte_mean_rad,
+            s.dte_mean_rel,
+        ),
+        row(
+            "DTE peak-to-peak, raw (keeps the mesh mode's ringing) [rad]",
+            a.dte_peak_to_peak_rad,
+            b.dte_peak_to_peak_rad,
+            s.dte_peak_to_peak_rel,
+        ),
+        row(
+            "DTE low-passed, mean [rad]",
+            a.dte_lowpass_mean_rad,
+            b.dte_lowpass_mean_rad,
+            s.dte_lowpass_mean_rel,
+        ),
+        row(
+            "DTE low-passed, peak-to-peak [rad]",
+            a.dte_lowpass_peak_to_peak_rad,
+            b.dte_lowpass_peak_to_peak_rad,
+            s.dte_lowpass_peak_to_peak_rel,
+        ),
+        row(
+            &format!(
+                "k mean, common window [N/m] (worst of {} bins {:.3} %)",
+                s.stiffness_bins,
+                100.0 * s.stiffness_max_abs_rel
+            ),
+            a.mesh_stiffness_mean_n_per_m,
+            b.mesh_stiffness_mean_n_per_m,
+            s.stiffness_mean_rel,
+        ),
+        row(
+            &format!(
+                "k mean, each run's stiffness.csv [N/m] (worst of {} bins {:.3} %)",
+                s.own_table_bins,
+                100.0 * s.own_table_stiffness_max_abs_rel
+            ),
+            a.own_table_mesh_stiffness_mean_n_per_m,
+            b.own_table_mesh_stiffness_mean_n_per_m,
+            s.own_table_stiffness_mean_rel,
+        ),
+        row(
+            "mass scaling factor",
+            a.mass_scaling_factor,
+            b.mass_scaling_factor,
+            ratio(a.mass_scaling_factor, b.mass_scaling_factor),
+        ),
+        row(
+            "mesh mode [Hz]",
+            a.mesh_mode_hz,
+            b.mesh_mode_hz,
+            ratio(a.mesh_mode_hz, b.mesh_mode_hz),
+        ),
+        row("time step [s]", a.dt_s, b.dt_s, ratio(a.dt_s, b.dt_s)),
+        row(
+            "steps",
+            a.steps as f64,
+            b.steps as f64,
+            ratio(a.steps as f64, b.steps as f64),
+        ),
+        row(
+            "explicit wall time [s]",
+            a.wall_s,
+            b.wall_s,
+            ratio(a.wall_s, b.wall_s),
+        ),
+        row(
+            "run wall time with the LTCA references [s]",
+            a.total_wall_s,
+            b.total_wall_s,
+            ratio(a.total_wall_s, b.total_wall_s),
+        ),
+        row(
+            "energy error / transmitted work",
+            a.energy_error_rel_transmitted,
+            b.energy_error_rel_transmitted,
+            ratio(
+                a.energy_error_rel_transmitted,
+                b.energy_error_rel_transmitted,
+            ),
+        ),
+    ];
+    let header = [
+        "quantity",
+        "scaled",
+        "unscaled",
+        "scaled_over_unscaled_minus_1_pct",
+    ];
+    out.csv("mass_scaling.csv", &header, rows.clone())?;
+    let mut markdown = format!(
+        "scene {}, window {:.4}-{:.4} s, common low-pass {:.3} ms; speed-up {:.1}x\n\n| {} |\n|{}\n",
+        s.scene,
+        s.window_s[0],
+        s.window_s[1],
+        1e3 * s.lowpass_span_s,
+        s.speedup,
+        header.join(" | "),
+        "---|".repeat(header.len())
+    );
+    for r in &rows {
+        markdown.push_str(&format!("| {} |\n", r.join(" | ")));
+    }
+    out.bytes("mass_scaling.md", markdown.as_bytes())?;
+    let roll_pitch = case.pair.roll_angle_at(1, case.pair.contact_points.pitch);
+    let deg = |theta: f64| (roll_pitch + theta).to_degrees();
+    out.csv(
+        "mass_scaling_stiffness.csv",
+        &[
+            "roll_angle_deg",
+            "mesh_stiffness_scaled_n_per_m",
+            "mesh_stiffness_unscaled_n_per_m",
+        ],
+        study.bins.iter().map(|(theta, k_scaled, k_unscaled)| {
+            vec![
+                format!("{:.6}", deg(*theta)),
+                format!("{k_scaled:.6e}"),
+                format!("{k_unscaled:.6e}"),
+            ]
+        }),
+    )?;
+    let curve = |pick: fn(&(f64, f64, f64)) -> f64| -> Vec<(f64, f64)> {
+        study.bins.iter().map(|b| (deg(b.0), pick(b))).collect()
+    };
+    out.chart(
+        "mass_scaling_stiffness",
+        &LinePlot {
+            title: format!(
+                "{}: {}: k from the DTE, mass scaled {:.1}x against unscaled",
+                case.name(),
+                s.scene,
+                a.mass_scaling_factor
+            ),
+            x_label: "driver roll angle [deg]".into(),
+            y_label: "mesh stiffness [N/m]".into(),
+            series: vec![
+                (
+                    format!("mass scaled {:.1}x", a.mass_scaling_factor),
+                    curve(|b| b.1),
+                ),
+                ("unscaled".to_string(), curve(|b| b.2)),
+            ],
+        },
+    )?;
+    out.json("summary.json", s)?;
+    out.case(case)?;
+    Ok(markdown)
 }

@@ -395,6 +395,9 @@ pub struct FeStudy {
     pub pair_names: Vec<String>,
     /// k(θ) from the DTE against the LTCA on the run's mesh and on the case's.
     pub stiffness_comparison: [Option<StiffnessComparison>; 2],
+    /// The relief's geometric unloaded TE e along the line of action [m] against the driver
+    /// rotation from the pitch-point position (the same-mesh LTCA's), as the analysis used it.
+    pub unloaded_te: PeriodicTable,
     pub summary: FeSummary,
 }
 
@@ -439,6 +442,7 @@ pub fn run(
         scene.torque,
         stats_start,
         &unloaded_te,
+        None,
     );
     let derived = derive(&history);
     let spectrum = dte_spectrum(&history, stats_start);
@@ -561,6 +565,7 @@ pub fn run(
         spectrum,
         pair_names,
         stiffness_comparison: [stiffness_same, stiffness_case],
+        unloaded_te,
         summary,
     })
 }
@@ -695,8 +700,8 @@ pub struct StiffnessComparison {
 }
 
 /// The LTCA's k(θ) on the same footing as the FE's: its STE and e at the window's driver
-/// positions, low-passed by the same filter, k = (T/R_b2)/(R_b2 φ − e) (frictionless: the
-/// LTCA's mesh force is T/R_b2), binned alike; then bin by bin against the FE's table.
+/// positions, k = Σ(T/R_b2)/Σ(R_b2 φ − e) per bin (frictionless: the LTCA's mesh force is
+/// T/R_b2), unfiltered, like the FE's; then bin by bin against the FE's table.
 fn compare_stiffness(
     a: &DteAnalysis,
     history: &History,
@@ -706,22 +711,16 @@ fn compare_stiffness(
     pitch: f64,
     (fine_mm, coarse_mm): (f64, f64),
 ) -> Option<StiffnessComparison> {
-    let filter = a.filter?;
-    let ste: Vec<f64> = history
-        .driver_rotation
+    let rotations = &history.driver_rotation[a.window_start..];
+    let deflection: Vec<f64> = rotations
         .iter()
-        .map(|theta| at_rotation(results, pitch, *theta, |r| r.ste))
+        .map(|theta| {
+            let ste = at_rotation(results, pitch, *theta, |r| r.ste);
+            let e = at_rotation(results, pitch, *theta, |r| r.unloaded_te);
+            rb2 * (ste - e)
+        })
         .collect();
-    let e: Vec<f64> = history
-        .driver_rotation
-        .iter()
-        .map(|theta| rb2 * at_rotation(results, pitch, *theta, |r| r.unloaded_te))
-        .collect();
-    let (first, ste_lp) = filter.apply(&ste, a.window_start);
-    let (_, e_lp) = filter.apply(&e, a.window_start);
-    let deflection: Vec<f64> = ste_lp.iter().zip(&e_lp).map(|(s, e)| rb2 * s - e).collect();
     let force = vec![torque / rb2; deflection.len()];
-    let rotations = &history.driver_rotation[first..first + deflection.len()];
     let reference = binned_stiffness(pitch, rotations, &force, &deflection);
     let fe_bins = &a.stiffness_bins;
     let bins: Vec<(f64, f64, f64)> = (0..STIFFNESS_BINS)

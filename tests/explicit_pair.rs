@@ -396,3 +396,58 @@ fn mass_scaling_lowers_the_mesh_mode_and_lengthens_the_step_by_its_root() {
             < 1e-12
     );
 }
+
+/// A start at speed ([`Start::AtSpeed`]) without load and without contact surfaces: both gears
+/// turn rigidly at the kinematic speeds from t = 0 (Ω₁ = 300 rpm, Ω₂ = −(z₁/z₂)Ω₁), so the
+/// initial kinetic energy is ½(I₁Ω₁² + I₂Ω₂²) of the nodal masses to round-off and is booked as
+/// external work; over 0.1 ms the driven hub keeps its kinematic speed and angle (no torque
+/// acts on it: 1e-6 of the speed, 1e-9 rad — what the centrifugal breathing of the corotational
+/// bodies leaves) and the energy balances to 1e-6 of the kinetic energy. A sign error in the
+/// driven gear's initial velocities would spin it against its hub and fail every check.
+#[test]
+fn a_start_at_speed_turns_both_gears_rigidly_at_the_kinematic_speeds() {
+    use geardyn::explicit::pair::{Drive, ExplicitPair, Start};
+    let case = coarse_case();
+    let p = prepared(&case, 300.0, 1e-4, 0.0, 1.0);
+    let model = ExplicitPair::new(
+        &case.pair,
+        p.model.meshes.clone(),
+        case.explicit_material(),
+        Vec::new(),
+        0.0,
+        1.0,
+    )
+    .unwrap();
+    let drive = Drive {
+        load_torque: 0.0,
+        ramp_time: 0.0,
+        start: Start::AtSpeed,
+        ..p.drive
+    };
+    let mut integrator = PairIntegrator::new(&model, drive, p.dt, 0.0);
+    let mut state = model.initial_state(&drive);
+    integrator.initialize(&mut state);
+    let driven_speed = model.kinematic_hub_rotation(drive.driver_speed);
+    let kinetic = 0.5
+        * (model.inertia(0) * drive.driver_speed.powi(2) + model.inertia(1) * driven_speed.powi(2));
+    let e0 = integrator.energy;
+    assert!(
+        (e0.kinetic / kinetic - 1.0).abs() < 1e-12,
+        "{e0:?} vs {kinetic}"
+    );
+    assert!((e0.external_work / kinetic - 1.0).abs() < 1e-12, "{e0:?}");
+    assert_eq!(state.hub[1], driven_speed);
+    while state.time < 1e-4 {
+        integrator.step(&mut state).unwrap();
+    }
+    let (driver_rotation, _, _) = drive.driver_motion(state.time);
+    let dte = model.kinematic_hub_rotation(driver_rotation) - state.hub[0];
+    eprintln!(
+        "after 0.1 ms: hub speed {:.9e} (kinematic {driven_speed:.9e}) rad/s, DTE {dte:.3e} rad, balance {:.3e} J of {kinetic:.3e} J",
+        state.hub[1],
+        integrator.energy.balance()
+    );
+    assert!((state.hub[1] / driven_speed - 1.0).abs() < 1e-6);
+    assert!(dte.abs() < 1e-9, "{dte}");
+    assert!(integrator.energy.balance().abs() < 1e-6 * kinetic);
+}

@@ -383,6 +383,23 @@ pub fn console(study: &FeStudy) -> String {
             ));
         }
         text.push('\n');
+        if let Some(te) = &s.static_te_from_stiffness {
+            text.push_str(&format!(
+                "static TE from k(theta) at the load: mean {:.4e} rad, peak-to-peak {:.4e} rad; against the LTCA on this mesh {:+.2} % / {:+.2} %",
+                te.mean_rad,
+                te.peak_to_peak_rad,
+                same.static_te_mean_rel * 100.0,
+                same.static_te_peak_to_peak_rel * 100.0
+            ));
+            if let Some(c) = &s.stiffness_vs_ltca_case_mesh {
+                text.push_str(&format!(
+                    ", on the case's {:+.2} % / {:+.2} %",
+                    c.static_te_mean_rel * 100.0,
+                    c.static_te_peak_to_peak_rel * 100.0
+                ));
+            }
+            text.push('\n');
+        }
     }
     if let Some(coupled) = s.dt_critical_coupled_s {
         text.push_str(&format!(
@@ -437,6 +454,18 @@ pub fn write_mass_scaling(
             a.dte_lowpass_peak_to_peak_rad,
             b.dte_lowpass_peak_to_peak_rad,
             s.dte_lowpass_peak_to_peak_rel,
+        ),
+        row(
+            "static TE from k(θ) at the load, mean [rad]",
+            a.static_te_mean_rad,
+            b.static_te_mean_rad,
+            s.static_te_mean_rel,
+        ),
+        row(
+            "static TE from k(θ) at the load, peak-to-peak [rad]",
+            a.static_te_peak_to_peak_rad,
+            b.static_te_peak_to_peak_rad,
+            s.static_te_peak_to_peak_rel,
         ),
         row(
             &format!(

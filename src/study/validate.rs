@@ -9,8 +9,8 @@
 //! **mass-scaling**: an explicit FE scene run twice, with the case's low-speed mass scaling and
 //! without it, compared on what a quasi-static analysis reads: over the common statistics window
 //! (from the later of the two starts to the end), the DTE mean and peak-to-peak through one
-//! low-pass (the longer of the two mesh-mode periods, the scaled run's) and k(θ) = ΣW/Σδ bin by
-//! bin; also each run's own k(θ) table as `stiffness.csv` has it (over its own window), the raw
+//! low-pass (the longer of the two mesh-mode periods, the scaled run's), k(θ) = ΣW/Σδ bin by
+//! bin and the static TE each k(θ) gives at the load; also each run's own k(θ) table as `stiffness.csv` has it (over its own window), the raw
 //! DTE peak-to-peak (which keeps the scaled mesh mode's ringing), and the cost of each.
 
 use serde::Serialize;
@@ -106,6 +106,9 @@ pub struct MassScalingRun {
     pub dte_peak_to_peak_rad: f64,
     pub dte_lowpass_mean_rad: f64,
     pub dte_lowpass_peak_to_peak_rad: f64,
+    /// The static TE its k(θ) gives at the load over the common window (mean, peak-to-peak).
+    pub static_te_mean_rad: f64,
+    pub static_te_peak_to_peak_rad: f64,
     /// Mean of k(θ) over the common window, and of the run's own table (stiffness.csv).
     pub mesh_stiffness_mean_n_per_m: f64,
     pub own_table_mesh_stiffness_mean_n_per_m: f64,
@@ -127,6 +130,8 @@ pub struct MassScalingSummary {
     pub dte_peak_to_peak_rel: f64,
     pub dte_lowpass_mean_rel: f64,
     pub dte_lowpass_peak_to_peak_rel: f64,
+    pub static_te_mean_rel: f64,
+    pub static_te_peak_to_peak_rel: f64,
     pub stiffness_mean_rel: f64,
     pub stiffness_max_abs_rel: f64,
     pub stiffness_bins: usize,
@@ -215,7 +220,7 @@ pub fn compare_quasi_static(
             r.unloaded_te,
             span,
         )?;
-        a.lowpass.is_some().then_some(a)
+        (a.lowpass.is_some() && a.static_te.is_some()).then_some(a)
     };
     let own = [
         analyse(&runs[0], runs[0].statistics_start, None)?,
@@ -268,6 +273,9 @@ pub fn mass_scaling(
         let lowpass = common
             .lowpass
             .expect("compare_quasi_static keeps low-passed runs");
+        let te = common
+            .static_te
+            .expect("compare_quasi_static keeps runs with a k(θ)");
         MassScalingRun {
             mass_scaling_factor: s.mass_scaling.factor,
             mesh_mode_hz: s.mass_scaling.scaled_mesh_mode_hz,
@@ -280,6 +288,8 @@ pub fn mass_scaling(
             dte_peak_to_peak_rad: common.dte_peak_to_peak_rad,
             dte_lowpass_mean_rad: lowpass.mean_rad,
             dte_lowpass_peak_to_peak_rad: lowpass.peak_to_peak_rad,
+            static_te_mean_rad: te.mean_rad,
+            static_te_peak_to_peak_rad: te.peak_to_peak_rad,
             mesh_stiffness_mean_n_per_m: common.mesh_stiffness_mean_n_per_m,
             own_table_mesh_stiffness_mean_n_per_m: own.mesh_stiffness_mean_n_per_m,
         }
@@ -304,6 +314,8 @@ pub fn mass_scaling(
         dte_peak_to_peak_rel: rel(|r| r.dte_peak_to_peak_rad),
         dte_lowpass_mean_rel: rel(|r| r.dte_lowpass_mean_rad),
         dte_lowpass_peak_to_peak_rel: rel(|r| r.dte_lowpass_peak_to_peak_rad),
+        static_te_mean_rel: rel(|r| r.static_te_mean_rad),
+        static_te_peak_to_peak_rel: rel(|r| r.static_te_peak_to_peak_rad),
         stiffness_mean_rel,
         stiffness_max_abs_rel,
         stiffness_bins,

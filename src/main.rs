@@ -337,6 +337,7 @@ fn validate_mass_scaling(args: &CommonArgs, scene: &str) -> Result<()> {
     for (case, name) in [(&scaled, "scaled"), (&unscaled, "unscaled")] {
         let out = dir.join(name);
         runs.push(fe_run(case, study::fe::scene(case, scene)?, &out)?);
+        study::validate::check_scaled(&runs[0])?;
     }
     let result = study::validate::mass_scaling(scaled.name(), &scaled.pair, &runs[0], &runs[1])?;
     let table = report::fe::write_mass_scaling(OutputDir(&dir), &scaled, &result)?;
@@ -358,6 +359,7 @@ fn fe(args: &CommonArgs, options: &FeShorthands) -> Result<()> {
 /// Prepares and runs an explicit scene with progress (a bar, or a line every 10 % without a
 /// terminal) and writes it to `dir`; a diverged run is written too, then reported as an error.
 fn fe_run(case: &Case, scene: &Scene, dir: &Path) -> Result<study::fe::FeStudy> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     eprintln!("{}", report::fe::scene_line(scene));
     let prepared = study::fe::prepare(case, scene)?;
     print!("{}", report::fe::prepared_console(case, &prepared, scene));
@@ -381,7 +383,6 @@ fn fe_run(case: &Case, scene: &Scene, dir: &Path) -> Result<study::fe::FeStudy> 
         }
     })?;
     bar.finish_and_clear();
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     report::fe::write(OutputDir(dir), case, &result)?;
     if let Some(message) = &result.summary.diverged {
         anyhow::bail!("{message}; partial results in {}", dir.display());

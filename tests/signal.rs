@@ -101,7 +101,8 @@ fn an_impact_of_known_size_gives_its_level1_detail() {
 
 /// Impacts of known size A and width: half-sines A sin(πn/w), n = 0 … w, spread over w samples
 /// (10 µs each). The transform is linear, so the record's detail minus the quasi-static record's
-/// is the impact's own, which a direct convolution with the db5 high-pass gives independently:
+/// is the impact's own, which a direct convolution with the db5 high-pass taps gives apart from
+/// the transform's reflection and indexing:
 /// d_i = Σ_j g_j x_{2i+1−j} (the parity the one-sample test pins down). The level-1 band
 /// (25–50 kHz) reads an impact's fast content, not its size: A·|g| for one sample, and it
 /// falls as the impact widens — below 5 % of A for an impact 100 µs wide (362, 165, 118, 25 and

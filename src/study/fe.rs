@@ -343,7 +343,7 @@ pub struct FeSummary {
     pub stats_window_s: Option<[f64; 2]>,
     pub dte_lowpass: Option<LowpassDte>,
     /// The static TE the run's k(θ) gives at the load: the quasi-static DTE without the mesh
-    /// mode's ringing and without a filter (what a mass-scaled run keeps).
+    /// mode's ringing and without a filter.
     pub static_te_from_stiffness: Option<StaticTe>,
     pub ltca_ste_mean_rad_same_positions: Option<f64>,
     pub ltca_mesh_stiffness_mean_n_per_m: Option<f64>,

@@ -16,7 +16,9 @@
 use serde::Serialize;
 
 use crate::case::Case;
-use crate::explicit::scene::{analyse_dte, DteAnalysis, History, STIFFNESS_BINS};
+use crate::explicit::scene::{
+    analyse_dte, static_te, DteAnalysis, History, StaticTe, STIFFNESS_BINS,
+};
 use crate::geometry::GearPair;
 use crate::lumped::schemes::{self, SchemeReport};
 use crate::stiffness::{MeshStiffness, PeriodicTable};
@@ -243,6 +245,19 @@ pub fn compare_quasi_static(
     })
 }
 
+/// Checks that mass scaling applied to the scaled run of the study (so the unscaled one is not
+/// the same run again).
+pub fn check_scaled(scaled: &FeStudy) -> Result<(), StudyError> {
+    let factor = scaled.summary.mass_scaling.factor;
+    if factor > 1.0 {
+        return Ok(());
+    }
+    Err(StudyError::Input(format!(
+        "scene {:?} runs unscaled (mass-scaling factor {factor}: 5 x margin x the mesh frequency is above the mesh mode, or fe.mass_scaling is off), so there is nothing to compare: pick a low-speed scene",
+        scaled.scene.name
+    )))
+}
+
 /// Compares a scene run with mass scaling (`scaled`) against the same scene without
 /// (`unscaled`); see the module doc. Both must be runs of one scene of `pair` at one output
 /// interval.
@@ -261,6 +276,15 @@ pub fn mass_scaling(
     let c = compare_quasi_static(pair, scaled.scene.torque, [scaled.into(), unscaled.into()])
         .ok_or_else(too_short)?;
     let [a, b] = &c.common;
+    // The static TE of each over the bins both have.
+    let both = |bins: &[Option<f64>], other: &[Option<f64>]| -> Vec<Option<f64>> {
+        bins.iter().zip(other).map(|(x, y)| y.and(*x)).collect()
+    };
+    let te = |study: &FeStudy, bins: Vec<Option<f64>>| {
+        static_te(pair, study.scene.torque, &bins, &study.unloaded_te).ok_or_else(too_short)
+    };
+    let te_scaled = te(scaled, both(&a.stiffness_bins, &b.stiffness_bins))?;
+    let te_unscaled = te(unscaled, both(&b.stiffness_bins, &a.stiffness_bins))?;
     let (stiffness_mean_rel, stiffness_max_abs_rel, stiffness_bins) =
         bin_difference(&a.stiffness_bins, &b.stiffness_bins).ok_or_else(too_short)?;
     let (own_mean, own_worst, own_bins) = bin_difference(
@@ -268,14 +292,11 @@ pub fn mass_scaling(
         &c.own[1].stiffness_bins,
     )
     .unwrap_or((f64::NAN, f64::NAN, 0));
-    let run = |study: &FeStudy, common: &DteAnalysis, own: &DteAnalysis| {
+    let run = |study: &FeStudy, common: &DteAnalysis, own: &DteAnalysis, te: StaticTe| {
         let s = &study.summary;
         let lowpass = common
             .lowpass
             .expect("compare_quasi_static keeps low-passed runs");
-        let te = common
-            .static_te
-            .expect("compare_quasi_static keeps runs with a k(θ)");
         MassScalingRun {
             mass_scaling_factor: s.mass_scaling.factor,
             mesh_mode_hz: s.mass_scaling.scaled_mesh_mode_hz,
@@ -294,8 +315,8 @@ pub fn mass_scaling(
             own_table_mesh_stiffness_mean_n_per_m: own.mesh_stiffness_mean_n_per_m,
         }
     };
-    let run_scaled = run(scaled, a, &c.own[0]);
-    let run_unscaled = run(unscaled, b, &c.own[1]);
+    let run_scaled = run(scaled, a, &c.own[0], te_scaled);
+    let run_unscaled = run(unscaled, b, &c.own[1], te_unscaled);
     let rel = |f: fn(&MassScalingRun) -> f64| f(&run_scaled) / f(&run_unscaled) - 1.0;
     let pitch = pair.gears[0].angular_pitch();
     let bins = (0..STIFFNESS_BINS)
@@ -382,10 +403,21 @@ mod tests {
     fn one_low_pass_compares_a_scaled_and_an_unscaled_run() {
         let pair = crate::samples::paper36_pair();
         let scaled = record(360.0, 1.0);
-        let unscaled = record(3120.0, 1.0);
+        let mut unscaled = record(3120.0, 1.0);
+        // Before the common start the unscaled record's DTE is off by 20 % (k by −17 %): only
+        // a window of its own would see it.
+        for (t, d) in unscaled.0.time.iter().zip(unscaled.0.dte.iter_mut()) {
+            if *t < 0.005 {
+                *d *= 1.2;
+            }
+        }
         let c = compare_quasi_static(&pair, 143.6, [run(&scaled, 0.006), run(&unscaled, 0.002)])
             .unwrap();
         assert_eq!(c.start, 0.006);
+        for a in &c.common {
+            assert!((a.window.0 - 0.006).abs() < 1e-9, "{:?}", a.window);
+            assert_eq!(a.filter.unwrap().period_s, c.span);
+        }
         // Each run's own low-pass spans its mesh mode on its mean stiffness T/(θ̄R_b2² − …),
         // 1.02 × k̄'s period here (the mean of 1/(1 + 0.2 cos) is 1/√0.96); the common one is
         // the longer, the scaled run's.

@@ -82,7 +82,8 @@ pub fn write_history(
     super::write_csv(path, &header_refs, rows)
 }
 
-/// The plots of a run.
+/// The plots of a run; `impacts` draws the level-1 detail (not for a mass-scaled run, whose
+/// body modes are lowered, so the band does not read the real pair's impacts).
 pub fn plot_run(
     dir: &Path,
     title: &str,
@@ -90,6 +91,7 @@ pub fn plot_run(
     derived: &Derived,
     spectrum: &[(f64, f64)],
     pair_names: &[String],
+    impacts: bool,
 ) -> Result<(), PlotError> {
     let series = |values: &[f64]| -> Vec<(f64, f64)> {
         history
@@ -145,11 +147,13 @@ pub fn plot_run(
             ("radial".into(), series(&history.force_radial)),
         ],
     )?;
-    time_plot(
-        "impacts",
-        "level-1 db5 detail of the contact force [N]",
-        vec![("D1".into(), series(&derived.force_detail))],
-    )?;
+    if impacts {
+        time_plot(
+            "impacts",
+            "level-1 db5 detail of the contact force [N]",
+            vec![("D1".into(), series(&derived.force_detail))],
+        )?;
+    }
     time_plot(
         "pair_forces",
         "contact force per flank pair [N]",
@@ -236,6 +240,7 @@ pub fn write(out: OutputDir, case: &Case, study: &FeStudy) -> Result<(), ReportE
         &study.derived,
         &study.spectrum,
         &study.pair_names,
+        study.summary.impact_d1_max_n.is_some(),
     )?;
     out.json("summary.json", &study.summary)
 }

@@ -54,6 +54,15 @@ pub fn db5_high() -> [f64; 10] {
     })
 }
 
+/// The smallest and the largest value (∞ and −∞ for none).
+pub fn extremes(values: &[f64]) -> (f64, f64) {
+    values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(*v), hi.max(*v))
+        })
+}
+
 /// One level of the periodized db5 DWT: (approximation, detail), each ⌈N/2⌉ long.
 pub fn dwt_db5(x: &[f64]) -> (Vec<f64>, Vec<f64>) {
     let mut signal = x.to_vec();

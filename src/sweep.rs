@@ -70,12 +70,7 @@ fn analyse(model: &MeshModel, rpm: f64, start: State) -> (SweepPoint, State) {
         .sum::<f64>()
         / n)
         .sqrt();
-    let (lo, hi) = s
-        .displacement
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
-            (a.min(*x), b.max(*x))
-        });
+    let (lo, hi) = crate::signal::extremes(&s.displacement);
     let mesh_hz = speed / model.mesh.period();
     let (record, periods) = if s.converged {
         (s.displacement.clone(), 1)

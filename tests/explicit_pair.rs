@@ -321,8 +321,9 @@ fn a_tooth_entering_mesh_books_no_energy() {
     assert!(worst < 5e-5, "{worst:e} J at {at:e} s");
 }
 
-/// The coarse 300 rpm scene and its bodies without contact surfaces (no flank pairs).
-fn contactless_at_300_rpm() -> (PreparedScene, ExplicitPair) {
+/// The coarse 300 rpm scene's step, its bodies without contact surfaces (no flank pairs) and
+/// its drive without load, starting at once (no ramp).
+fn contactless_at_300_rpm() -> (PreparedScene, ExplicitPair, Drive) {
     let case = coarse_case();
     let p = prepared(&case, 300.0, 1e-4, 0.0, 1.0);
     let model = ExplicitPair::new(
@@ -334,7 +335,12 @@ fn contactless_at_300_rpm() -> (PreparedScene, ExplicitPair) {
         1.0,
     )
     .unwrap();
-    (p, model)
+    let drive = Drive {
+        load_torque: 0.0,
+        ramp_time: 0.0,
+        ..p.drive
+    };
+    (p, model, drive)
 }
 
 /// The mesh dashpot acts through the contact only. A pair without contact surfaces (no tooth
@@ -344,12 +350,7 @@ fn contactless_at_300_rpm() -> (PreparedScene, ExplicitPair) {
 /// drag it to 1 − e^{−c_t t/I₂} of that speed: a third within 0.1 ms here.)
 #[test]
 fn the_mesh_dashpot_transmits_nothing_across_open_teeth() {
-    let (p, model) = contactless_at_300_rpm();
-    let drive = Drive {
-        load_torque: 0.0,
-        ramp_time: 0.0,
-        ..p.drive
-    };
+    let (p, model, drive) = contactless_at_300_rpm();
     let mut integrator = PairIntegrator::new(&model, drive, p.dt, 0.0);
     let inertia = model.driven_inertia();
     integrator.mesh_damping = 4.0 * inertia / 1e-4;
@@ -413,12 +414,10 @@ fn mass_scaling_lowers_the_mesh_mode_and_lengthens_the_step_by_its_root() {
 #[test]
 fn a_start_at_speed_turns_both_gears_rigidly_at_the_kinematic_speeds() {
     use geardyn::explicit::pair::Start;
-    let (p, model) = contactless_at_300_rpm();
+    let (p, model, unloaded) = contactless_at_300_rpm();
     let drive = Drive {
-        load_torque: 0.0,
-        ramp_time: 0.0,
         start: Start::AtSpeed,
-        ..p.drive
+        ..unloaded
     };
     let mut integrator = PairIntegrator::new(&model, drive, p.dt, 0.0);
     let mut state = model.initial_state(&drive);

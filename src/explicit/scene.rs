@@ -206,15 +206,11 @@ pub struct PreparedScene {
 /// Ringing of the mesh mode, over the static response, at which a run counts as settled.
 pub const SETTLED_RINGING: f64 = 0.005;
 
-/// Speed ratio |Ω₂/Ω₁| = z₁/z₂.
-fn rates_ratio(pair: &GearPair) -> f64 {
-    pair.gears[0].teeth() as f64 / pair.gears[1].teeth() as f64
-}
-
 /// Free ringing that the ramp of `drive` leaves in an undamped mode `omega` [rad/s], over the
 /// static response (module doc): |R(ω)| √(1 + (c ω)²), c = I₂Ω₂/T the spin-up's inertia torque
-/// per unit ramp rate over the load (0 for a start at speed), `driven_inertia` I₂.
-pub fn ramp_ringing(drive: &Drive, omega: f64, driven_inertia: f64, speed_ratio: f64) -> f64 {
+/// per unit ramp rate over the load (0 for a start at speed), `driven_inertia` I₂,
+/// `driven_speed` |Ω₂| after the ramp.
+pub fn ramp_ringing(drive: &Drive, omega: f64, driven_inertia: f64, driven_speed: f64) -> f64 {
     let wt = omega * drive.ramp_time;
     let pi2 = std::f64::consts::PI.powi(2);
     let ramp = match drive.ramp {
@@ -223,9 +219,7 @@ pub fn ramp_ringing(drive: &Drive, omega: f64, driven_inertia: f64, speed_ratio:
         Ramp::Cosine => 1.0,
     };
     let c = match drive.start {
-        Start::Rest if drive.load_torque > 0.0 => {
-            driven_inertia * drive.driver_speed * speed_ratio / drive.load_torque
-        }
+        Start::Rest if drive.load_torque > 0.0 => driven_inertia * driven_speed / drive.load_torque,
         _ => 0.0,
     };
     ramp * (1.0 + (c * omega).powi(2)).sqrt()
@@ -346,7 +340,8 @@ pub fn prepare(
         * settings.mesh_damping_ratio
         * (mesh_damping_stiffness * rb2 * rb2 * model.driven_inertia()).sqrt();
     let mesh_mode = (mesh_damping_stiffness * rb2 * rb2 / model.driven_inertia()).sqrt();
-    let ringing = ramp_ringing(&drive, mesh_mode, model.driven_inertia(), rates_ratio(pair));
+    let driven_speed = model.kinematic_hub_rotation(drive.driver_speed).abs();
+    let ringing = ramp_ringing(&drive, mesh_mode, model.driven_inertia(), driven_speed);
     let settling_time = if settings.mesh_damping_ratio > 0.0 && ringing > SETTLED_RINGING {
         (ringing / SETTLED_RINGING).ln() / (settings.mesh_damping_ratio * mesh_mode)
     } else {
@@ -687,11 +682,7 @@ pub fn static_te(
     if te.is_empty() {
         return None;
     }
-    let (min, max) = te
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-            (a.min(*v), b.max(*v))
-        });
+    let (min, max) = crate::signal::extremes(&te);
     Some(StaticTe {
         mean_rad: te.iter().sum::<f64>() / te.len() as f64,
         max_rad: max,
@@ -780,6 +771,42 @@ pub fn binned_stiffness(
         .collect()
 }
 
+/// Mean over mean − 1 and the worst |a/b − 1| of the bins both have, and their count; None
+/// without one.
+pub fn bin_difference(a: &[Option<f64>], b: &[Option<f64>]) -> Option<(f64, f64, usize)> {
+    let both: Vec<(f64, f64)> = a
+        .iter()
+        .zip(b)
+        .filter_map(|(x, y)| Some(((*x)?, (*y)?)))
+        .collect();
+    if both.is_empty() {
+        return None;
+    }
+    let n = both.len() as f64;
+    let mean = |f: fn(&(f64, f64)) -> f64| both.iter().map(f).sum::<f64>() / n;
+    let worst = both
+        .iter()
+        .map(|(x, y)| (x / y - 1.0).abs())
+        .fold(0.0, f64::max);
+    Some((mean(|p| p.0) / mean(|p| p.1) - 1.0, worst, both.len()))
+}
+
+/// The table `own` where `other` has a bin too (None elsewhere).
+pub fn common_bins(own: &[Option<f64>], other: &[Option<f64>]) -> Vec<Option<f64>> {
+    own.iter().zip(other).map(|(x, y)| y.and(*x)).collect()
+}
+
+/// The bins both tables have: (driver rotation of the bin centre from the pitch-point position
+/// [rad], a, b), bins centred on j·`pitch`/[`STIFFNESS_BINS`].
+pub fn paired_bins(pitch: f64, a: &[Option<f64>], b: &[Option<f64>]) -> Vec<(f64, f64, f64)> {
+    (0..STIFFNESS_BINS)
+        .filter_map(|j| {
+            let theta = j as f64 * pitch / STIFFNESS_BINS as f64;
+            Some((theta, a[j]?, b[j]?))
+        })
+        .collect()
+}
+
 /// Analyses the DTE of `history` in the window [t_from, end]. `unloaded_te` is the relief's
 /// geometric unloaded TE e along the line of action [m] against the driver rotation from the
 /// pitch-point position (the LTCA's), `torque` the load torque on the driven gear. The low-pass
@@ -801,19 +828,15 @@ pub fn analyse_dte(
     }
     let n = window.len() as f64;
     let mean = window.iter().sum::<f64>() / n;
-    let (min, max) = window
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-            (a.min(*v), b.max(*v))
-        });
+    let (min, max) = crate::signal::extremes(window);
     let rb2 = pair.gears[1].base_radius;
     let pitch = pair.gears[0].angular_pitch();
-    let e: Vec<f64> = history
-        .driver_rotation
+    // The unloaded TE over the window (the only place k and the filter's stiffness read it).
+    let e: Vec<f64> = history.driver_rotation[start..]
         .iter()
         .map(|theta| unloaded_te.at(*theta))
         .collect();
-    let e_mean = e[start..].iter().sum::<f64>() / n;
+    let e_mean = e.iter().sum::<f64>() / n;
     // Torsional mesh stiffness k̄ R_b2² = T/(θ̄ − ē/R_b2) for the filter's period.
     let k_t = torque / (mean - e_mean / rb2);
     let sample = history.time.get(1).map_or(0.0, |t| t - history.time[0]);
@@ -826,11 +849,7 @@ pub fn analyse_dte(
         let (_, dte) = filter.apply(&history.dte, start);
         if !dte.is_empty() {
             let lp_mean = dte.iter().sum::<f64>() / dte.len() as f64;
-            let (lo, hi) = dte
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-                    (a.min(*v), b.max(*v))
-                });
+            let (lo, hi) = crate::signal::extremes(&dte);
             lowpass_stats = Some(LowpassDte {
                 period_s: filter.period_s,
                 mean_rad: lp_mean,
@@ -840,11 +859,7 @@ pub fn analyse_dte(
             });
         }
     }
-    let deflection: Vec<f64> = history.dte[start..]
-        .iter()
-        .zip(&e[start..])
-        .map(|(d, e)| rb2 * d - e)
-        .collect();
+    let deflection: Vec<f64> = window.iter().zip(&e).map(|(d, e)| rb2 * d - e).collect();
     let stiffness_bins = binned_stiffness(
         pitch,
         &history.driver_rotation[start..],
@@ -920,11 +935,7 @@ mod tests {
         assert_eq!(filter.width, 40);
         let (first, averages) = filter.apply(&dte, 100);
         assert_eq!(first, 100);
-        let (lo, hi) = averages
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-                (a.min(*v), b.max(*v))
-            });
+        let (lo, hi) = crate::signal::extremes(&averages);
         assert!((hi - 1.5e-4).abs() < 1e-12, "{hi}");
         assert!((lo - 1.0e-4).abs() < 1e-12, "{lo}");
     }
@@ -999,11 +1010,7 @@ mod tests {
             .collect();
         let te = a.static_te.unwrap();
         let mean = exact.iter().sum::<f64>() / exact.len() as f64;
-        let (lo, hi) = exact
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-                (a.min(*v), b.max(*v))
-            });
+        let (lo, hi) = crate::signal::extremes(&exact);
         assert_eq!(te.bins, STIFFNESS_BINS);
         assert!((te.mean_rad / mean - 1.0).abs() < 1e-3, "{te:?} vs {mean}");
         assert!(
@@ -1011,6 +1018,17 @@ mod tests {
             "{te:?} vs {}",
             hi - lo
         );
+    }
+
+    #[test]
+    fn bin_difference_reads_only_bins_both_have() {
+        let a = [Some(1.02), None, Some(2.0), Some(3.0)];
+        let b = [Some(1.0), Some(5.0), None, Some(3.0)];
+        let (mean, worst, n) = bin_difference(&a, &b).unwrap();
+        assert_eq!(n, 2);
+        assert!((mean - (4.02 / 4.0 - 1.0)).abs() < 1e-12);
+        assert!((worst - 0.02).abs() < 1e-12);
+        assert!(bin_difference(&[None], &[Some(1.0)]).is_none());
     }
 
     /// The ringing a ramp leaves in an undamped oscillator x″ + ω²x = ω²f(t), f the load
@@ -1053,7 +1071,7 @@ mod tests {
                         start_rotation: 0.0,
                     };
                     let simulated = residual(&drive);
-                    let envelope = ramp_ringing(&drive, omega, inertia, ratio);
+                    let envelope = ramp_ringing(&drive, omega, inertia, ratio * drive.driver_speed);
                     let case = format!("{ramp:?} {start:?} ωt_r/2 = {half_phase:.2}");
                     assert!(
                         simulated <= envelope * 1.005,

@@ -5,6 +5,7 @@ use std::path::Path;
 
 use crate::case::Case;
 use crate::explicit::scene::{History, PreparedScene, Scene};
+use crate::geometry::GearPair;
 use crate::report::plot::{save_chart, LinePlot, PlotError};
 use crate::report::{stiffness_csv, OutputDir, ReportError};
 use crate::study::fe::{Derived, FeStudy};
@@ -264,6 +265,23 @@ pub fn prepared_console(case: &Case, prepared: &PreparedScene, scene: &Scene) ->
     )
 }
 
+/// The driver's roll angle [deg] at a bin centre `theta` (driver rotation from the
+/// pitch-point position [rad]).
+fn bin_roll_angle_deg(pair: &GearPair, theta: f64) -> f64 {
+    (pair.roll_angle_at(1, pair.contact_points.pitch) + theta).to_degrees()
+}
+
+/// One column of paired bins (θ, a, b) against the roll angle, for a plot.
+fn bin_curve(
+    pair: &GearPair,
+    bins: &[(f64, f64, f64)],
+    pick: fn(&(f64, f64, f64)) -> f64,
+) -> Vec<(f64, f64)> {
+    bins.iter()
+        .map(|b| (bin_roll_angle_deg(pair, b.0), pick(b)))
+        .collect()
+}
+
 /// `stiffness_vs_ltca.csv` and the `stiffness` plot: k(θ) from the DTE per bin beside the
 /// LTCA's on the run's mesh and on the case's.
 fn write_stiffness_comparison(
@@ -275,8 +293,7 @@ fn write_stiffness_comparison(
     let Some(same) = same else {
         return Ok(());
     };
-    let roll_pitch = case.pair.roll_angle_at(1, case.pair.contact_points.pitch);
-    let deg = |theta: f64| (roll_pitch + theta).to_degrees();
+    let deg = |theta: f64| bin_roll_angle_deg(&case.pair, theta);
     let reference = |theta: f64| {
         converged.as_ref().and_then(|c| {
             c.bins
@@ -302,9 +319,7 @@ fn write_stiffness_comparison(
             ]
         }),
     )?;
-    let curve = |pick: fn(&(f64, f64, f64)) -> f64, bins: &[(f64, f64, f64)]| -> Vec<(f64, f64)> {
-        bins.iter().map(|b| (deg(b.0), pick(b))).collect()
-    };
+    let curve = |pick, bins: &[(f64, f64, f64)]| bin_curve(&case.pair, bins, pick);
     let mut series = vec![
         ("FE, from the DTE".to_string(), curve(|b| b.1, &same.bins)),
         (
@@ -554,8 +569,7 @@ pub fn write_mass_scaling(
         markdown.push_str(&format!("| {} |\n", r.join(" | ")));
     }
     out.bytes("mass_scaling.md", markdown.as_bytes())?;
-    let roll_pitch = case.pair.roll_angle_at(1, case.pair.contact_points.pitch);
-    let deg = |theta: f64| (roll_pitch + theta).to_degrees();
+    let deg = |theta: f64| bin_roll_angle_deg(&case.pair, theta);
     out.csv(
         "mass_scaling_stiffness.csv",
         &[
@@ -571,9 +585,7 @@ pub fn write_mass_scaling(
             ]
         }),
     )?;
-    let curve = |pick: fn(&(f64, f64, f64)) -> f64| -> Vec<(f64, f64)> {
-        study.bins.iter().map(|b| (deg(b.0), pick(b))).collect()
-    };
+    let curve = |pick| bin_curve(&case.pair, &study.bins, pick);
     out.chart(
         "mass_scaling_stiffness",
         &LinePlot {

@@ -11,8 +11,9 @@ use serde::Serialize;
 use crate::case::{Case, Override};
 use crate::explicit::pair::PairEnergy;
 use crate::explicit::scene::{
-    analyse_dte, binned_stiffness, static_te, statistics_start, CoupledStep, DteAnalysis,
-    FeSettings, History, LowpassDte, MassScaling, PreparedScene, Scene, StaticTe, STIFFNESS_BINS,
+    analyse_dte, bin_difference, binned_stiffness, common_bins, paired_bins, static_te,
+    statistics_start, CoupledStep, DteAnalysis, FeSettings, History, LowpassDte, MassScaling,
+    PreparedScene, Scene, StaticTe,
 };
 use crate::fe::{MassLumping, PlaneState};
 use crate::geometry::GearPair;
@@ -437,10 +438,7 @@ pub fn run(
         };
     let rb2 = case.pair.gears[1].base_radius;
     let pitch = case.pair.gears[0].angular_pitch();
-    let unloaded_te = PeriodicTable {
-        period: pitch,
-        values: same.iter().map(|r| r.unloaded_te * rb2).collect(),
-    };
+    let unloaded_te = unloaded_te_table(&same, rb2, pitch);
     let analysis = analyse_dte(
         &history,
         &case.pair,
@@ -668,11 +666,7 @@ fn ltca_check(
         .map(|theta| at_rotation(results, pitch, *theta, |r| r.ste))
         .collect();
     let mean = covered.iter().sum::<f64>() / covered.len() as f64;
-    let (min, max) = covered
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-            (lo.min(*v), hi.max(*v))
-        });
+    let (min, max) = crate::signal::extremes(&covered);
     let k_mean = results.iter().map(|r| r.mesh_stiffness).sum::<f64>() / results.len() as f64;
     LtcaCheck {
         fine_element_mm: fine_mm,
@@ -714,6 +708,15 @@ pub struct StiffnessComparison {
     pub bins: Vec<(f64, f64, f64)>,
 }
 
+/// The relief's unloaded TE of an LTCA cycle along the line of action [m] against the driver
+/// rotation from the pitch-point position.
+fn unloaded_te_table(results: &[PositionResult], rb2: f64, pitch: f64) -> PeriodicTable {
+    PeriodicTable {
+        period: pitch,
+        values: results.iter().map(|r| r.unloaded_te * rb2).collect(),
+    }
+}
+
 /// The LTCA's k(θ) on the same footing as the FE's: its STE and e at the window's driver
 /// positions, k = Σ(T/R_b2)/Σ(R_b2 φ − e) per bin (frictionless: the LTCA's mesh force is
 /// T/R_b2), unfiltered, like the FE's; then bin by bin against the FE's table.
@@ -739,41 +742,26 @@ fn compare_stiffness(
     let force = vec![torque / rb2; deflection.len()];
     let reference = binned_stiffness(pitch, rotations, &force, &deflection);
     let fe_bins = &a.stiffness_bins;
-    let bins: Vec<(f64, f64, f64)> = (0..STIFFNESS_BINS)
-        .filter_map(|b| {
-            let theta = b as f64 / STIFFNESS_BINS as f64 * pitch;
-            Some((theta, fe_bins[b]?, reference[b]?))
-        })
-        .collect();
-    if bins.is_empty() {
-        return None;
-    }
-    let unloaded_te = PeriodicTable {
-        period: pitch,
-        values: results.iter().map(|r| r.unloaded_te * rb2).collect(),
+    let (mean_rel, max_abs_rel, count) = bin_difference(fe_bins, &reference)?;
+    let unloaded_te = unloaded_te_table(results, rb2, pitch);
+    // The static TE of each over the bins both have, with the same e: the difference is k's.
+    let static_of = |own: &[Option<f64>], other: &[Option<f64>]| {
+        static_te(pair, torque, &common_bins(own, other), &unloaded_te)
     };
-    let static_of = |pick: fn(&(f64, f64, f64)) -> f64| {
-        let mut per_bin = vec![None; STIFFNESS_BINS];
-        for bin in &bins {
-            per_bin[(bin.0 / pitch * STIFFNESS_BINS as f64).round() as usize] = Some(pick(bin));
-        }
-        static_te(pair, torque, &per_bin, &unloaded_te)
-    };
-    let (fe_te, ltca_te) = (static_of(|b| b.1)?, static_of(|b| b.2)?);
-    let mean = |f: fn(&(f64, f64, f64)) -> f64| bins.iter().map(f).sum::<f64>() / bins.len() as f64;
+    let (fe_te, ltca_te) = (
+        static_of(fe_bins, &reference)?,
+        static_of(&reference, fe_bins)?,
+    );
     Some(StiffnessComparison {
         summary: StiffnessDifference {
             fine_element_mm: fine_mm,
             coarse_element_mm: coarse_mm,
-            mean_rel: mean(|b| b.1) / mean(|b| b.2) - 1.0,
-            max_abs_rel: bins
-                .iter()
-                .map(|b| (b.1 / b.2 - 1.0).abs())
-                .fold(0.0, f64::max),
+            mean_rel,
+            max_abs_rel,
             static_te_mean_rel: fe_te.mean_rad / ltca_te.mean_rad - 1.0,
             static_te_peak_to_peak_rel: fe_te.peak_to_peak_rad / ltca_te.peak_to_peak_rad - 1.0,
-            bins: bins.len(),
+            bins: count,
         },
-        bins,
+        bins: paired_bins(pitch, fe_bins, &reference),
     })
 }

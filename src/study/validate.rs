@@ -17,7 +17,8 @@ use serde::Serialize;
 
 use crate::case::Case;
 use crate::explicit::scene::{
-    analyse_dte, static_te, DteAnalysis, History, StaticTe, STIFFNESS_BINS,
+    analyse_dte, bin_difference, common_bins, paired_bins, static_te, DteAnalysis, History,
+    StaticTe,
 };
 use crate::geometry::GearPair;
 use crate::lumped::schemes::{self, SchemeReport};
@@ -152,26 +153,6 @@ pub struct MassScalingStudy {
     pub bins: Vec<(f64, f64, f64)>,
 }
 
-/// Mean over mean − 1 and the worst |a/b − 1| of the bins both have, and their count; None
-/// without one.
-pub fn bin_difference(a: &[Option<f64>], b: &[Option<f64>]) -> Option<(f64, f64, usize)> {
-    let both: Vec<(f64, f64)> = a
-        .iter()
-        .zip(b)
-        .filter_map(|(x, y)| Some(((*x)?, (*y)?)))
-        .collect();
-    if both.is_empty() {
-        return None;
-    }
-    let n = both.len() as f64;
-    let mean = |f: fn(&(f64, f64)) -> f64| both.iter().map(f).sum::<f64>() / n;
-    let worst = both
-        .iter()
-        .map(|(x, y)| (x / y - 1.0).abs())
-        .fold(0.0, f64::max);
-    Some((mean(|p| p.0) / mean(|p| p.1) - 1.0, worst, both.len()))
-}
-
 /// A run of a scene as the comparison reads it.
 #[derive(Clone, Copy)]
 pub struct RunRecord<'a> {
@@ -277,14 +258,11 @@ pub fn mass_scaling(
         .ok_or_else(too_short)?;
     let [a, b] = &c.common;
     // The static TE of each over the bins both have.
-    let both = |bins: &[Option<f64>], other: &[Option<f64>]| -> Vec<Option<f64>> {
-        bins.iter().zip(other).map(|(x, y)| y.and(*x)).collect()
-    };
     let te = |study: &FeStudy, bins: Vec<Option<f64>>| {
         static_te(pair, study.scene.torque, &bins, &study.unloaded_te).ok_or_else(too_short)
     };
-    let te_scaled = te(scaled, both(&a.stiffness_bins, &b.stiffness_bins))?;
-    let te_unscaled = te(unscaled, both(&b.stiffness_bins, &a.stiffness_bins))?;
+    let te_scaled = te(scaled, common_bins(&a.stiffness_bins, &b.stiffness_bins))?;
+    let te_unscaled = te(unscaled, common_bins(&b.stiffness_bins, &a.stiffness_bins))?;
     let (stiffness_mean_rel, stiffness_max_abs_rel, stiffness_bins) =
         bin_difference(&a.stiffness_bins, &b.stiffness_bins).ok_or_else(too_short)?;
     let (own_mean, own_worst, own_bins) = bin_difference(
@@ -318,13 +296,11 @@ pub fn mass_scaling(
     let run_scaled = run(scaled, a, &c.own[0], te_scaled);
     let run_unscaled = run(unscaled, b, &c.own[1], te_unscaled);
     let rel = |f: fn(&MassScalingRun) -> f64| f(&run_scaled) / f(&run_unscaled) - 1.0;
-    let pitch = pair.gears[0].angular_pitch();
-    let bins = (0..STIFFNESS_BINS)
-        .filter_map(|j| {
-            let theta = j as f64 * pitch / STIFFNESS_BINS as f64;
-            Some((theta, a.stiffness_bins[j]?, b.stiffness_bins[j]?))
-        })
-        .collect();
+    let bins = paired_bins(
+        pair.gears[0].angular_pitch(),
+        &a.stiffness_bins,
+        &b.stiffness_bins,
+    );
     let summary = MassScalingSummary {
         case: case_name.to_string(),
         study: "mass-scaling",
@@ -353,6 +329,7 @@ pub fn mass_scaling(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::explicit::scene::STIFFNESS_BINS;
 
     /// A synthetic 60 rpm record: k(θ) = k̄ s_k (1 + 0.2 cos 2πθ/p), e(θ) = 5 µm sin 2πθ/p,
     /// W = F(1 + 0.05 sin 2πθ/p), the deflection δ = W/k with 10 % free ringing of a mesh mode
@@ -438,16 +415,5 @@ mod tests {
         let (mean, _, _) =
             bin_difference(&c.common[0].stiffness_bins, &c.common[1].stiffness_bins).unwrap();
         assert!((mean - (1.0 / 1.02 - 1.0)).abs() < 2e-3, "{mean}");
-    }
-
-    #[test]
-    fn bin_difference_reads_only_bins_both_have() {
-        let a = [Some(1.02), None, Some(2.0), Some(3.0)];
-        let b = [Some(1.0), Some(5.0), None, Some(3.0)];
-        let (mean, worst, n) = bin_difference(&a, &b).unwrap();
-        assert_eq!(n, 2);
-        assert!((mean - (4.02 / 4.0 - 1.0)).abs() < 1e-12);
-        assert!((worst - 0.02).abs() < 1e-12);
-        assert!(bin_difference(&[None], &[Some(1.0)]).is_none());
     }
 }

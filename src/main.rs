@@ -104,6 +104,36 @@ enum Command {
         #[command(flatten)]
         options: FeShorthands,
     },
+    /// FE versus lumped: the mesh-mode frequency by every method (lumped sqrt(k/m) with k from
+    /// the LTCA and the FE DTE, Floquet, FE modal analysis of the meshed pair) for both boundary
+    /// conditions (driver held, both free), and the explicit FE's DTE spectra against the lumped
+    /// model's at each FE speed (labelled peaks, early vs late window, first three mesh
+    /// harmonics). Writes summary.json, frequencies/modal/harmonics/peaks CSVs, spectra plots
+    /// and table.md.
+    Compare {
+        #[command(flatten)]
+        common: CommonArgs,
+        /// Explicit FE runs to make: scene high-unmodified at these driver speeds [rpm], into
+        /// DIR/fe-<rpm> (skipped for speeds given by --fe-run).
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "1200,3000,4800",
+            value_name = "RPM"
+        )]
+        speed_rpm: Vec<f64>,
+        /// Finished `geardyn fe` output folders to use instead of running their speeds
+        /// (repeatable).
+        #[arg(long = "fe-run", value_name = "DIR")]
+        fe_runs: Vec<PathBuf>,
+        /// k(θ) from the FE DTE (stiffness.csv of `geardyn fe --scene stiffness`); default: run
+        /// that scene into DIR/fe-stiffness.
+        #[arg(long, value_name = "FILE")]
+        fe_stiffness: Option<PathBuf>,
+        /// Mesh positions over one base pitch for the FE modal analysis.
+        #[arg(long, default_value_t = 8, value_name = "N")]
+        positions: usize,
+    },
     /// Validation studies too wide for the test suite; each writes a table (CSV and Markdown)
     /// and summary.json.
     Validate {
@@ -183,6 +213,19 @@ fn main() -> ExitCode {
             scene,
             ..
         } => validate_mass_scaling(&common, &scene),
+        Command::Compare {
+            common,
+            speed_rpm,
+            fe_runs,
+            fe_stiffness,
+            positions,
+        } => compare(
+            &common,
+            &speed_rpm,
+            &fe_runs,
+            fe_stiffness.as_deref(),
+            positions,
+        ),
         Command::Case { case, set } => Case::load_with(case.as_deref(), &set)
             .map(|c| print!("{}", c.text))
             .map_err(Into::into),
@@ -353,6 +396,62 @@ fn fe(args: &CommonArgs, options: &FeShorthands) -> Result<()> {
     let dir = output_dir(args, &format!("fe-{}", scene.name), &case)?;
     fe_run(&case, scene, &dir)?;
     println!("wrote {}", dir.display());
+    Ok(())
+}
+
+fn compare(
+    args: &CommonArgs,
+    speeds: &[f64],
+    fe_runs: &[PathBuf],
+    fe_stiffness: Option<&Path>,
+    positions: usize,
+) -> Result<()> {
+    use report::compare::read_fe_run;
+    let case = load(args, Vec::new())?;
+    let dir = output_dir(args, "compare", &case)?;
+    let read = |d: &Path| read_fe_run(d).map_err(anyhow::Error::msg);
+    let mut runs = fe_runs
+        .iter()
+        .map(|d| read(d))
+        .collect::<Result<Vec<_>>>()?;
+    for &rpm in speeds {
+        if runs.iter().any(|r| (r.speed_rpm - rpm).abs() < 1e-6 * rpm) {
+            continue;
+        }
+        let key = "scene[high-unmodified].speed_rpm";
+        let at_speed = load(args, vec![Override::set(key, rpm)])?;
+        let out = dir.join(format!("fe-{rpm:.0}"));
+        fe_run(
+            &at_speed,
+            study::fe::scene(&at_speed, "high-unmodified")?,
+            &out,
+        )?;
+        runs.push(read(&out)?);
+    }
+    let stiffness_file = match fe_stiffness {
+        Some(file) => file.to_path_buf(),
+        None => {
+            let out = dir.join("fe-stiffness");
+            fe_run(&case, study::fe::scene(&case, "stiffness")?, &out)?;
+            out.join("stiffness.csv")
+        }
+    };
+    let pitch = case.pair.gears[0].angular_pitch();
+    let fe_stiffness = report::stiffness_csv::read_stiffness_csv(&stiffness_file, pitch)
+        .map_err(anyhow::Error::msg)?;
+    let input = study::compare::CompareInput {
+        fe_runs: runs,
+        fe_stiffness,
+    };
+    let bar = progress_bar("{msg} [{bar:40}] {pos}/{len}");
+    let summary = study::compare::run(&case, &input, positions, &|stage, done, total| {
+        bar.set_message(stage.to_string());
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    })?;
+    bar.finish_and_clear();
+    let table = report::compare::write(OutputDir(&dir), &case, &summary)?;
+    println!("{table}wrote {}", dir.display());
     Ok(())
 }
 

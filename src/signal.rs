@@ -216,6 +216,33 @@ pub fn amplitude_spectrum(record: &[f64]) -> Vec<f64> {
         .collect()
 }
 
+/// Amplitudes of the harmonics n·f, n = 1 … `count`, of a record sampled every `dt`, over the
+/// longest whole number of periods 1/f from its end: |2/N Σ x_k e^{−i2πnf t_k}| (a DFT at the
+/// exact harmonic frequencies, so they need not fall on FFT bins; the mean cancels over whole
+/// periods). A record shorter than one period gives zeros.
+pub fn harmonic_amplitudes(x: &[f64], dt: f64, f: f64, count: usize) -> Vec<f64> {
+    let per_period = 1.0 / (f * dt);
+    let periods = (x.len() as f64 / per_period).floor();
+    let n = (periods * per_period).round() as usize;
+    if periods < 1.0 || n == 0 {
+        return vec![0.0; count];
+    }
+    let record = &x[x.len() - n..];
+    (1..=count)
+        .map(|h| {
+            let w = std::f64::consts::TAU * h as f64 * f * dt;
+            let (re, im) = record
+                .iter()
+                .enumerate()
+                .fold((0.0, 0.0), |(re, im), (k, v)| {
+                    let phase = w * k as f64;
+                    (re + v * phase.cos(), im - v * phase.sin())
+                });
+            2.0 * (re * re + im * im).sqrt() / n as f64
+        })
+        .collect()
+}
+
 /// The `count` largest local maxima of an amplitude spectrum: (line index from 1, amplitude).
 /// Lines below 1e-9 of the largest are rounding noise and are left out.
 pub fn strongest_lines(spectrum: &[f64], count: usize) -> Vec<(usize, f64)> {
@@ -257,6 +284,29 @@ pub fn spectrum_peaks(spectrum: &[(f64, f64)], min_hz: f64, count: usize) -> Vec
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn harmonic_amplitudes_read_known_harmonics() {
+        // 1 800 Hz with 3 harmonics, a mean and a 2 853 Hz line, sampled at 10 µs (the period,
+        // 55.6 samples, is not a whole number of samples).
+        let (f, dt) = (1800.0, 1e-5);
+        let x: Vec<f64> = (0..1703)
+            .map(|k| {
+                let t = k as f64 * dt;
+                let w = std::f64::consts::TAU * f * t;
+                1e-4 + 3e-6 * (w + 0.3).cos()
+                    + 2e-6 * (2.0 * w).sin()
+                    + 0.5e-6 * (3.0 * w - 1.0).cos()
+                    + 1e-6 * (std::f64::consts::TAU * 2853.0 * t).sin()
+            })
+            .collect();
+        let a = harmonic_amplitudes(&x, dt, f, 3);
+        // The off-harmonic line leaks O(1/periods) into the harmonics: 30 periods, ≤ 2e-8.
+        for (got, want) in a.iter().zip([3e-6, 2e-6, 0.5e-6]) {
+            assert!((got - want).abs() < 4e-8, "{got} vs {want}");
+        }
+        assert_eq!(harmonic_amplitudes(&x[..40], dt, f, 2), vec![0.0, 0.0]);
+    }
 
     #[test]
     fn db5_is_orthonormal_and_invertible() {

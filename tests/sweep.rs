@@ -24,6 +24,7 @@ fn model(te_amplitude: f64, backlash: Option<f64>) -> MeshModel {
         force: 2670.0,
         backlash,
         bearings: None,
+        back_reflection: None,
     };
     m.damping = m.damping_from_ratio(0.03);
     m

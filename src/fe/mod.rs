@@ -2,8 +2,10 @@
 //!
 //! * [`q8`] — 8-node serendipity quadrilateral, plane stress / plane strain with thickness B.
 //! * [`assembly`] — global stiffness (faer sparse), constraints, Cholesky, solves.
+//! * [`modal`] — the lowest modes of K φ = ω² M φ by shift-invert Lanczos.
 
 pub mod assembly;
+pub mod modal;
 pub mod q8;
 
 pub use assembly::{FactorizedStiffness, FeError};

@@ -227,6 +227,18 @@ impl Gear {
             - involute(alpha_r)
     }
 
+    /// Torsional compliance of the gear body between bore and root circle, a solid annulus of
+    /// width b in in-plane shear: the shear stress τ = T/(2π r² b) twists it by
+    /// dφ/dr = τ/(G r), so φ/T = (1/r_i² − 1/r_f²)/(4π G b), G = E/(2(1 + ν)) [rad/(N·m)]
+    /// (Timoshenko & Goodier, rotating disk in shear). The teeth and their foundation are the
+    /// mesh stiffness's; this is the rotation of the root circle against the bore.
+    pub fn body_torsional_compliance(&self, youngs_modulus: f64, poisson_ratio: f64) -> f64 {
+        let shear = youngs_modulus / (2.0 * (1.0 + poisson_ratio));
+        let (ri, rf) = (self.spec.bore_radius, self.root_radius);
+        (1.0 / (ri * ri) - 1.0 / (rf * rf))
+            / (4.0 * std::f64::consts::PI * shear * self.spec.face_width)
+    }
+
     /// Circular (arc) tooth thickness 2 R ψ(R) of the unmodified involute at radius R [m].
     pub fn thickness_at_radius(&self, radius: f64) -> f64 {
         2.0 * radius * self.half_thickness_angle(radius)

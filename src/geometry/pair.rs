@@ -428,6 +428,18 @@ impl GearPair {
         ]
     }
 
+    /// The driver roll angle ρ about which the back flanks mirror the drive flanks: the pair
+    /// turned to driver roll angle ξ meets on its back flanks as it meets on its drive flanks
+    /// at ρ − ξ. In [`GearPair::mesh_placement`] the driver's tooth 0 touches at the pitch
+    /// point (roll angle ξ_p) with its axis ψ₁ (half the tooth angle at the working pitch
+    /// circle) off the centre line; mirroring about the centre line turns the axis angle
+    /// ψ + θ into −ψ − θ, i.e. θ into 2ψ₁ − θ: ρ = 2(ξ_p + ψ₁). Exact for symmetric teeth
+    /// without backlash (with backlash, to the backlash's rotation).
+    pub fn back_flank_reflection(&self) -> f64 {
+        let psi1 = self.gears[0].half_thickness_angle(self.working_pitch_radii[0]);
+        2.0 * (self.roll_angle_at(1, self.contact_points.pitch) + psi1)
+    }
+
     /// Global position (placement frame) of the LOA point at distance `s` from T1.
     pub fn loa_point(&self, s: f64) -> Point2<f64> {
         let aw = self.operating_pressure_angle;

@@ -25,6 +25,7 @@
 
 pub mod body;
 pub mod contact;
+pub mod modal;
 
 use nalgebra::{DMatrix, DVector, Point2, Rotation2, Vector2};
 use rayon::prelude::*;
@@ -149,6 +150,48 @@ impl LtcaModel {
         positions: usize,
         torque: f64,
     ) -> Result<PositionResult, LtcaError> {
+        Ok(self.contact_state(index, positions, torque)?.result)
+    }
+
+    /// The loaded contact state of one position: its result and its active contact points with
+    /// the flank nodes they tie together — what a linearization about the loaded state needs.
+    pub fn loaded_contacts(
+        &self,
+        index: usize,
+        positions: usize,
+        torque: f64,
+    ) -> Result<LoadedContacts, LtcaError> {
+        let state = self.contact_state(index, positions, torque)?;
+        let node = |body: &LtcaBody, (candidate, weight): (usize, f64)| {
+            let c = &body.candidates[candidate];
+            (c.node, weight, c.inward)
+        };
+        let active = state
+            .points
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| state.forces[*i] > 0.0)
+            .map(|(i, p)| ActiveContact {
+                nodes: [
+                    p.weights1.map(|w| node(&self.bodies[0], w)),
+                    p.weights2.map(|w| node(&self.bodies[1], w)),
+                ],
+                force: state.forces[i],
+                compliance: state.compliance[(i, i)],
+            })
+            .collect();
+        Ok(LoadedContacts {
+            result: state.result,
+            active,
+        })
+    }
+
+    fn contact_state(
+        &self,
+        index: usize,
+        positions: usize,
+        torque: f64,
+    ) -> Result<ContactState, LtcaError> {
         let pair = &self.pair;
         let driver_rotation = index as f64 / positions as f64 * pair.gears[0].angular_pitch();
         let [rot1, rot2] = self.rotations(driver_rotation);
@@ -282,7 +325,9 @@ impl LtcaModel {
             .map(|(f, fm)| if *f > 0.0 { Some(fm / f) } else { None })
             .collect();
         let roll_pitch = pair.roll_angle_at(1, pair.contact_points.pitch);
-        Ok(PositionResult {
+        let tangent_stiffness =
+            tangent_torsional_stiffness(&compliance, &arms, &forces) / (rb2 * rb2);
+        let result = PositionResult {
             driver_rotation,
             roll_angle: roll_pitch + driver_rotation,
             ste: solution.rotation,
@@ -291,10 +336,17 @@ impl LtcaModel {
             pair_forces,
             pair_positions,
             mesh_stiffness: total_force / (rb2 * (solution.rotation - unloaded)),
+            tangent_stiffness,
             kkt_residual: solution.kkt_residual,
             active_points: forces.iter().filter(|f| **f > 0.0).count(),
             candidate_points: m,
             iterations: solution.iterations,
+        };
+        Ok(ContactState {
+            result,
+            points,
+            compliance,
+            forces,
         })
     }
 
@@ -347,6 +399,53 @@ impl LtcaModel {
 /// Half the number of lattice points per tooth pair: the lattice spans ±8 node spacings around
 /// the geometric contact point, several times the Hertzian contact width at any sensible mesh.
 const LATTICE_HALF_WIDTH: i32 = 8;
+
+/// The contact problem of one position, solved.
+struct ContactState {
+    result: PositionResult,
+    points: Vec<ContactPoint>,
+    compliance: DMatrix<f64>,
+    forces: DVector<f64>,
+}
+
+/// The tangent torsional mesh stiffness dT/dφ = aᵀ C_AA⁻¹ a [N·m/rad] on the active set A (the
+/// points with F > 0): with the active set held, g_A = g₀ + C_AA F_A − φ a_A = 0 and aᵀF = T give
+/// dF_A = C_AA⁻¹ a_A dφ. It is above the secant W/(r_b2(φ − φ₀)) where the curved flanks close
+/// more points as the load grows.
+fn tangent_torsional_stiffness(
+    compliance: &DMatrix<f64>,
+    arms: &DVector<f64>,
+    forces: &DVector<f64>,
+) -> f64 {
+    let active: Vec<usize> = (0..forces.len()).filter(|&i| forces[i] > 0.0).collect();
+    let c = DMatrix::from_fn(active.len(), active.len(), |i, j| {
+        compliance[(active[i], active[j])]
+    });
+    let a = DVector::from_iterator(active.len(), active.iter().map(|&i| arms[i]));
+    match c.cholesky() {
+        Some(llt) => a.dot(&llt.solve(&a)),
+        None => f64::NAN,
+    }
+}
+
+/// An active contact point of the loaded state: the gear-1 and gear-2 flank nodes it ties
+/// together, each as (mesh node, weight, unit inward normal in the gear's frame), so that the
+/// gap opens by Σ w (n · u) over both gears' nodal displacements u.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ActiveContact {
+    pub nodes: [[(usize, f64, Vector2<f64>); 3]; 2],
+    /// Contact force [N].
+    pub force: f64,
+    /// The point's own compliance C_kk of both bodies with their bores held [m/N].
+    pub compliance: f64,
+}
+
+/// The loaded state of one position with its active contact points.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoadedContacts {
+    pub result: PositionResult,
+    pub active: Vec<ActiveContact>,
+}
 
 /// A candidate contact point of one position.
 struct ContactPoint {
@@ -453,8 +552,11 @@ pub struct PositionResult {
     pub pair_forces: Vec<f64>,
     /// Force-weighted contact position of each loaded pair, distance from T1 [m].
     pub pair_positions: Vec<Option<f64>>,
-    /// Mesh stiffness k = W / (r_b2 (φ − φ₀)) [N/m].
+    /// Mesh stiffness k = W / (r_b2 (φ − φ₀)) [N/m] (secant).
     pub mesh_stiffness: f64,
+    /// Tangent mesh stiffness dW/dδ on the active set, aᵀC_AA⁻¹a / r_b2² [N/m]: what small
+    /// vibrations about the loaded state feel.
+    pub tangent_stiffness: f64,
     pub kkt_residual: f64,
     pub active_points: usize,
     pub candidate_points: usize,

@@ -106,6 +106,9 @@ pub struct MeshModel {
     pub backlash: Option<f64>,
     /// Bearing translations; `None`: rigid bearings.
     pub bearings: Option<Bearings>,
+    /// Where the back flanks' own k and e are read (see [`MeshModel::mesh_force`]):
+    /// `Some(ρ)`: at the mirrored angle ρ − θ; `None`: at θ, with e a positional error.
+    pub back_reflection: Option<f64>,
 }
 
 /// State of the lumped model: positions q = (p, y₁, y₂) [m] and their velocities [m/s]. Without
@@ -217,15 +220,33 @@ impl MeshModel {
             .expect("at least one mode")
     }
 
-    /// Elastic mesh force k(θ) f(δ − e(θ)) at mesh deflection δ (≥ 0 on the drive side).
+    /// Elastic mesh force at mesh deflection δ (≥ 0 on the drive side, < 0 on the back side).
+    /// Drive flanks: W = k(θ)(δ − e(θ)) while δ > e(θ). Back flanks, once the backlash j is
+    /// taken up: with [`MeshModel::back_reflection`] ρ, the back flanks are the drive flanks of
+    /// the mirrored pair (symmetric teeth and relief: mirroring about the centre line swaps the
+    /// flanks and turns θ into ρ − θ), so they carry their own stiffness k_b = k(ρ − θ) and their
+    /// own relief e_b = e(ρ − θ), which widens the gap: W = k_b (δ + j + e_b) while
+    /// δ + j + e_b < 0. Without it, the drive side's k(θ) and e read as a positional error
+    /// (shifting both flanks alike): W = k(θ)(δ − e + j).
     pub fn mesh_force(&self, theta: f64, deflection: f64) -> f64 {
-        let delta = deflection - self.mesh.unloaded_te.at(theta);
-        let k = self.mesh.stiffness.at(theta);
+        let e = self.mesh.unloaded_te.at(theta);
+        let drive = deflection - e;
         match self.backlash {
-            None => k * delta,
-            Some(_) if delta > 0.0 => k * delta,
-            Some(j) if delta < -j => k * (delta + j),
-            Some(_) => 0.0,
+            None => self.mesh.stiffness.at(theta) * drive,
+            Some(_) if drive > 0.0 => self.mesh.stiffness.at(theta) * drive,
+            Some(j) => match self.back_reflection {
+                Some(rho) => {
+                    let back = rho - theta;
+                    let gap = deflection + j + self.mesh.unloaded_te.at(back);
+                    if gap < 0.0 {
+                        self.mesh.stiffness.at(back) * gap
+                    } else {
+                        0.0
+                    }
+                }
+                None if drive < -j => self.mesh.stiffness.at(theta) * (drive + j),
+                None => 0.0,
+            },
         }
     }
 
@@ -392,6 +413,19 @@ pub fn floquet_max_multiplier(
     driver_speed: f64,
     steps_per_period: usize,
 ) -> f64 {
+    floquet_multipliers(model, driver_speed, steps_per_period)
+        .iter()
+        .map(|l| l.norm())
+        .fold(0.0, f64::max)
+}
+
+/// The Floquet multipliers λ of the linear model at driver speed Ω₁: the eigenvalues of the
+/// monodromy matrix over one mesh period.
+pub fn floquet_multipliers(
+    model: &MeshModel,
+    driver_speed: f64,
+    steps_per_period: usize,
+) -> Vec<nalgebra::Complex<f64>> {
     let linear = model.linearized();
     let active = model.active_components();
     let n = active.len();
@@ -408,11 +442,36 @@ pub fn floquet_max_multiplier(
             monodromy[(row, column)] = end.component(j);
         }
     }
-    monodromy
-        .complex_eigenvalues()
+    monodromy.complex_eigenvalues().iter().copied().collect()
+}
+
+/// The lowest Floquet frequency of the linear model at driver speed Ω₁ [rad/s]: the imaginary
+/// part of the characteristic exponent μ = ln λ / T_m, which is fixed only modulo the mesh
+/// frequency Ω_m = 2π/T_m; the branch nearest the mean-stiffness ω of the lowest mode is taken.
+/// Inside an instability region (|λ| > 1, real λ) it locks to a multiple of Ω_m/2.
+pub fn floquet_frequency(model: &MeshModel, driver_speed: f64, steps_per_period: usize) -> f64 {
+    let period = model.mesh.period() / driver_speed;
+    let mesh = std::f64::consts::TAU / period;
+    let target = model.mode_frequencies(model.mesh.mean())[0];
+    floquet_multipliers(model, driver_speed, steps_per_period)
         .iter()
-        .map(|l| l.norm())
-        .fold(0.0, f64::max)
+        .map(|l| {
+            let base = l.arg().abs() / period;
+            // Branches ±base + n Ω_m: the one nearest the target.
+            let n = (target / mesh).floor();
+            [
+                n * mesh + base,
+                (n + 1.0) * mesh - base,
+                n * mesh - base,
+                (n + 1.0) * mesh + base,
+            ]
+            .into_iter()
+            .filter(|w| *w >= 0.0)
+            .min_by(|a, b| (a - target).abs().total_cmp(&(b - target).abs()))
+            .unwrap_or(base)
+        })
+        .min_by(|a, b| (a - target).abs().total_cmp(&(b - target).abs()))
+        .unwrap_or(f64::NAN)
 }
 
 /// RK4 over one mesh period in `steps` equal steps from `start` at θ = 0; `sample` sees the

@@ -3,6 +3,7 @@
 //! Every file is written to a temporary name in its folder and renamed into place, so a reader
 //! (or a crash) never sees half a file.
 
+pub mod compare;
 pub mod fe;
 pub mod geometry;
 pub mod ltca;

@@ -179,6 +179,21 @@ impl MeshStiffness {
         })
     }
 
+    /// The stiffness with a compliance `c` [m/N] taken out of series: k' = 1/(1/k − c) (e kept).
+    /// `None` when c is not below every 1/k.
+    pub fn without_series_compliance(&self, c: f64) -> Option<Self> {
+        let mut out = self.clone();
+        for k in &mut out.stiffness.values {
+            let rest = 1.0 / *k - c;
+            if !(rest > 0.0) {
+                return None;
+            }
+            *k = 1.0 / rest;
+        }
+        out.source = format!("{} without {c:.3e} m/N body twist", self.source);
+        Some(out)
+    }
+
     /// The mesh period in driver roll angle [rad].
     pub fn period(&self) -> f64 {
         self.stiffness.period

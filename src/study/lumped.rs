@@ -159,11 +159,13 @@ pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
     });
     let mut model = MeshModel {
         effective_mass,
-        mesh,
+        mesh: mesh.clone(),
         damping: 0.0,
         force: torque / base_radii[1],
         backlash,
         bearings,
+        // The back flanks' own k and e: the tables' θ is counted from their origin.
+        back_reflection: Some(pair.back_flank_reflection() - 2.0 * mesh.origin),
     };
     // A coefficient in the case wins over its ratio (`--damping-ratio` removes the coefficient).
     let damping_ratio = match settings.mesh_damping {

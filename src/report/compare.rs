@@ -1,0 +1,299 @@
+//! `geardyn compare` at the IO edge: an explicit FE run folder read back (its DTE), and the
+//! comparison written as summary.json, CSV tables, overlaid spectra and a Markdown table.
+
+use std::path::Path;
+
+use super::plot::LinePlot;
+use super::{OutputDir, ReportError};
+use crate::case::Case;
+use crate::study::compare::{CompareSummary, FeDte, Peak};
+
+/// Reads the DTE of a `geardyn fe` output folder (summary.json and history.csv). The message
+/// says what is missing.
+pub fn read_fe_run(dir: &Path) -> Result<FeDte, String> {
+    let shown = dir.display();
+    let text = std::fs::read_to_string(dir.join("summary.json"))
+        .map_err(|e| format!("{shown} is not a geardyn fe output folder (summary.json: {e})"))?;
+    let summary: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("{shown}/summary.json: {e}"))?;
+    let number = |path: &[&str]| {
+        path.iter()
+            .try_fold(&summary, |v, key| v.get(key))
+            .and_then(|v| v.as_f64())
+            .ok_or_else(|| format!("{shown}/summary.json has no {}", path.join(".")))
+    };
+    if summary.get("diverged").is_some_and(|d| !d.is_null()) {
+        return Err(format!(
+            "{shown}: the run diverged; compare needs a finished run"
+        ));
+    }
+    let speed = number(&["scene", "driver_speed"])?;
+    let mut reader = csv::Reader::from_path(dir.join("history.csv"))
+        .map_err(|e| format!("{shown}/history.csv: {e}"))?;
+    let headers = reader
+        .headers()
+        .map_err(|e| format!("{shown}/history.csv: {e}"))?
+        .clone();
+    let column = |name: &str| {
+        headers
+            .iter()
+            .position(|h| h == name)
+            .ok_or_else(|| format!("{shown}/history.csv has no column {name}"))
+    };
+    let (time_col, dte_col) = (column("time_s")?, column("dte_rad")?);
+    let (mut time, mut dte) = (Vec::new(), Vec::new());
+    for record in reader.records() {
+        let record = record.map_err(|e| format!("{shown}/history.csv: {e}"))?;
+        let value = |i: usize| {
+            record[i]
+                .parse::<f64>()
+                .map_err(|e| format!("{shown}/history.csv: {e}"))
+        };
+        time.push(value(time_col)?);
+        dte.push(value(dte_col)?);
+    }
+    if time.len() < 16 {
+        return Err(format!("{shown}/history.csv holds {} samples", time.len()));
+    }
+    let dt = (time[time.len() - 1] - time[0]) / (time.len() - 1) as f64;
+    Ok(FeDte {
+        source: shown.to_string(),
+        speed_rpm: speed * 60.0 / std::f64::consts::TAU,
+        torque_nm: number(&["scene", "torque"])?,
+        dt,
+        dte,
+        ramp_end_s: number(&["scene", "ramp_time"])?,
+        statistics_start_s: number(&["statistics_start_s"])?,
+        wall_s: number(&["total_wall_s"])?,
+    })
+}
+
+fn peaks_text(peaks: &[Peak]) -> String {
+    peaks
+        .iter()
+        .take(5)
+        .map(|p| format!("{:.0} ({})", p.frequency_hz, p.label))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Writes the comparison; returns the Markdown table printed on the console.
+pub fn write(dir: OutputDir, case: &Case, summary: &CompareSummary) -> Result<String, ReportError> {
+    dir.case(case)?;
+    dir.json("summary.json", summary)?;
+    let f = |x: f64| format!("{x:.1}");
+    let mut rows = Vec::new();
+    for fr in [&summary.driver_held, &summary.both_free] {
+        let bc = match fr.hubs {
+            crate::ltca::modal::Hubs::DriverHeld => "driver held",
+            crate::ltca::modal::Hubs::BothFree => "both free",
+        };
+        rows.push(vec![
+            bc.into(),
+            "lumped sqrt(k/m), k LTCA secant".into(),
+            f(fr.lumped_ltca_secant_hz),
+        ]);
+        rows.push(vec![
+            bc.into(),
+            "lumped sqrt(k/m), k LTCA tangent".into(),
+            f(fr.lumped_ltca_tangent_hz),
+        ]);
+        rows.push(vec![
+            bc.into(),
+            "lumped sqrt(k/m), k LTCA secant, rigid rims".into(),
+            f(fr.lumped_ltca_rim_hz),
+        ]);
+        rows.push(vec![
+            bc.into(),
+            "lumped sqrt(k/m), k FE DTE, rigid gears".into(),
+            f(fr.lumped_fe_hz),
+        ]);
+        rows.push(vec![
+            bc.into(),
+            "lumped sqrt(k/m), k FE DTE, rigid rims (body twist out)".into(),
+            f(fr.lumped_fe_rim_hz),
+        ]);
+        for (rpm, hz) in &fr.floquet_hz {
+            rows.push(vec![
+                bc.into(),
+                format!("lumped Floquet, k FE DTE, rigid rims, {rpm:.0} rpm"),
+                f(*hz),
+            ]);
+        }
+        rows.push(vec![
+            bc.into(),
+            "FE modal mesh mode (mean over positions)".into(),
+            f(fr.fe_modal_mean_hz),
+        ]);
+    }
+    dir.csv(
+        "frequencies.csv",
+        &["boundary", "method", "frequency_hz"],
+        rows.clone(),
+    )?;
+    dir.csv(
+        "modal.csv",
+        &[
+            "hubs",
+            "driver_rotation_deg",
+            "mode",
+            "frequency_hz",
+            "mesh_share",
+            "kind",
+        ],
+        summary.modal.iter().flat_map(|p| {
+            p.modes.iter().enumerate().map(move |(i, m)| {
+                vec![
+                    format!("{:?}", p.hubs),
+                    format!("{:.4}", p.driver_rotation.to_degrees()),
+                    i.to_string(),
+                    format!("{:.2}", m.frequency_hz),
+                    format!("{:.3e}", m.mesh_share),
+                    m.kind.into(),
+                ]
+            })
+        }),
+    )?;
+    dir.csv(
+        "harmonics.csv",
+        &[
+            "speed_rpm",
+            "mesh_hz",
+            "harmonic",
+            "fe_rad",
+            "lumped_rad",
+            "lumped_over_fe_minus_1",
+            "lumped_rigid_gears_rad",
+            "rigid_over_fe_minus_1",
+        ],
+        summary.speeds.iter().flat_map(|s| {
+            (0..s.fe_harmonics_rad.len()).map(move |n| {
+                vec![
+                    format!("{:.1}", s.speed_rpm),
+                    format!("{:.2}", s.mesh_hz),
+                    (n + 1).to_string(),
+                    format!("{:.4e}", s.fe_harmonics_rad[n]),
+                    format!("{:.4e}", s.lumped_harmonics_rad[n]),
+                    format!("{:+.4}", s.harmonic_error_rel[n]),
+                    format!("{:.4e}", s.lumped_rigid_harmonics_rad[n]),
+                    format!("{:+.4}", s.rigid_harmonic_error_rel[n]),
+                ]
+            })
+        }),
+    )?;
+    dir.csv(
+        "peaks.csv",
+        &[
+            "speed_rpm",
+            "window",
+            "frequency_hz",
+            "amplitude_rad",
+            "label",
+        ],
+        summary.speeds.iter().flat_map(|s| {
+            [("late", &s.fe_peaks), ("early", &s.fe_early_peaks)]
+                .into_iter()
+                .flat_map(move |(w, peaks)| {
+                    peaks.iter().map(move |p| {
+                        vec![
+                            format!("{:.1}", s.speed_rpm),
+                            w.into(),
+                            format!("{:.1}", p.frequency_hz),
+                            format!("{:.4e}", p.amplitude_rad),
+                            p.label.clone(),
+                        ]
+                    })
+                })
+        }),
+    )?;
+    for s in &summary.speeds {
+        let stem = format!("spectra_{:.0}rpm", s.speed_rpm);
+        let limit = (4.5 * s.mesh_hz).max(1.3 * summary.f_natural_fe_modal_hz);
+        let clip = |spectrum: &[(f64, f64)]| -> Vec<(f64, f64)> {
+            spectrum
+                .iter()
+                .copied()
+                .filter(|(f, _)| *f <= limit)
+                .collect()
+        };
+        dir.csv(
+            &format!("{stem}.csv"),
+            &["frequency_hz", "fe_late_rad"],
+            s.fe_spectrum
+                .iter()
+                .map(|(f, a)| vec![format!("{f:.3}"), format!("{a:.5e}")]),
+        )?;
+        // The lumped model's periodic response has lines at the mesh harmonics only: spikes.
+        let width = 0.2 * s.resolution_hz;
+        let lumped: Vec<(f64, f64)> = s
+            .lumped_harmonics_rad
+            .iter()
+            .enumerate()
+            .flat_map(|(n, a)| {
+                let f = (n + 1) as f64 * s.mesh_hz;
+                [(f - width, 0.0), (f, *a), (f + width, 0.0)]
+            })
+            .collect();
+        let labels = s
+            .fe_peaks
+            .iter()
+            .take(4)
+            .map(|p| format!("{:.0} Hz {}", p.frequency_hz, p.label))
+            .collect::<Vec<_>>()
+            .join("; ");
+        dir.chart(
+            &stem,
+            &LinePlot {
+                title: format!(
+                    "{}: DTE spectra at {:.0} rpm (f_m {:.0} Hz, f_n held {:.0} Hz): {labels}",
+                    case.name(),
+                    s.speed_rpm,
+                    s.mesh_hz,
+                    summary.f_natural_fe_modal_driver_held_hz
+                ),
+                x_label: "frequency [Hz]".into(),
+                y_label: "amplitude [rad]".into(),
+                series: vec![
+                    ("explicit FE, late window".into(), clip(&s.fe_spectrum)),
+                    (
+                        "explicit FE, early window".into(),
+                        clip(&s.fe_early_spectrum),
+                    ),
+                    ("lumped, k from FE, rigid rims (harmonics)".into(), lumped),
+                ],
+            },
+        )?;
+    }
+    let mut table = String::from("| boundary | method | mesh mode [Hz] |\n|---|---|---|\n");
+    for row in &rows {
+        table += &format!("| {} | {} | {} |\n", row[0], row[1], row[2]);
+    }
+    table += "\n| speed [rpm] | f_m [Hz] | f_m/f_n | FE peaks (late) | FE peaks (early) | harmonics FE [rad] | lumped/FE - 1 (rims) | (rigid gears) |\n|---|---|---|---|---|---|---|---|\n";
+    for s in &summary.speeds {
+        table += &format!(
+            "| {:.0} | {:.0} | {:.2} | {} | {} | {} | {} | {} |\n",
+            s.speed_rpm,
+            s.mesh_hz,
+            s.mesh_over_mode,
+            peaks_text(&s.fe_peaks),
+            peaks_text(&s.fe_early_peaks),
+            s.fe_harmonics_rad
+                .iter()
+                .map(|a| format!("{a:.2e}"))
+                .collect::<Vec<_>>()
+                .join(" "),
+            s.harmonic_error_rel
+                .iter()
+                .map(|e| format!("{:+.0} %", 100.0 * e))
+                .collect::<Vec<_>>()
+                .join(" "),
+            s.rigid_harmonic_error_rel
+                .iter()
+                .map(|e| format!("{:+.0} %", 100.0 * e))
+                .collect::<Vec<_>>()
+                .join(" "),
+        );
+    }
+    dir.bytes("table.md", table.as_bytes())?;
+    Ok(table)
+}

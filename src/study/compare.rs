@@ -1,0 +1,470 @@
+//! The comparison study (`geardyn compare`): the mesh (torsional) natural frequency of the pair
+//! by every method, for both boundary conditions, and the explicit FE's DTE spectra against the
+//! lumped model's at the same speeds.
+//!
+//! # Boundary conditions and masses
+//! * **driver held** — the explicit FE's: the driver's bore follows the prescribed speed, so the
+//!   mesh mode moves the driven gear only, m = I₂/r_b2² (lumped `drive = speed`).
+//! * **both free** — the lumped model's torque drive: m_e = I₁I₂/(I₁r_b2² + I₂r_b1²). (The seed
+//!   paper's 2 433 Hz used this mass although its driver is speed-driven.)
+//!
+//! # Methods
+//! (a) √(k̄/m) with k̄ from the LTCA (secant W/δ and tangent dW/dδ, on the explicit FE's mesh)
+//! and from the FE DTE (`stiffness.csv` of a stiffness scene); (b) the Floquet frequency of the
+//! periodic lumped model with the FE k(θ) at each speed; (c) the FE modal analysis of the meshed
+//! pair about the LTCA's loaded state ([`crate::ltca::modal`]) at `positions` positions over the
+//! base pitch; (d) the spectral peaks of the explicit FE's DTE, after the ramp's ringing, each
+//! labelled as a mesh harmonic n·f_m, the mesh mode f_n or a combination n·f_m ± f_n, and an
+//! early window's against a late one's; (e) the lumped model's periodic steady state at the
+//! same speed (speed drive, FE k(θ), the FE's mesh damping, the back flanks' own k and e), its
+//! first three mesh harmonics against the FE's.
+//!
+//! # Rigid gears or rigid rims
+//! The hub-to-hub stiffness (LTCA, FE DTE) holds each body's twist between bore and root
+//! circle, c_b = r_b² (1/r_i² − 1/r_f²)/(4πGb) ([`crate::geometry::Gear::body_torsional_compliance`]).
+//! Most of a gear's inertia lies outside that twist (I ∝ ∫r³dr, the twist ∝ ∫dr/r³), so behind a
+//! free, light hub (the FE's driven hub carries only its bore nodes) the mesh mode does not
+//! stretch it. The lumped model with rigid gears puts the whole inertia behind the whole
+//! compliance and reads the mesh mode low; with that twist taken out of series
+//! (k' = 1/(1/k − c_b) for the driven gear with the driver held, both gears when both are free)
+//! it places the inertia at rigid rims. Both are reported; the speed comparison uses the rims.
+
+use serde::Serialize;
+
+use crate::case::Case;
+use crate::ltca::modal::{pair_modes, Hubs, PairModes};
+use crate::lumped::{floquet_frequency, steady_state, Drive, MeshModel};
+use crate::signal::{
+    amplitude_spectrum, hann_amplitude_spectrum, harmonic_amplitudes, spectrum_peaks,
+};
+use crate::stiffness::MeshStiffness;
+
+use super::lumped::gear_inertias;
+use super::{Progress, StudyError};
+
+/// Mesh harmonics compared.
+pub const HARMONICS: usize = 3;
+/// Spectral peaks listed per window.
+pub const PEAKS: usize = 8;
+
+/// The DTE record of one explicit FE run.
+#[derive(Debug, Clone)]
+pub struct FeDte {
+    /// Where it comes from (a run folder).
+    pub source: String,
+    pub speed_rpm: f64,
+    pub torque_nm: f64,
+    /// Uniform sampling interval [s] and the angular DTE of the driven gear [rad].
+    pub dt: f64,
+    pub dte: Vec<f64>,
+    /// End of the ramp, and the start of the statistics (the ramp's ringing decayed) [s].
+    pub ramp_end_s: f64,
+    pub statistics_start_s: f64,
+    pub wall_s: f64,
+}
+
+/// What the study needs beyond the case: FE runs and the FE's k(θ).
+pub struct CompareInput {
+    pub fe_runs: Vec<FeDte>,
+    /// k(θ), e(θ) from the FE DTE (a stiffness scene), with its source.
+    pub fe_stiffness: MeshStiffness,
+}
+
+/// The mesh-mode frequency of one boundary condition by every method [Hz].
+#[derive(Debug, Clone, Serialize)]
+pub struct Frequencies {
+    pub hubs: Hubs,
+    /// The lumped model's mass for this boundary condition [kg].
+    pub effective_mass_kg: f64,
+    pub lumped_ltca_secant_hz: f64,
+    pub lumped_ltca_tangent_hz: f64,
+    pub lumped_fe_hz: f64,
+    /// The bodies' twist (bore to root circle) behind light free hubs, taken out of the FE k:
+    /// the driven gear's with the driver held, both with both free [m/N], and the lumped
+    /// √(k̄'/m) with that k'(θ) = 1/(1/k − c) (rigid rims carrying the inertia).
+    pub body_twist_removed_m_per_n: f64,
+    pub lumped_fe_rim_hz: f64,
+    /// √(k̄'/m) with the LTCA's secant k̄ and the same body twist out: the FE modal's own
+    /// contact (hard), so it isolates the reduction from the FE's penalty compliance.
+    pub lumped_ltca_rim_hz: f64,
+    /// Floquet frequency of the lumped model with the FE k(θ), per FE speed: (rpm, Hz).
+    pub floquet_hz: Vec<(f64, f64)>,
+    /// FE modal mesh mode per position: (driver rotation [deg], Hz), and its mean.
+    pub fe_modal_hz: Vec<(f64, f64)>,
+    pub fe_modal_mean_hz: f64,
+    /// The lumped √(k̄/m) with the FE k̄ over the FE modal mean, minus 1: rigid gears, and
+    /// rigid rims (body twist behind light free hubs out).
+    pub lumped_fe_over_modal_rel: f64,
+    pub lumped_fe_rim_over_modal_rel: f64,
+}
+
+/// A labelled spectral line.
+#[derive(Debug, Clone, Serialize)]
+pub struct Peak {
+    pub frequency_hz: f64,
+    pub amplitude_rad: f64,
+    /// `n f_m`, `f_n`, `n f_m + f_n`, `n f_m - f_n`, or `?` when none is within 1.5 bins.
+    pub label: String,
+}
+
+/// One speed: the FE DTE spectrum against the lumped model's.
+#[derive(Debug, Clone, Serialize)]
+pub struct SpeedComparison {
+    pub speed_rpm: f64,
+    pub mesh_hz: f64,
+    pub source: String,
+    /// Spectral resolution of the late window [Hz].
+    pub resolution_hz: f64,
+    /// Late window (the statistics window) and early window (ramp end to the statistics start,
+    /// or the first half after the ramp when that is shorter than 3 mesh periods) [s].
+    pub late_window_s: (f64, f64),
+    pub early_window_s: (f64, f64),
+    pub fe_peaks: Vec<Peak>,
+    pub fe_early_peaks: Vec<Peak>,
+    /// Amplitudes of the first mesh harmonics [rad]: FE (late window), lumped (steady state).
+    pub fe_harmonics_rad: Vec<f64>,
+    pub lumped_harmonics_rad: Vec<f64>,
+    pub harmonic_error_rel: Vec<f64>,
+    /// The same with rigid gears (the FE k as it is, body twist included).
+    pub lumped_rigid_harmonics_rad: Vec<f64>,
+    pub rigid_harmonic_error_rel: Vec<f64>,
+    pub lumped_converged: bool,
+    pub lumped_separated: bool,
+    /// f_mesh over the FE modal mesh mode (driver held).
+    pub mesh_over_mode: f64,
+    #[serde(skip)]
+    pub fe_spectrum: Vec<(f64, f64)>,
+    #[serde(skip)]
+    pub fe_early_spectrum: Vec<(f64, f64)>,
+}
+
+/// Headline numbers (`summary.json`).
+#[derive(Debug, Clone, Serialize)]
+pub struct CompareSummary {
+    pub case: String,
+    /// Mesh frequency of the first FE run [Hz].
+    pub f_mesh_hz: f64,
+    /// Both gears free (m_e): lumped √(k̄_FE/m_e), FE modal mean.
+    pub f_natural_lumped_hz: f64,
+    pub f_natural_fe_modal_hz: f64,
+    /// Driver held (I₂/r_b2²).
+    pub f_natural_lumped_driver_held_hz: f64,
+    pub f_natural_fe_modal_driver_held_hz: f64,
+    /// Peaks of the first FE run's DTE and the lumped model's lines at its speed [Hz].
+    pub fe_dte_peaks_hz: Vec<f64>,
+    pub lumped_dte_peaks_hz: Vec<f64>,
+    pub mean_stiffness_ltca_n_per_m: f64,
+    pub mean_tangent_stiffness_ltca_n_per_m: f64,
+    pub mean_stiffness_fe_n_per_m: f64,
+    pub fe_stiffness_source: String,
+    pub driver_held: Frequencies,
+    pub both_free: Frequencies,
+    pub speeds: Vec<SpeedComparison>,
+    /// FE modal at every position and boundary condition.
+    pub modal: Vec<PairModes>,
+    pub mesh_damping_n_s_per_m: f64,
+    pub model_note: String,
+    pub wall_s: f64,
+}
+
+/// Runs the comparison.
+pub fn run(
+    case: &Case,
+    input: &CompareInput,
+    positions: usize,
+    progress: Progress,
+) -> Result<CompareSummary, StudyError> {
+    let started = std::time::Instant::now();
+    if positions == 0 {
+        return Err(StudyError::Input("--positions must be at least 1".into()));
+    }
+    let pair = &case.pair;
+    let rb = [pair.gears[0].base_radius, pair.gears[1].base_radius];
+    let inertias = gear_inertias(case);
+    let torque = input
+        .fe_runs
+        .first()
+        .map(|r| r.torque_nm)
+        .map_or_else(|| super::load_torque(case), Ok)?;
+    let variant =
+        super::relief_variant(case, Some("none")).or_else(|_| super::relief_variant(case, None))?;
+    let (fine, coarse) = (case.fe.fine_size, case.fe.coarse_size);
+    let model = super::ltca::model_with_sizes(case, &variant.modifications, fine, coarse)?;
+
+    // (c) FE modal analysis, and the LTCA's secant and tangent stiffness at the same positions.
+    let mut modal = Vec::new();
+    let total = 2 * positions;
+    for (b, hubs) in [Hubs::DriverHeld, Hubs::BothFree].into_iter().enumerate() {
+        for j in 0..positions {
+            progress("FE modal", b * positions + j, total);
+            modal.push(pair_modes(
+                &model,
+                (j, positions),
+                torque,
+                case.ltca_material(),
+                case.material.density,
+                hubs,
+                10,
+            )?);
+        }
+    }
+    progress("FE modal", total, total);
+    let mean = |f: &dyn Fn(&PairModes) -> f64, hubs: Hubs| {
+        let values: Vec<f64> = modal.iter().filter(|m| m.hubs == hubs).map(f).collect();
+        values.iter().sum::<f64>() / values.len() as f64
+    };
+    let k_secant = mean(&|m| m.ltca_mesh_stiffness, Hubs::DriverHeld);
+    let k_tangent = mean(&|m| m.ltca_tangent_stiffness, Hubs::DriverHeld);
+    let k_fe = input.fe_stiffness.mean();
+    let modal_mean = |hubs| mean(&|m| m.modes[m.mesh_mode].frequency_hz, hubs);
+    let held_modal = modal_mean(Hubs::DriverHeld);
+
+    // The lumped model on the FE k(θ), the FE's mesh damping (ζ on the LTCA k̄ and the driven
+    // inertia, as the explicit scene sizes it), the back flanks' own k and e.
+    let zeta = case.fe.mesh_damping_ratio;
+    let m_held = Drive::Speed.effective_mass(inertias, rb);
+    let damping = 2.0 * zeta * (k_secant * m_held).sqrt();
+    // Body twist: bore to root circle, along the line of action (r_b² φ/T).
+    let twist: [f64; 2] = std::array::from_fn(|g| {
+        rb[g]
+            * rb[g]
+            * pair.gears[g].body_torsional_compliance(
+                case.material.youngs_modulus,
+                case.material.poisson_ratio,
+            )
+    });
+    let removed = |drive: Drive| match drive {
+        Drive::Speed => twist[1],
+        Drive::Torque => twist[0] + twist[1],
+    };
+    let rim_stiffness = |drive: Drive| {
+        input
+            .fe_stiffness
+            .without_series_compliance(removed(drive))
+            .ok_or_else(|| {
+                StudyError::Input(format!(
+                    "the gear bodies' twist ({:.3e} m/N) is not below the FE mesh compliance: check bore_radius_mm and the stiffness file",
+                    removed(drive)
+                ))
+            })
+    };
+    let lumped = |drive: Drive, mesh: MeshStiffness| MeshModel {
+        effective_mass: drive.effective_mass(inertias, rb),
+        mesh,
+        damping,
+        force: torque / rb[1],
+        backlash: Some(pair.backlash_normal.max(0.0)),
+        bearings: None,
+        back_reflection: Some(pair.back_flank_reflection() - 2.0 * input.fe_stiffness.origin),
+    };
+    let frequencies = |hubs: Hubs, drive: Drive| -> Result<Frequencies, StudyError> {
+        let rim = rim_stiffness(drive)?;
+        let k_rim = rim.mean();
+        let model = lumped(drive, rim);
+        let m = model.effective_mass;
+        let hz = |k: f64| (k / m).sqrt() / std::f64::consts::TAU;
+        let floquet_hz = input
+            .fe_runs
+            .iter()
+            .map(|r| {
+                let speed = r.speed_rpm * std::f64::consts::TAU / 60.0;
+                let steps = crate::sweep::steps_per_period(&model, speed);
+                let w = floquet_frequency(&model, speed, steps);
+                (r.speed_rpm, w / std::f64::consts::TAU)
+            })
+            .collect();
+        let fe_modal_hz = modal
+            .iter()
+            .filter(|p| p.hubs == hubs)
+            .map(|p| {
+                (
+                    p.driver_rotation.to_degrees(),
+                    p.modes[p.mesh_mode].frequency_hz,
+                )
+            })
+            .collect();
+        let fe_modal_mean_hz = modal_mean(hubs);
+        Ok(Frequencies {
+            hubs,
+            effective_mass_kg: m,
+            lumped_ltca_secant_hz: hz(k_secant),
+            lumped_ltca_tangent_hz: hz(k_tangent),
+            lumped_fe_hz: hz(k_fe),
+            body_twist_removed_m_per_n: removed(drive),
+            lumped_fe_rim_hz: hz(k_rim),
+            lumped_ltca_rim_hz: hz(1.0 / (1.0 / k_secant - removed(drive))),
+            floquet_hz,
+            fe_modal_hz,
+            fe_modal_mean_hz,
+            lumped_fe_over_modal_rel: hz(k_fe) / fe_modal_mean_hz - 1.0,
+            lumped_fe_rim_over_modal_rel: hz(k_rim) / fe_modal_mean_hz - 1.0,
+        })
+    };
+    let driver_held = frequencies(Hubs::DriverHeld, Drive::Speed)?;
+    let both_free = frequencies(Hubs::BothFree, Drive::Torque)?;
+
+    // (d), (e) per FE speed: the explicit FE holds the driver's bore and drives a light driven
+    // hub, so its lumped twin is the speed drive with the driven body's twist out.
+    let rim_model = lumped(Drive::Speed, rim_stiffness(Drive::Speed)?);
+    let rigid_model = lumped(Drive::Speed, input.fe_stiffness.clone());
+    let teeth = pair.gears[0].teeth() as f64;
+    let speeds: Vec<SpeedComparison> = input
+        .fe_runs
+        .iter()
+        .map(|run| compare_speed(run, [&rim_model, &rigid_model], teeth, rb[1], held_modal))
+        .collect();
+    let first = speeds.first();
+    Ok(CompareSummary {
+        case: case.name().to_string(),
+        f_mesh_hz: first.map_or(f64::NAN, |s| s.mesh_hz),
+        f_natural_lumped_hz: both_free.lumped_fe_rim_hz,
+        f_natural_fe_modal_hz: both_free.fe_modal_mean_hz,
+        f_natural_lumped_driver_held_hz: driver_held.lumped_fe_rim_hz,
+        f_natural_fe_modal_driver_held_hz: driver_held.fe_modal_mean_hz,
+        fe_dte_peaks_hz: first.map_or(Vec::new(), |s| s.fe_peaks.iter().map(|p| p.frequency_hz).collect()),
+        lumped_dte_peaks_hz: first.map_or(Vec::new(), |s| {
+            let mut lines: Vec<(f64, f64)> = s
+                .lumped_harmonics_rad
+                .iter()
+                .enumerate()
+                .map(|(n, a)| ((n + 1) as f64 * s.mesh_hz, *a))
+                .collect();
+            lines.sort_by(|a, b| b.1.total_cmp(&a.1));
+            lines.iter().map(|l| l.0).collect()
+        }),
+        mean_stiffness_ltca_n_per_m: k_secant,
+        mean_tangent_stiffness_ltca_n_per_m: k_tangent,
+        mean_stiffness_fe_n_per_m: k_fe,
+        fe_stiffness_source: input.fe_stiffness.source.clone(),
+        driver_held,
+        both_free,
+        speeds,
+        modal,
+        mesh_damping_n_s_per_m: damping,
+        model_note: format!(
+            "FE modal: the explicit FE's mesh ({:.2} mm flanks, {:.2} mm body), consistent mass, hubs rigid with the bore nodes' inertia, the LTCA's active contact points tied along their normals, relief none, {positions} positions; lumped: 1 DOF, rigid gears (I = {:.4e} / {:.4e} kg m2), k(theta) from the FE DTE, zeta = {zeta} on the LTCA k and the driven inertia, back flanks with their own k and e",
+            fine * 1e3,
+            coarse * 1e3,
+            inertias[0],
+            inertias[1]
+        ),
+        wall_s: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// The FE run's spectra and harmonics against the lumped steady state at its speed.
+fn compare_speed(
+    run: &FeDte,
+    [model, rigid]: [&MeshModel; 2],
+    teeth: f64,
+    rb2: f64,
+    mesh_mode_hz: f64,
+) -> SpeedComparison {
+    let mesh_hz = run.speed_rpm / 60.0 * teeth;
+    let index = |t: f64| ((t / run.dt).round().max(0.0) as usize).min(run.dte.len());
+    let (ramp, stats, end) = (
+        index(run.ramp_end_s),
+        index(run.statistics_start_s),
+        run.dte.len(),
+    );
+    let late = &run.dte[stats..end];
+    // Early: the ringing after the ramp, or the first half after it when that is too short.
+    let min_len = (3.0 / (mesh_hz * run.dt)).ceil() as usize;
+    let early_end = if stats - ramp >= min_len {
+        stats
+    } else {
+        ramp + (end - ramp) / 2
+    };
+    let early = &run.dte[ramp..early_end];
+    let fe_spectrum = hann_amplitude_spectrum(late, run.dt);
+    let fe_early_spectrum = hann_amplitude_spectrum(early, run.dt);
+    let resolution_hz = 1.0 / (late.len().max(1) as f64 * run.dt);
+    let label = |f: f64, resolution: f64| label_line(f, mesh_hz, mesh_mode_hz, 1.5 * resolution);
+    let peaks = |spectrum: &[(f64, f64)], resolution: f64| {
+        spectrum_peaks(spectrum, 0.5 * mesh_hz, PEAKS)
+            .into_iter()
+            .map(|(f, a)| Peak {
+                frequency_hz: f,
+                amplitude_rad: a,
+                label: label(f, resolution),
+            })
+            .collect::<Vec<_>>()
+    };
+    let fe_peaks = peaks(&fe_spectrum, resolution_hz);
+    let early_resolution = 1.0 / (early.len().max(1) as f64 * run.dt);
+    let fe_early_peaks = peaks(&fe_early_spectrum, early_resolution);
+    let fe_harmonics_rad = harmonic_amplitudes(late, run.dt, mesh_hz, HARMONICS);
+
+    let speed = run.speed_rpm * std::f64::consts::TAU / 60.0;
+    let harmonics = |model: &MeshModel| {
+        let steps = crate::sweep::steps_per_period(model, speed);
+        let steady = steady_state(model, speed, steps, model.static_state(), 1e-9, 2000);
+        let lines = amplitude_spectrum(&steady.displacement);
+        let amplitudes: Vec<f64> = (0..HARMONICS)
+            .map(|n| lines.get(n).copied().unwrap_or(0.0) / rb2)
+            .collect();
+        let errors: Vec<f64> = amplitudes
+            .iter()
+            .zip(&fe_harmonics_rad)
+            .map(|(l, f)| l / f - 1.0)
+            .collect();
+        (steady, amplitudes, errors)
+    };
+    let (steady, lumped_harmonics_rad, harmonic_error_rel) = harmonics(model);
+    let (_, lumped_rigid_harmonics_rad, rigid_harmonic_error_rel) = harmonics(rigid);
+    SpeedComparison {
+        speed_rpm: run.speed_rpm,
+        mesh_hz,
+        source: run.source.clone(),
+        resolution_hz,
+        late_window_s: (stats as f64 * run.dt, end as f64 * run.dt),
+        early_window_s: (ramp as f64 * run.dt, early_end as f64 * run.dt),
+        fe_peaks,
+        fe_early_peaks,
+        fe_harmonics_rad,
+        lumped_harmonics_rad,
+        harmonic_error_rel,
+        lumped_rigid_harmonics_rad,
+        rigid_harmonic_error_rel,
+        lumped_converged: steady.converged,
+        lumped_separated: steady.separated,
+        mesh_over_mode: mesh_hz / mesh_mode_hz,
+        fe_spectrum,
+        fe_early_spectrum,
+    }
+}
+
+/// Names a spectral line: the nearest of n·f_m (n = 1 … 8), f_n and n·f_m ± f_n (n = 1 … 4)
+/// within `tolerance` [Hz], or `?`.
+pub fn label_line(f: f64, mesh_hz: f64, mode_hz: f64, tolerance: f64) -> String {
+    let mut candidates: Vec<(f64, String)> = (1..=8)
+        .map(|n| (n as f64 * mesh_hz, format!("{n} f_m")))
+        .collect();
+    candidates.push((mode_hz, "f_n".into()));
+    for n in 1..=4 {
+        let base = n as f64 * mesh_hz;
+        candidates.push((base + mode_hz, format!("{n} f_m + f_n")));
+        candidates.push(((base - mode_hz).abs(), format!("{n} f_m - f_n")));
+    }
+    candidates
+        .into_iter()
+        .filter(|(c, _)| (c - f).abs() <= tolerance)
+        .min_by(|a, b| (a.0 - f).abs().total_cmp(&(b.0 - f).abs()))
+        .map_or_else(|| "?".into(), |(_, name)| name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lines_are_named_by_the_nearest_combination() {
+        let (fm, fn_) = (1800.0, 2880.0);
+        assert_eq!(label_line(1805.0, fm, fn_, 100.0), "1 f_m");
+        assert_eq!(label_line(3590.0, fm, fn_, 100.0), "2 f_m");
+        assert_eq!(label_line(2870.0, fm, fn_, 100.0), "f_n");
+        assert_eq!(label_line(1080.0, fm, fn_, 100.0), "1 f_m - f_n");
+        assert_eq!(label_line(4700.0, fm, fn_, 100.0), "1 f_m + f_n");
+        assert_eq!(label_line(2300.0, fm, fn_, 100.0), "?");
+    }
+}

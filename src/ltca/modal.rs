@@ -22,9 +22,12 @@
 //! A unit torque on the driven hub loads the mesh. Its static hub rotation is the sum over the
 //! modes of Γᵢ²/ωᵢ² (Γᵢ = φᵢᵀ f, modal participation of the torque): each mode's share of the
 //! mesh's torsional compliance. The mesh mode is the elastic mode with the largest share; the
-//! modes above it are the tooth and body modes. The static check: the same K gives the hub
-//! rotation under the torque directly, its inverse the tangent mesh stiffness of this model,
-//! which [`PairModes::static_mesh_stiffness`] holds against the LTCA's condensed tangent.
+//! modes above it are the tooth and body modes. [`PairModes::static_mesh_stiffness`] is the
+//! same K's static hub-to-hub tangent, held against the LTCA's condensed aᵀC⁻¹a.
+//!
+//! The mesh mode lies above √(k_static/m) with rigid-gear inertias: the hub-to-hub stiffness
+//! holds each body's twist between bore and teeth, while most of the inertia sits outside it;
+//! behind a light free hub that twist does not take part (see [`crate::study::compare`]).
 
 use nalgebra::{Point2, Vector2};
 

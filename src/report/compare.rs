@@ -264,6 +264,37 @@ pub fn write(dir: OutputDir, case: &Case, summary: &CompareSummary) -> Result<St
             },
         )?;
     }
+    if let Some(p) = &summary.paper_stiffness {
+        let clip = |spectrum: &[(f64, f64)]| -> Vec<(f64, f64)> {
+            spectrum
+                .iter()
+                .copied()
+                .filter(|(f, _)| *f <= 5.0 * p.mesh_hz)
+                .collect()
+        };
+        dir.csv(
+            "paper_stiffness_spectrum.csv",
+            &["frequency_hz", "late_rad"],
+            p.late_spectrum
+                .iter()
+                .map(|(f, a)| vec![format!("{f:.3}"), format!("{a:.5e}")]),
+        )?;
+        dir.chart(
+            "paper_stiffness_spectra",
+            &LinePlot {
+                title: format!(
+                    "PAPER-STIFFNESS STUDY (k = {:.4e} N/m, lumped, speed drive) at {:.0} rpm: f_n held {:.0} Hz, free {:.0} Hz",
+                    p.mean_stiffness_n_per_m, p.speed_rpm, p.f_driver_held_hz, p.f_both_free_hz
+                ),
+                x_label: "frequency [Hz]".into(),
+                y_label: "amplitude [rad]".into(),
+                series: vec![
+                    ("lumped, late window".into(), clip(&p.late_spectrum)),
+                    ("lumped, early window".into(), clip(&p.early_spectrum)),
+                ],
+            },
+        )?;
+    }
     let mut table = String::from("| boundary | method | mesh mode [Hz] |\n|---|---|---|\n");
     for row in &rows {
         table += &format!("| {} | {} | {} |\n", row[0], row[1], row[2]);
@@ -292,6 +323,18 @@ pub fn write(dir: OutputDir, case: &Case, summary: &CompareSummary) -> Result<St
                 .map(|e| format!("{:+.0} %", 100.0 * e))
                 .collect::<Vec<_>>()
                 .join(" "),
+        );
+    }
+    if let Some(p) = &summary.paper_stiffness {
+        table += &format!(
+            "\n{}\n\n| rigid gears, k = {:.4e} N/m | both free {:.0} Hz | driver held {:.0} Hz | {:.0} rpm peaks (late): {} | (early): {} |\n",
+            p.note,
+            p.mean_stiffness_n_per_m,
+            p.f_both_free_hz,
+            p.f_driver_held_hz,
+            p.speed_rpm,
+            peaks_text(&p.late_peaks),
+            peaks_text(&p.early_peaks)
         );
     }
     dir.bytes("table.md", table.as_bytes())?;

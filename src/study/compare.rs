@@ -138,6 +138,36 @@ pub struct SpeedComparison {
     pub fe_early_spectrum: Vec<(f64, f64)>,
 }
 
+/// The seed paper's mean mesh stiffness T/(θ̄ R_b2²) = 1.3427e8 N/m (mean angular deflection
+/// 3.695e-4 rad at 143.6 N·m). Used only by the labelled `paper-stiffness` study, never as a
+/// default: our LTCA and FE give about 4e8 N/m for the same pair.
+pub const PAPER_MEAN_STIFFNESS: f64 = 1.3427e8;
+
+/// The `paper-stiffness` study: our lumped dynamics given the paper's stiffness, to test
+/// whether they reproduce the paper's frequency pattern (mesh mode 2 433 Hz with m_e; DTE lines
+/// at 1 800 and 2 200 Hz at 3 000 rpm).
+#[derive(Debug, Clone, Serialize)]
+pub struct PaperStiffness {
+    pub note: String,
+    /// The compliance put in series with the FE k(θ) so that its mean is the paper's [m/N].
+    pub series_compliance_m_per_n: f64,
+    pub mean_stiffness_n_per_m: f64,
+    /// √(k̄/m) with rigid gears: both free (the paper's m_e) and driver held [Hz].
+    pub f_both_free_hz: f64,
+    pub f_driver_held_hz: f64,
+    pub speed_rpm: f64,
+    pub mesh_hz: f64,
+    /// A 0.03 s lumped transient at constant speed (speed drive) from the static state at the
+    /// mean stiffness: peaks of the late window (from 0.0158 s, as the FE's 3000 rpm window) and
+    /// of the early one, labelled with f_n = the driver-held frequency.
+    pub late_peaks: Vec<Peak>,
+    pub early_peaks: Vec<Peak>,
+    #[serde(skip)]
+    pub late_spectrum: Vec<(f64, f64)>,
+    #[serde(skip)]
+    pub early_spectrum: Vec<(f64, f64)>,
+}
+
 /// Headline numbers (`summary.json`).
 #[derive(Debug, Clone, Serialize)]
 pub struct CompareSummary {
@@ -163,6 +193,8 @@ pub struct CompareSummary {
     /// FE modal at every position and boundary condition.
     pub modal: Vec<PairModes>,
     pub mesh_damping_n_s_per_m: f64,
+    /// Only with `--paper-stiffness`.
+    pub paper_stiffness: Option<PaperStiffness>,
     pub model_note: String,
     pub wall_s: f64,
 }
@@ -172,6 +204,7 @@ pub fn run(
     case: &Case,
     input: &CompareInput,
     positions: usize,
+    paper_stiffness: bool,
     progress: Progress,
 ) -> Result<CompareSummary, StudyError> {
     let started = std::time::Instant::now();
@@ -314,6 +347,10 @@ pub fn run(
         .map(|run| compare_speed(run, [&rim_model, &rigid_model], teeth, rb[1], held_modal))
         .collect();
     let first = speeds.first();
+    let paper = paper_stiffness.then(|| {
+        let speed_rpm = first.map_or(3000.0, |s| s.speed_rpm);
+        paper_stiffness_study(&rigid_model, inertias, rb, teeth, speed_rpm)
+    });
     Ok(CompareSummary {
         case: case.name().to_string(),
         f_mesh_hz: first.map_or(f64::NAN, |s| s.mesh_hz),
@@ -341,6 +378,7 @@ pub fn run(
         speeds,
         modal,
         mesh_damping_n_s_per_m: damping,
+        paper_stiffness: paper,
         model_note: format!(
             "FE modal: the explicit FE's mesh ({:.2} mm flanks, {:.2} mm body), consistent mass, hubs rigid with the bore nodes' inertia, the LTCA's active contact points tied along their normals, relief none, {positions} positions; lumped: 1 DOF, rigid gears (I = {:.4e} / {:.4e} kg m2), k(theta) from the FE DTE, zeta = {zeta} on the LTCA k and the driven inertia, back flanks with their own k and e",
             fine * 1e3,
@@ -431,6 +469,84 @@ fn compare_speed(
         mesh_over_mode: mesh_hz / mesh_mode_hz,
         fe_spectrum,
         fe_early_spectrum,
+    }
+}
+
+/// The lumped speed-drive model `model` with a compliance in series that brings its mean
+/// stiffness to [`PAPER_MEAN_STIFFNESS`], run for 0.03 s at `speed_rpm`.
+fn paper_stiffness_study(
+    model: &MeshModel,
+    inertias: [f64; 2],
+    rb: [f64; 2],
+    teeth: f64,
+    speed_rpm: f64,
+) -> PaperStiffness {
+    let softened = |c: f64| {
+        let mut mesh = model.mesh.clone();
+        mesh.stiffness
+            .values
+            .iter_mut()
+            .for_each(|k| *k = 1.0 / (1.0 / *k + c));
+        mesh
+    };
+    // The mean falls monotonically with c: bisection on [0, 1/k_paper].
+    let (mut lo, mut hi) = (0.0, 1.0 / PAPER_MEAN_STIFFNESS);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if softened(mid).mean() > PAPER_MEAN_STIFFNESS {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let c = 0.5 * (lo + hi);
+    let mut paper = model.clone();
+    paper.mesh = softened(c);
+    paper.mesh.source = format!(
+        "paper-stiffness: {} + {c:.4e} m/N in series",
+        model.mesh.source
+    );
+    let k = paper.mesh.mean();
+    paper.damping = model.damping * (k / model.mesh.mean()).sqrt();
+    let hz = |m: f64| (k / m).sqrt() / std::f64::consts::TAU;
+    let (f_both_free_hz, f_driver_held_hz) = (
+        hz(Drive::Torque.effective_mass(inertias, rb)),
+        hz(Drive::Speed.effective_mass(inertias, rb)),
+    );
+    let speed = speed_rpm * std::f64::consts::TAU / 60.0;
+    let mesh_hz = speed_rpm / 60.0 * teeth;
+    let record = crate::lumped::run_up(&paper, speed, speed, 0.03, 30_000);
+    let dt = record.time[1] - record.time[0];
+    let split = ((0.0158 / dt) as usize).min(record.time.len());
+    let dte: Vec<f64> = record.displacement.iter().map(|p| p / rb[1]).collect();
+    let (early, late) = dte.split_at(split);
+    let late_spectrum = hann_amplitude_spectrum(late, dt);
+    let early_spectrum = hann_amplitude_spectrum(early, dt);
+    let peaks = |spectrum: &[(f64, f64)], length: usize| {
+        let resolution = 1.0 / (length.max(1) as f64 * dt);
+        spectrum_peaks(spectrum, 0.5 * mesh_hz, PEAKS)
+            .into_iter()
+            .map(|(f, a)| Peak {
+                frequency_hz: f,
+                amplitude_rad: a,
+                label: label_line(f, mesh_hz, f_driver_held_hz, 1.5 * resolution),
+            })
+            .collect()
+    };
+    PaperStiffness {
+        note: format!(
+            "PAPER-STIFFNESS STUDY, not our prediction: the FE k(theta) with {c:.4e} m/N in series so that its mean is the seed paper's {PAPER_MEAN_STIFFNESS:.4e} N/m; lumped, rigid gears, speed drive, the FE's damping ratio"
+        ),
+        series_compliance_m_per_n: c,
+        mean_stiffness_n_per_m: k,
+        f_both_free_hz,
+        f_driver_held_hz,
+        speed_rpm,
+        mesh_hz,
+        late_peaks: peaks(&late_spectrum, late.len()),
+        early_peaks: peaks(&early_spectrum, early.len()),
+        late_spectrum,
+        early_spectrum,
     }
 }
 

@@ -131,7 +131,7 @@ enum Command {
         #[arg(long, value_name = "FILE")]
         fe_stiffness: Option<PathBuf>,
         /// Mesh positions over one base pitch for the FE modal analysis.
-        #[arg(long, default_value_t = 8, value_name = "N")]
+        #[arg(long, default_value_t = 16, value_name = "N")]
         positions: usize,
         /// Also the labelled paper-stiffness study: the lumped model given the seed paper's
         /// mean stiffness (1.3427e8 N/m, by a compliance in series), never a default.

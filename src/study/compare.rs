@@ -103,7 +103,8 @@ pub struct Frequencies {
 pub struct Peak {
     pub frequency_hz: f64,
     pub amplitude_rad: f64,
-    /// `n f_m`, `f_n`, `n f_m + f_n`, `n f_m - f_n`, or `?` when none is within 1.5 bins.
+    /// `n f_m`, `f_n` (FE modal mesh mode, driver held), `n f_m + f_n`, `n f_m - f_n`, `f_b`
+    /// (the first tooth/body mode), or `?` when none is within 1.5 bins.
     pub label: String,
 }
 
@@ -251,6 +252,13 @@ pub fn run(
     let k_fe = input.fe_stiffness.mean();
     let modal_mean = |hubs| mean(&|m| m.modes[m.mesh_mode].frequency_hz, hubs);
     let held_modal = modal_mean(Hubs::DriverHeld);
+    // The first tooth/body mode above the mesh mode, driver held, mean over the positions.
+    let body: Vec<f64> = modal
+        .iter()
+        .filter(|m| m.hubs == Hubs::DriverHeld)
+        .filter_map(|m| m.modes.get(m.mesh_mode + 1).map(|b| b.frequency_hz))
+        .collect();
+    let held_body = (!body.is_empty()).then(|| body.iter().sum::<f64>() / body.len() as f64);
 
     // The lumped model on the FE k(θ), the FE's mesh damping (ζ on the LTCA k̄ and the driven
     // inertia, as the explicit scene sizes it), the back flanks' own k and e.
@@ -344,7 +352,15 @@ pub fn run(
     let speeds: Vec<SpeedComparison> = input
         .fe_runs
         .iter()
-        .map(|run| compare_speed(run, [&rim_model, &rigid_model], teeth, rb[1], held_modal))
+        .map(|run| {
+            compare_speed(
+                run,
+                [&rim_model, &rigid_model],
+                teeth,
+                rb[1],
+                (held_modal, held_body),
+            )
+        })
         .collect();
     let first = speeds.first();
     let paper = paper_stiffness.then(|| {
@@ -396,7 +412,7 @@ fn compare_speed(
     [model, rigid]: [&MeshModel; 2],
     teeth: f64,
     rb2: f64,
-    mesh_mode_hz: f64,
+    (mesh_mode_hz, body_hz): (f64, Option<f64>),
 ) -> SpeedComparison {
     let mesh_hz = run.speed_rpm / 60.0 * teeth;
     let index = |t: f64| ((t / run.dt).round().max(0.0) as usize).min(run.dte.len());
@@ -417,7 +433,8 @@ fn compare_speed(
     let fe_spectrum = hann_amplitude_spectrum(late, run.dt);
     let fe_early_spectrum = hann_amplitude_spectrum(early, run.dt);
     let resolution_hz = 1.0 / (late.len().max(1) as f64 * run.dt);
-    let label = |f: f64, resolution: f64| label_line(f, mesh_hz, mesh_mode_hz, 1.5 * resolution);
+    let label =
+        |f: f64, resolution: f64| label_line(f, mesh_hz, mesh_mode_hz, body_hz, 1.5 * resolution);
     let peaks = |spectrum: &[(f64, f64)], resolution: f64| {
         spectrum_peaks(spectrum, 0.5 * mesh_hz, PEAKS)
             .into_iter()
@@ -529,7 +546,7 @@ fn paper_stiffness_study(
             .map(|(f, a)| Peak {
                 frequency_hz: f,
                 amplitude_rad: a,
-                label: label_line(f, mesh_hz, f_driver_held_hz, 1.5 * resolution),
+                label: label_line(f, mesh_hz, f_driver_held_hz, None, 1.5 * resolution),
             })
             .collect()
     };
@@ -550,13 +567,22 @@ fn paper_stiffness_study(
     }
 }
 
-/// Names a spectral line: the nearest of n·f_m (n = 1 … 8), f_n and n·f_m ± f_n (n = 1 … 4)
-/// within `tolerance` [Hz], or `?`.
-pub fn label_line(f: f64, mesh_hz: f64, mode_hz: f64, tolerance: f64) -> String {
+/// Names a spectral line: the nearest of n·f_m (n = 1 … 8), f_n and n·f_m ± f_n (n = 1 … 4),
+/// and the first tooth/body mode f_b when given, within `tolerance` [Hz], or `?`.
+pub fn label_line(
+    f: f64,
+    mesh_hz: f64,
+    mode_hz: f64,
+    body_hz: Option<f64>,
+    tolerance: f64,
+) -> String {
     let mut candidates: Vec<(f64, String)> = (1..=8)
         .map(|n| (n as f64 * mesh_hz, format!("{n} f_m")))
         .collect();
     candidates.push((mode_hz, "f_n".into()));
+    if let Some(b) = body_hz {
+        candidates.push((b, "f_b".into()));
+    }
     for n in 1..=4 {
         let base = n as f64 * mesh_hz;
         candidates.push((base + mode_hz, format!("{n} f_m + f_n")));
@@ -576,11 +602,13 @@ mod tests {
     #[test]
     fn lines_are_named_by_the_nearest_combination() {
         let (fm, fn_) = (1800.0, 2880.0);
-        assert_eq!(label_line(1805.0, fm, fn_, 100.0), "1 f_m");
-        assert_eq!(label_line(3590.0, fm, fn_, 100.0), "2 f_m");
-        assert_eq!(label_line(2870.0, fm, fn_, 100.0), "f_n");
-        assert_eq!(label_line(1080.0, fm, fn_, 100.0), "1 f_m - f_n");
-        assert_eq!(label_line(4700.0, fm, fn_, 100.0), "1 f_m + f_n");
-        assert_eq!(label_line(2300.0, fm, fn_, 100.0), "?");
+        let fb = Some(10_900.0);
+        assert_eq!(label_line(1805.0, fm, fn_, fb, 100.0), "1 f_m");
+        assert_eq!(label_line(3590.0, fm, fn_, fb, 100.0), "2 f_m");
+        assert_eq!(label_line(2870.0, fm, fn_, fb, 100.0), "f_n");
+        assert_eq!(label_line(1080.0, fm, fn_, fb, 100.0), "1 f_m - f_n");
+        assert_eq!(label_line(4700.0, fm, fn_, fb, 100.0), "1 f_m + f_n");
+        assert_eq!(label_line(10_870.0, fm, fn_, fb, 100.0), "f_b");
+        assert_eq!(label_line(2300.0, fm, fn_, fb, 100.0), "?");
     }
 }

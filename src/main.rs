@@ -137,6 +137,15 @@ enum Command {
         /// mean stiffness (1.3427e8 N/m, by a compliance in series), never a default.
         #[arg(long)]
         paper_stiffness: bool,
+        /// Also the accuracy-versus-cost chart (accuracy_cost.{csv,md,png,svg}): LTCA at three
+        /// mesh levels, ISO, potential energy and explicit FE stiffness runs, against the finest
+        /// unscaled FE run and the first FE run's DTE.
+        #[arg(long)]
+        chart: bool,
+        /// Finished stiffness-scene folders for the chart (repeatable); default: run the
+        /// stiffness scene at 1.0 and 0.7 mm flanks, scaled and unscaled, into DIR/chart-fe-*.
+        #[arg(long = "chart-fe-run", value_name = "DIR")]
+        chart_fe_runs: Vec<PathBuf>,
     },
     /// Validation studies too wide for the test suite; each writes a table (CSV and Markdown)
     /// and summary.json.
@@ -224,11 +233,14 @@ fn main() -> ExitCode {
             fe_stiffness,
             positions,
             paper_stiffness,
+            chart,
+            chart_fe_runs,
         } => compare(
             &common,
             &speed_rpm,
             &fe_runs,
             (fe_stiffness.as_deref(), positions, paper_stiffness),
+            chart.then_some(&chart_fe_runs[..]),
         ),
         Command::Case { case, set } => Case::load_with(case.as_deref(), &set)
             .map(|c| print!("{}", c.text))
@@ -408,6 +420,7 @@ fn compare(
     speeds: &[f64],
     fe_runs: &[PathBuf],
     (fe_stiffness, positions, paper): (Option<&Path>, usize, bool),
+    chart: Option<&[PathBuf]>,
 ) -> Result<()> {
     use report::compare::read_fe_run;
     let case = load(args, Vec::new())?;
@@ -454,7 +467,54 @@ fn compare(
     })?;
     bar.finish_and_clear();
     let table = report::compare::write(OutputDir(&dir), &case, &summary)?;
-    println!("{table}wrote {}", dir.display());
+    println!("{table}");
+    if let Some(folders) = chart {
+        accuracy_chart(args, &case, folders, &input.fe_runs[0], &dir)?;
+    }
+    println!("wrote {}", dir.display());
+    Ok(())
+}
+
+/// The accuracy-versus-cost chart of `compare --chart`, into `dir`.
+fn accuracy_chart(
+    args: &CommonArgs,
+    case: &Case,
+    folders: &[PathBuf],
+    dte_run: &study::compare::FeDte,
+    dir: &Path,
+) -> Result<()> {
+    let mut folders = folders.to_vec();
+    if folders.is_empty() {
+        for (mm, scaled) in [(1.0, true), (1.0, false), (0.7, true), (0.7, false)] {
+            let at_level = load(
+                args,
+                vec![
+                    Override::set("fe.explicit_fine_element_mm", mm),
+                    Override::set("fe.mass_scaling", scaled),
+                ],
+            )?;
+            let tag = if scaled { "scaled" } else { "unscaled" };
+            let out = dir.join(format!("chart-fe-{mm}-{tag}"));
+            fe_run(&at_level, study::fe::scene(&at_level, "stiffness")?, &out)?;
+            folders.push(out);
+        }
+    }
+    let pitch = case.pair.gears[0].angular_pitch();
+    let runs = folders
+        .iter()
+        .map(|d| report::compare::read_fe_stiffness_run(d, pitch).map_err(anyhow::Error::msg))
+        .collect::<Result<Vec<_>>>()?;
+    let bar = progress_bar("{msg} [{bar:40}] {pos}/{len}");
+    let chart = study::accuracy::run(case, &runs, dte_run, &|stage, done, total| {
+        bar.set_message(stage.to_string());
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    })?;
+    bar.finish_and_clear();
+    print!(
+        "{}",
+        report::compare::write_accuracy_cost(OutputDir(dir), &chart)?
+    );
     Ok(())
 }
 

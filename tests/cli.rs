@@ -832,6 +832,15 @@ fn compare_reads_a_known_fe_run_and_names_its_lines() {
     }
     let stiffness = dir.path().join("stiffness.csv");
     std::fs::write(&stiffness, table).unwrap();
+    // A stiffness run folder for the chart: the same cosine k(θ), unscaled, 0.5 mm.
+    let stiffness_run = dir.path().join("stiffness-run");
+    std::fs::create_dir_all(&stiffness_run).unwrap();
+    std::fs::copy(&stiffness, stiffness_run.join("stiffness.csv")).unwrap();
+    std::fs::write(
+        stiffness_run.join("summary.json"),
+        r#"{"fine_element_mm": 0.5, "total_wall_s": 100.0, "mass_scaling": {"factor": 1.0}}"#,
+    )
+    .unwrap();
     let out = dir.path().join("cmp");
     run_ok(
         geardyn()
@@ -846,9 +855,35 @@ fn compare_reads_a_known_fe_run_and_names_its_lines() {
             .arg(&run)
             .arg("--fe-stiffness")
             .arg(&stiffness)
+            .arg("--chart")
+            .arg("--chart-fe-run")
+            .arg(&stiffness_run)
             .arg("--out")
             .arg(&out),
     );
+    // The chart: the reference answers itself exactly; ISO's constant k has no static-TE
+    // fluctuation (error 1); the reference's static TE peak-to-peak is the cosine's,
+    // T/(r_b2² k̄)·(1/0.9 − 1/1.1).
+    let chart: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("accuracy_cost.json")).unwrap()).unwrap();
+    let points = chart["points"].as_array().unwrap();
+    let fe = points.iter().find(|p| p["family"] == "explicit").unwrap();
+    for key in ["mean_stiffness_error", "static_te_error", "resonance_error"] {
+        assert!(fe[key].as_f64().unwrap() < 1e-12, "{key}");
+    }
+    let iso = points
+        .iter()
+        .find(|p| p["method"] == "ISO 6336-1 B")
+        .unwrap();
+    assert!((iso["static_te_error"].as_f64().unwrap() - 1.0).abs() < 1e-12);
+    let rb2 = 0.057_24 * 20f64.to_radians().cos();
+    let mean_deflection = 143.6 / (rb2 * rb2 * 4.0e8);
+    let pp = fe["static_te_peak_to_peak_rad"].as_f64().unwrap();
+    let expected = mean_deflection * (1.0 / 0.9 - 1.0 / 1.1);
+    assert!((pp / expected - 1.0).abs() < 0.01, "{pp} vs {expected}");
+    for name in ["accuracy_cost.csv", "accuracy_cost.md", "accuracy_cost.png"] {
+        assert!(out.join(name).exists(), "{name}");
+    }
     let s = read_summary(&out);
     let speed = &s["speeds"][0];
     let fe: Vec<f64> = speed["fe_harmonics_rad"]

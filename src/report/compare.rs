@@ -3,9 +3,10 @@
 
 use std::path::Path;
 
-use super::plot::LinePlot;
+use super::plot::{LinePlot, LogScatter};
 use super::{OutputDir, ReportError};
 use crate::case::Case;
+use crate::study::accuracy::{AccuracyCost, FeStiffnessRun};
 use crate::study::compare::{CompareSummary, FeDte, Peak};
 
 /// Reads the DTE of a `geardyn fe` output folder (summary.json and history.csv). The message
@@ -338,5 +339,122 @@ pub fn write(dir: OutputDir, case: &Case, summary: &CompareSummary) -> Result<St
         );
     }
     dir.bytes("table.md", table.as_bytes())?;
+    Ok(table)
+}
+
+/// Reads an explicit FE stiffness run (`geardyn fe --scene stiffness`): k(θ) from its
+/// stiffness.csv, its mesh level, mass scaling and wall time from summary.json.
+pub fn read_fe_stiffness_run(dir: &Path, period: f64) -> Result<FeStiffnessRun, String> {
+    let shown = dir.display();
+    let text = std::fs::read_to_string(dir.join("summary.json"))
+        .map_err(|e| format!("{shown} is not a geardyn fe output folder (summary.json: {e})"))?;
+    let summary: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("{shown}/summary.json: {e}"))?;
+    let number = |path: &[&str]| {
+        path.iter()
+            .try_fold(&summary, |v, key| v.get(key))
+            .and_then(|v| v.as_f64())
+            .ok_or_else(|| format!("{shown}/summary.json has no {}", path.join(".")))
+    };
+    Ok(FeStiffnessRun {
+        fine_mm: number(&["fine_element_mm"])?,
+        mass_scaling_factor: number(&["mass_scaling", "factor"]).unwrap_or(1.0),
+        stiffness: super::stiffness_csv::read_stiffness_csv(&dir.join("stiffness.csv"), period)?,
+        wall_s: number(&["total_wall_s"])?,
+    })
+}
+
+/// Writes the accuracy-versus-cost chart: accuracy_cost.csv, .md and the chart.
+pub fn write_accuracy_cost(dir: OutputDir, chart: &AccuracyCost) -> Result<String, ReportError> {
+    dir.json("accuracy_cost.json", chart)?;
+    let header = [
+        "method",
+        "family",
+        "wall_s",
+        "mean_stiffness_n_per_m",
+        "static_te_pp_rad",
+        "resonance_rpm",
+        "dte_mesh_amplitude_rad",
+        "mean_stiffness_error",
+        "static_te_pp_error",
+        "resonance_rpm_error",
+        "dte_amplitude_error",
+    ];
+    let rows: Vec<Vec<String>> = chart
+        .points
+        .iter()
+        .map(|p| {
+            vec![
+                p.method.clone(),
+                p.family.into(),
+                format!("{:.4}", p.wall_s),
+                format!("{:.5e}", p.mean_stiffness_n_per_m),
+                format!("{:.5e}", p.static_te_peak_to_peak_rad),
+                format!("{:.1}", p.resonance_rpm),
+                format!("{:.5e}", p.dte_mesh_amplitude_rad),
+                format!("{:.5}", p.mean_stiffness_error),
+                format!("{:.5}", p.static_te_error),
+                format!("{:.5}", p.resonance_error),
+                format!("{:.5}", p.dte_amplitude_error),
+            ]
+        })
+        .collect();
+    dir.csv("accuracy_cost.csv", &header, rows)?;
+    type Pick = fn(&crate::study::accuracy::MethodPoint) -> f64;
+    let questions: [(&str, Pick); 4] = [
+        ("mean stiffness", |p| p.mean_stiffness_error),
+        ("static TE peak-to-peak", |p| p.static_te_error),
+        ("first resonance speed", |p| p.resonance_error),
+        ("DTE at f_mesh", |p| p.dte_amplitude_error),
+    ];
+    let short = |m: &str| {
+        m.replace("explicit FE ", "FE ")
+            .replace("potential energy", "PE")
+            .replace("ISO 6336-1 B", "ISO")
+    };
+    dir.chart(
+        "accuracy_cost",
+        &LogScatter {
+            title: format!(
+                "{}: error against {} (DTE: explicit FE at {:.0} rpm) vs wall time",
+                chart.case, chart.reference, chart.speed_rpm
+            ),
+            x_label: "wall time [s] (k(theta) + lumped solve)".into(),
+            y_label: "|error| (fraction)".into(),
+            series: questions
+                .iter()
+                .map(|(name, pick)| {
+                    (
+                        name.to_string(),
+                        chart
+                            .points
+                            .iter()
+                            .map(|p| (p.wall_s, pick(p), short(&p.method)))
+                            .collect(),
+                    )
+                })
+                .collect(),
+        },
+    )?;
+    let mut table = format!(
+        "Reference: {}; DTE reference: {} ({:.3e} rad at f_mesh)\n\n| method | wall [s] | k mean | static TE p-p | resonance rpm | DTE at f_mesh |\n|---|---|---|---|---|---|\n",
+        chart.reference, chart.dte_reference, chart.reference_dte_mesh_amplitude_rad
+    );
+    for p in &chart.points {
+        table += &format!(
+            "| {} | {:.3} | {:.4e} ({:.1} %) | {:.3e} ({:.1} %) | {:.0} ({:.1} %) | {:.3e} ({:.1} %) |\n",
+            p.method,
+            p.wall_s,
+            p.mean_stiffness_n_per_m,
+            100.0 * p.mean_stiffness_error,
+            p.static_te_peak_to_peak_rad,
+            100.0 * p.static_te_error,
+            p.resonance_rpm,
+            100.0 * p.resonance_error,
+            p.dte_mesh_amplitude_rad,
+            100.0 * p.dte_amplitude_error
+        );
+    }
+    dir.bytes("accuracy_cost.md", table.as_bytes())?;
     Ok(table)
 }

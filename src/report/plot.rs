@@ -533,6 +533,103 @@ impl Drawing for LinePlot {
     }
 }
 
+/// A point (x, y) with its label.
+pub type LabelledPoint = (f64, f64, String);
+
+/// Labelled points on logarithmic axes, one marker shape and colour per series (an
+/// accuracy-versus-cost chart). Points with a non-positive coordinate are left out.
+pub struct LogScatter {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    /// (series name, points (x, y, label)).
+    pub series: Vec<(String, Vec<LabelledPoint>)>,
+}
+
+impl Drawing for LogScatter {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError> {
+        let err = plot_err::<DrawingAreaErrorKind<DB::ErrorType>>(&self.title);
+        root.fill(&WHITE).map_err(&err)?;
+        let shown =
+            |p: &&LabelledPoint| p.0 > 0.0 && p.1 > 0.0 && p.0.is_finite() && p.1.is_finite();
+        let all: Vec<&LabelledPoint> = self
+            .series
+            .iter()
+            .flat_map(|(_, s)| s.iter())
+            .filter(shown)
+            .collect();
+        let range = |f: fn(&LabelledPoint) -> f64| {
+            let lo = all.iter().map(|p| f(p)).fold(f64::INFINITY, f64::min);
+            let hi = all.iter().map(|p| f(p)).fold(f64::NEG_INFINITY, f64::max);
+            if lo.is_finite() {
+                (lo / 3.0, hi * 3.0)
+            } else {
+                (1e-3, 1.0)
+            }
+        };
+        let (x, y) = (range(|p| p.0), range(|p| p.1));
+        let mut chart = ChartBuilder::on(root)
+            .caption(&self.title, ("sans-serif", 18))
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(80)
+            .build_cartesian_2d((x.0..x.1).log_scale(), (y.0..y.1).log_scale())
+            .map_err(&err)?;
+        chart
+            .configure_mesh()
+            .x_desc(&self.x_label)
+            .y_desc(&self.y_label)
+            .x_label_formatter(&|v| {
+                if *v < 0.01 {
+                    format!("{v:.0e}")
+                } else {
+                    format!("{v}")
+                }
+            })
+            .y_label_formatter(&|v| format!("{v:.1e}"))
+            .axis_desc_style(("sans-serif", 16))
+            .draw()
+            .map_err(&err)?;
+        let palette = [
+            RGBColor(31, 90, 180),
+            RGBColor(200, 50, 40),
+            RGBColor(20, 140, 60),
+            RGBColor(150, 80, 170),
+        ];
+        for (i, (name, points)) in self.series.iter().enumerate() {
+            let colour = palette[i % palette.len()];
+            let visible: Vec<&LabelledPoint> = points.iter().filter(shown).collect();
+            chart
+                .draw_series(
+                    visible
+                        .iter()
+                        .map(|p| Circle::new((p.0, p.1), 5, colour.filled())),
+                )
+                .map_err(&err)?
+                .label(name)
+                .legend(move |(x, y)| Circle::new((x + 10, y), 5, colour.filled()));
+            chart
+                .draw_series(visible.iter().map(|p| {
+                    // Beside the marker, not on it (log axes: a factor).
+                    Text::new(
+                        p.2.clone(),
+                        (p.0 * 1.15, p.1 * 1.04),
+                        ("sans-serif", 11).into_font().color(&colour),
+                    )
+                }))
+                .map_err(&err)?;
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::LowerLeft)
+            .draw()
+            .map_err(&err)?;
+        Ok(())
+    }
+}
+
 /// A colour map of scattered values (a waterfall of spectra: x = speed, y = frequency, colour =
 /// amplitude on a log scale), each value drawn as a cell of the given size.
 pub struct ColourMap {

@@ -6,6 +6,7 @@
 //! files (a stiffness file named in the case is the one thing they read): `report` writes their
 //! results and the binary prints.
 
+pub mod accuracy;
 pub mod compare;
 pub mod fe;
 pub mod geometry;

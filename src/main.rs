@@ -469,7 +469,9 @@ fn compare(
     let table = report::compare::write(OutputDir(&dir), &case, &summary)?;
     println!("{table}");
     if let Some(folders) = chart {
-        accuracy_chart(args, &case, folders, &input.fe_runs[0], &dir)?;
+        let primary = study::compare::primary_run(&case, &input.fe_runs)
+            .context("the chart needs an FE run at speed")?;
+        accuracy_chart(args, &case, folders, &input.fe_runs[primary], &dir)?;
     }
     println!("wrote {}", dir.display());
     Ok(())

@@ -591,3 +591,39 @@ fn floquet_frequency_matches_mathieu_characteristic_exponent() {
         "{w} vs {expected} (ω_n {wn})"
     );
 }
+
+/// Back flanks with their own k and e: the back-side force at (θ, δ) is minus the drive-side
+/// force of the mirrored pair at (ρ − θ, −δ − j) — the drive flanks' k and e read at the
+/// mirrored angle, the relief widening the gap — and nothing is carried in between.
+#[test]
+fn back_flanks_carry_the_mirrored_stiffness_and_relief() {
+    let mut m = model(cosine_stiffness(0.3), 0.0, 0.0);
+    // An asymmetric relief-like TE (≥ 0) and stiffness, so a wrong phase shows.
+    m.mesh.unloaded_te = PeriodicTable::from_fn(PERIOD, 256, |t| {
+        4e-6 * (1.0 + (2.0 * PI * t / PERIOD + 0.7).sin())
+    });
+    m.mesh.stiffness = PeriodicTable::from_fn(PERIOD, 256, |t| {
+        K_MEAN * (1.0 + 0.3 * (2.0 * PI * t / PERIOD).cos() + 0.1 * (4.0 * PI * t / PERIOD).sin())
+    });
+    let (rho, j) = (0.37 * PERIOD, 5e-6);
+    m.backlash = Some(j);
+    m.back_reflection = Some(rho);
+    for i in 0..40 {
+        let theta = i as f64 / 40.0 * PERIOD;
+        let e_back = m.mesh.unloaded_te.at(rho - theta);
+        let k_back = m.mesh.stiffness.at(rho - theta);
+        for delta in [-3e-5, -j - e_back - 2e-6, -j - e_back - 1e-7] {
+            let back = m.mesh_force(theta, delta);
+            let mirrored = m.mesh_force(rho - theta, -delta - j);
+            assert!(back < 0.0 && (back + mirrored).abs() < 1e-9 * back.abs());
+            assert!((back - k_back * (delta + j + e_back)).abs() < 1e-9 * back.abs());
+        }
+        // Between the drive flank's first touch (e) and the back flank's (−j − e_back): free.
+        let e = m.mesh.unloaded_te.at(theta);
+        for delta in [e - 1e-8, 0.0, -j - e_back + 1e-8] {
+            if delta <= e {
+                assert_eq!(m.mesh_force(theta, delta), 0.0, "θ {theta}, δ {delta}");
+            }
+        }
+    }
+}

@@ -14,6 +14,11 @@
 //! so no spurious copies appear. A Ritz pair is accepted when its residual
 //! ‖A φ − θ φ‖_M = |β_m s_m| is below `tolerance`·θ; the basis grows until the `count` lowest
 //! pairs are accepted.
+//!
+//! Limit: a single-vector Lanczos finds one vector per distinct eigenvalue its start vector
+//! reaches; of a cluster of (nearly) equal eigenvalues — the bending modes of identical teeth —
+//! it may list fewer members than there are, and a residual test cannot tell. An isolated mode
+//! (the mesh mode of a gear pair) and the lowest member of a cluster are found reliably.
 
 use nalgebra::{DMatrix, SymmetricEigen};
 

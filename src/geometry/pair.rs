@@ -472,6 +472,37 @@ mod tests {
         assert!(((t2 - o2).norm() - pair.gears[1].base_radius).abs() < 1e-12);
     }
 
+    /// The mirror that maps drive flanks onto back flanks: turned by ρ/2 − ξ_p = ψ₁ from the
+    /// pitch-point position, the driver's tooth 0 sits on the centre line, and (zero backlash)
+    /// the driven gear must then have a tooth or a tooth space centred on it too, so the whole
+    /// configuration is symmetric about the centre line. Checked on the driven gear's own
+    /// placement, which ρ does not use.
+    #[test]
+    fn back_flank_reflection_is_a_symmetry_of_the_tight_mesh() {
+        for (z1, z2) in [(36, 36), (19, 53)] {
+            let mut spec = samples::paper36_case().pair_spec;
+            spec.gears[0].teeth = z1;
+            spec.gears[1].teeth = z2;
+            spec.center_distance = None;
+            let pair = GearPair::new(&spec).unwrap();
+            let placement = pair.mesh_placement();
+            let turn = pair.back_flank_reflection() / 2.0
+                - pair.roll_angle_at(1, pair.contact_points.pitch);
+            let psi1 = pair.gears[0].half_thickness_angle(pair.working_pitch_radii[0]);
+            assert!((turn - psi1).abs() < 1e-12);
+            // Gear 2's tooth-0 axis (local y) after the driver turns by ψ₁, against the centre
+            // line seen from O2 (angle π): a multiple of half a pitch.
+            let axis = placement[1].rotation + FRAC_PI_2 - z1 as f64 / z2 as f64 * turn;
+            let half_pitch = pair.gears[1].angular_pitch() / 2.0;
+            let offset = (axis - std::f64::consts::PI).rem_euclid(half_pitch);
+            let offset = offset.min(half_pitch - offset);
+            assert!(
+                offset < 1e-9,
+                "z = {z1}/{z2}: {offset:e} rad off the mirror"
+            );
+        }
+    }
+
     #[test]
     fn gear2_flank_points_mirror_gear1_for_equal_gears() {
         let pair = samples::paper36_pair();

@@ -56,7 +56,8 @@ pub fn read_fe_run(dir: &Path) -> Result<FeDte, String> {
     if time.len() < 16 {
         return Err(format!("{shown}/history.csv holds {} samples", time.len()));
     }
-    let dt = (time[time.len() - 1] - time[0]) / (time.len() - 1) as f64;
+    // The last sample closes the run wherever it ends: the interval from the others.
+    let dt = (time[time.len() - 2] - time[0]) / (time.len() - 2) as f64;
     Ok(FeDte {
         source: shown.to_string(),
         speed_rpm: speed * 60.0 / std::f64::consts::TAU,
@@ -117,7 +118,7 @@ pub fn write(dir: OutputDir, case: &Case, summary: &CompareSummary) -> Result<St
         for (rpm, hz) in &fr.floquet_hz {
             rows.push(vec![
                 bc.into(),
-                format!("lumped Floquet, k FE DTE, rigid rims, {rpm:.0} rpm"),
+                format!("lumped Floquet (undamped), k FE DTE, rigid rims, {rpm:.0} rpm"),
                 f(*hz),
             ]);
         }

@@ -87,7 +87,10 @@ pub struct Frequencies {
     /// √(k̄'/m) with the LTCA's secant k̄ and the same body twist out: the FE modal's own
     /// contact (hard), so it isolates the reduction from the FE's penalty compliance.
     pub lumped_ltca_rim_hz: f64,
-    /// Floquet frequency of the lumped model with the FE k(θ), per FE speed: (rpm, Hz).
+    /// The same with the LTCA's tangent k̄ (the modal's own linearization).
+    pub lumped_ltca_tangent_rim_hz: f64,
+    /// Floquet frequency of the undamped lumped model with the FE k(θ) (rigid rims), per FE
+    /// speed: (rpm, Hz).
     pub floquet_hz: Vec<(f64, f64)>,
     /// FE modal mesh mode per position: (driver rotation [deg], Hz), and its mean.
     pub fe_modal_hz: Vec<(f64, f64)>,
@@ -158,9 +161,10 @@ pub struct PaperStiffness {
     pub f_driver_held_hz: f64,
     pub speed_rpm: f64,
     pub mesh_hz: f64,
-    /// A 0.03 s lumped transient at constant speed (speed drive) from the static state at the
-    /// mean stiffness: peaks of the late window (from 0.0158 s, as the FE's 3000 rpm window) and
-    /// of the early one, labelled with f_n = the driver-held frequency.
+    /// A lumped transient at constant speed (speed drive) from the static state at the mean
+    /// stiffness, as long as the FE run: peaks of the late window (from the FE run's statistics
+    /// start) and of the early one, labelled with f_n = the driver-held frequency. (The early
+    /// window's resolution, 1/its length, decides whether f_n separates from the mesh line.)
     pub late_peaks: Vec<Peak>,
     pub early_peaks: Vec<Peak>,
     #[serde(skip)]
@@ -173,7 +177,7 @@ pub struct PaperStiffness {
 #[derive(Debug, Clone, Serialize)]
 pub struct CompareSummary {
     pub case: String,
-    /// Mesh frequency of the first FE run [Hz].
+    /// Mesh frequency of the primary FE run ([`primary_run`]) [Hz].
     pub f_mesh_hz: f64,
     /// Both gears free (m_e): lumped √(k̄_FE/m_e), FE modal mean.
     pub f_natural_lumped_hz: f64,
@@ -181,7 +185,7 @@ pub struct CompareSummary {
     /// Driver held (I₂/r_b2²).
     pub f_natural_lumped_driver_held_hz: f64,
     pub f_natural_fe_modal_driver_held_hz: f64,
-    /// Peaks of the first FE run's DTE and the lumped model's lines at its speed [Hz].
+    /// Peaks of the primary FE run's DTE and the lumped model's lines at its speed [Hz].
     pub fe_dte_peaks_hz: Vec<f64>,
     pub lumped_dte_peaks_hz: Vec<f64>,
     pub mean_stiffness_ltca_n_per_m: f64,
@@ -200,6 +204,25 @@ pub struct CompareSummary {
     pub wall_s: f64,
 }
 
+/// The FE run the headline numbers, the paper-stiffness study and the chart use: the one
+/// nearest the speed of the case's `high-unmodified` scene (the seed paper's 3000 rpm), else
+/// the first.
+pub fn primary_run(case: &Case, runs: &[FeDte]) -> Option<usize> {
+    let target = case
+        .scenes
+        .iter()
+        .find(|s| s.name == "high-unmodified")
+        .map(|s| s.driver_speed * 60.0 / std::f64::consts::TAU);
+    match target {
+        Some(rpm) => (0..runs.len()).min_by(|&a, &b| {
+            (runs[a].speed_rpm - rpm)
+                .abs()
+                .total_cmp(&(runs[b].speed_rpm - rpm).abs())
+        }),
+        None => (!runs.is_empty()).then_some(0),
+    }
+}
+
 /// Runs the comparison.
 pub fn run(
     case: &Case,
@@ -215,10 +238,9 @@ pub fn run(
     let pair = &case.pair;
     let rb = [pair.gears[0].base_radius, pair.gears[1].base_radius];
     let inertias = gear_inertias(case);
-    let torque = input
-        .fe_runs
-        .first()
-        .map(|r| r.torque_nm)
+    let primary = primary_run(case, &input.fe_runs);
+    let torque = primary
+        .map(|i| input.fe_runs[i].torque_nm)
         .map_or_else(|| super::load_torque(case), Ok)?;
     let variant =
         super::relief_variant(case, Some("none")).or_else(|_| super::relief_variant(case, None))?;
@@ -263,8 +285,9 @@ pub fn run(
     // The lumped model on the FE k(θ), the FE's mesh damping (ζ on the LTCA k̄ and the driven
     // inertia, as the explicit scene sizes it), the back flanks' own k and e.
     let zeta = case.fe.mesh_damping_ratio;
-    let m_held = Drive::Speed.effective_mass(inertias, rb);
-    let damping = 2.0 * zeta * (k_secant * m_held).sqrt();
+    let damping_of =
+        |drive: Drive| 2.0 * zeta * (k_secant * drive.effective_mass(inertias, rb)).sqrt();
+    let damping = damping_of(Drive::Speed);
     // Body twist: bore to root circle, along the line of action (r_b² φ/T).
     let twist: [f64; 2] = std::array::from_fn(|g| {
         rb[g]
@@ -292,7 +315,7 @@ pub fn run(
     let lumped = |drive: Drive, mesh: MeshStiffness| MeshModel {
         effective_mass: drive.effective_mass(inertias, rb),
         mesh,
-        damping,
+        damping: damping_of(drive),
         force: torque / rb[1],
         backlash: Some(pair.backlash_normal.max(0.0)),
         bearings: None,
@@ -304,13 +327,27 @@ pub fn run(
         let model = lumped(drive, rim);
         let m = model.effective_mass;
         let hz = |k: f64| (k / m).sqrt() / std::f64::consts::TAU;
+        // NaN when the twist is not below the compliance (checked for the FE k above).
+        let rim_of = |k: f64| {
+            let rest = 1.0 / k - removed(drive);
+            if rest > 0.0 {
+                hz(1.0 / rest)
+            } else {
+                f64::NAN
+            }
+        };
         let floquet_hz = input
             .fe_runs
             .iter()
             .map(|r| {
                 let speed = r.speed_rpm * std::f64::consts::TAU / 60.0;
                 let steps = crate::sweep::steps_per_period(&model, speed);
-                let w = floquet_frequency(&model, speed, steps);
+                // Undamped: the parametric shift alone, comparable with the modal.
+                let undamped = MeshModel {
+                    damping: 0.0,
+                    ..model.clone()
+                };
+                let w = floquet_frequency(&undamped, speed, steps);
                 (r.speed_rpm, w / std::f64::consts::TAU)
             })
             .collect();
@@ -333,7 +370,8 @@ pub fn run(
             lumped_fe_hz: hz(k_fe),
             body_twist_removed_m_per_n: removed(drive),
             lumped_fe_rim_hz: hz(k_rim),
-            lumped_ltca_rim_hz: hz(1.0 / (1.0 / k_secant - removed(drive))),
+            lumped_ltca_rim_hz: rim_of(k_secant),
+            lumped_ltca_tangent_rim_hz: rim_of(k_tangent),
             floquet_hz,
             fe_modal_hz,
             fe_modal_mean_hz,
@@ -362,11 +400,22 @@ pub fn run(
             )
         })
         .collect();
-    let first = speeds.first();
-    let paper = paper_stiffness.then(|| {
-        let speed_rpm = first.map_or(3000.0, |s| s.speed_rpm);
-        paper_stiffness_study(&rigid_model, inertias, rb, teeth, speed_rpm)
-    });
+    let first = primary.map(|i| &speeds[i]);
+    let paper = match (paper_stiffness, primary) {
+        (false, _) => None,
+        (true, None) => {
+            return Err(StudyError::Input(
+                "--paper-stiffness needs an FE run (its speed and window)".into(),
+            ))
+        }
+        (true, Some(i)) => Some(paper_stiffness_study(
+            &rigid_model,
+            inertias,
+            rb,
+            teeth,
+            &input.fe_runs[i],
+        )?),
+    };
     Ok(CompareSummary {
         case: case.name().to_string(),
         f_mesh_hz: first.map_or(f64::NAN, |s| s.mesh_hz),
@@ -416,11 +465,8 @@ fn compare_speed(
 ) -> SpeedComparison {
     let mesh_hz = run.speed_rpm / 60.0 * teeth;
     let index = |t: f64| ((t / run.dt).round().max(0.0) as usize).min(run.dte.len());
-    let (ramp, stats, end) = (
-        index(run.ramp_end_s),
-        index(run.statistics_start_s),
-        run.dte.len(),
-    );
+    let ramp = index(run.ramp_end_s);
+    let (stats, end) = (index(run.statistics_start_s).max(ramp), run.dte.len());
     let late = &run.dte[stats..end];
     // Early: the ringing after the ramp, or the first half after it when that is too short.
     let min_len = (3.0 / (mesh_hz * run.dt)).ceil() as usize;
@@ -496,8 +542,15 @@ fn paper_stiffness_study(
     inertias: [f64; 2],
     rb: [f64; 2],
     teeth: f64,
-    speed_rpm: f64,
-) -> PaperStiffness {
+    run: &FeDte,
+) -> Result<PaperStiffness, StudyError> {
+    let speed_rpm = run.speed_rpm;
+    if !(model.mesh.mean() > PAPER_MEAN_STIFFNESS) {
+        return Err(StudyError::Input(format!(
+            "the FE mean stiffness {:.4e} N/m is not above the paper's {PAPER_MEAN_STIFFNESS:.4e} N/m: no compliance in series can bring it there",
+            model.mesh.mean()
+        )));
+    }
     let softened = |c: f64| {
         let mut mesh = model.mesh.clone();
         mesh.stiffness
@@ -532,9 +585,11 @@ fn paper_stiffness_study(
     );
     let speed = speed_rpm * std::f64::consts::TAU / 60.0;
     let mesh_hz = speed_rpm / 60.0 * teeth;
-    let record = crate::lumped::run_up(&paper, speed, speed, 0.03, 30_000);
+    // As long as the FE run, split where its statistics start.
+    let duration = run.dt * run.dte.len() as f64;
+    let record = crate::lumped::run_up(&paper, speed, speed, duration, 30_000);
     let dt = record.time[1] - record.time[0];
-    let split = ((0.0158 / dt) as usize).min(record.time.len());
+    let split = ((run.statistics_start_s / dt) as usize).min(record.time.len());
     let dte: Vec<f64> = record.displacement.iter().map(|p| p / rb[1]).collect();
     let (early, late) = dte.split_at(split);
     let late_spectrum = hann_amplitude_spectrum(late, dt);
@@ -550,7 +605,7 @@ fn paper_stiffness_study(
             })
             .collect()
     };
-    PaperStiffness {
+    Ok(PaperStiffness {
         note: format!(
             "PAPER-STIFFNESS STUDY, not our prediction: the FE k(theta) with {c:.4e} m/N in series so that its mean is the seed paper's {PAPER_MEAN_STIFFNESS:.4e} N/m; lumped, rigid gears, speed drive, the FE's damping ratio"
         ),
@@ -564,7 +619,7 @@ fn paper_stiffness_study(
         early_peaks: peaks(&early_spectrum, early.len()),
         late_spectrum,
         early_spectrum,
-    }
+    })
 }
 
 /// Names a spectral line: the nearest of n·f_m (n = 1 … 8), f_n and n·f_m ± f_n (n = 1 … 4),

@@ -140,7 +140,9 @@ pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
     let inertias = gear_inertias(case);
     let base_radii = [pair.gears[0].base_radius, pair.gears[1].base_radius];
     let effective_mass = settings.drive.effective_mass(inertias, base_radii);
-    let backlash = (pair.backlash_normal > 1e-9).then_some(pair.backlash_normal);
+    // Zero backlash: the back flanks engage as soon as the drive flanks open, with their own
+    // k and e (back_reflection below).
+    let backlash = Some(pair.backlash_normal.max(0.0));
     let bearings = settings.bearings.then(|| {
         let mass = settings.gear_masses.unwrap_or_else(|| {
             std::array::from_fn(|i| {

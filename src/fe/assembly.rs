@@ -46,9 +46,19 @@ pub fn stiffness_triplets(
     d: &Matrix3<f64>,
     thickness: f64,
 ) -> Vec<(usize, usize, f64)> {
+    element_triplets(nodes, elements, |xe| q8::stiffness(xe, d, thickness))
+}
+
+/// Triplets (lower triangle, row ≥ col) of Σ_e M_e for the element matrices `matrix` gives
+/// (DOF order u₀, v₀, u₁, v₁, …).
+pub fn element_triplets(
+    nodes: &[Point2<f64>],
+    elements: &[[usize; 8]],
+    matrix: impl Fn(&[Point2<f64>; 8]) -> q8::ElementMatrix,
+) -> Vec<(usize, usize, f64)> {
     let mut triplets = Vec::with_capacity(elements.len() * 136);
     for e in elements {
-        let k = q8::stiffness(&element_nodes(nodes, e), d, thickness);
+        let k = matrix(&element_nodes(nodes, e));
         let dofs: [usize; 16] = std::array::from_fn(|a| 2 * e[a / 2] + a % 2);
         for a in 0..16 {
             for b in 0..16 {

@@ -32,7 +32,7 @@
 use nalgebra::{Point2, Vector2};
 
 use super::{body::BodyMaterial, LoadedContacts, LtcaError, LtcaModel};
-use crate::fe::assembly::{element_nodes, stiffness_triplets, FactorizedStiffness};
+use crate::fe::assembly::{element_triplets, stiffness_triplets, FactorizedStiffness};
 use crate::fe::modal::{lowest_modes, Mode};
 use crate::fe::{elasticity_matrix, q8};
 
@@ -146,19 +146,9 @@ fn mass_triplets(
     density: f64,
     thickness: f64,
 ) -> Vec<(usize, usize, f64)> {
-    let mut triplets = Vec::with_capacity(elements.len() * 136);
-    for e in elements {
-        let m = q8::consistent_mass(&element_nodes(nodes, e), density, thickness);
-        let dofs: [usize; 16] = std::array::from_fn(|a| 2 * e[a / 2] + a % 2);
-        for a in 0..16 {
-            for b in 0..16 {
-                if dofs[a] >= dofs[b] && m[(a, b)] != 0.0 {
-                    triplets.push((dofs[a], dofs[b], m[(a, b)]));
-                }
-            }
-        }
-    }
-    triplets
+    element_triplets(nodes, elements, |xe| {
+        q8::consistent_mass(xe, density, thickness)
+    })
 }
 
 /// The assembled pair: stiffness and mass in the pair's unknowns, the hub unknowns.

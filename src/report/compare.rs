@@ -9,20 +9,28 @@ use crate::case::Case;
 use crate::study::accuracy::{AccuracyCost, FeStiffnessRun};
 use crate::study::compare::{CompareSummary, FeDte, Peak};
 
+/// A `geardyn fe` folder's summary.json, and a reader of its numbers by key path whose message
+/// names the folder and the key.
+fn fe_summary(dir: &Path) -> Result<serde_json::Value, String> {
+    let shown = dir.display();
+    let text = std::fs::read_to_string(dir.join("summary.json"))
+        .map_err(|e| format!("{shown} is not a geardyn fe output folder (summary.json: {e})"))?;
+    serde_json::from_str(&text).map_err(|e| format!("{shown}/summary.json: {e}"))
+}
+
+fn summary_number(summary: &serde_json::Value, dir: &Path, path: &[&str]) -> Result<f64, String> {
+    path.iter()
+        .try_fold(summary, |v, key| v.get(key))
+        .and_then(|v| v.as_f64())
+        .ok_or_else(|| format!("{}/summary.json has no {}", dir.display(), path.join(".")))
+}
+
 /// Reads the DTE of a `geardyn fe` output folder (summary.json and history.csv). The message
 /// says what is missing.
 pub fn read_fe_run(dir: &Path) -> Result<FeDte, String> {
     let shown = dir.display();
-    let text = std::fs::read_to_string(dir.join("summary.json"))
-        .map_err(|e| format!("{shown} is not a geardyn fe output folder (summary.json: {e})"))?;
-    let summary: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| format!("{shown}/summary.json: {e}"))?;
-    let number = |path: &[&str]| {
-        path.iter()
-            .try_fold(&summary, |v, key| v.get(key))
-            .and_then(|v| v.as_f64())
-            .ok_or_else(|| format!("{shown}/summary.json has no {}", path.join(".")))
-    };
+    let summary = fe_summary(dir)?;
+    let number = |path: &[&str]| summary_number(&summary, dir, path);
     if summary.get("diverged").is_some_and(|d| !d.is_null()) {
         return Err(format!(
             "{shown}: the run diverged; compare needs a finished run"
@@ -346,17 +354,8 @@ pub fn write(dir: OutputDir, case: &Case, summary: &CompareSummary) -> Result<St
 /// Reads an explicit FE stiffness run (`geardyn fe --scene stiffness`): k(θ) from its
 /// stiffness.csv, its mesh level, mass scaling and wall time from summary.json.
 pub fn read_fe_stiffness_run(dir: &Path, period: f64) -> Result<FeStiffnessRun, String> {
-    let shown = dir.display();
-    let text = std::fs::read_to_string(dir.join("summary.json"))
-        .map_err(|e| format!("{shown} is not a geardyn fe output folder (summary.json: {e})"))?;
-    let summary: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| format!("{shown}/summary.json: {e}"))?;
-    let number = |path: &[&str]| {
-        path.iter()
-            .try_fold(&summary, |v, key| v.get(key))
-            .and_then(|v| v.as_f64())
-            .ok_or_else(|| format!("{shown}/summary.json has no {}", path.join(".")))
-    };
+    let summary = fe_summary(dir)?;
+    let number = |path: &[&str]| summary_number(&summary, dir, path);
     Ok(FeStiffnessRun {
         fine_mm: number(&["fine_element_mm"])?,
         mass_scaling_factor: number(&["mass_scaling", "factor"]).unwrap_or(1.0),

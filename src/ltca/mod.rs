@@ -61,7 +61,9 @@ pub enum LtcaError {
 /// The two bodies and the geometry an LTCA runs on.
 pub struct LtcaModel {
     pub pair: GearPair,
-    pub bodies: [LtcaBody; 2],
+    /// Meshed, factorized and condensed once; shared by the models [`LtcaModel::with_relief`]
+    /// derives (a relief of a few µm changes the gap, not the bodies' compliance).
+    pub bodies: std::sync::Arc<[LtcaBody; 2]>,
     /// Gear 2's loaded-side profile (tooth-local): dense polyline from the tip centre down to the
     /// root, with the roll angle of flank points.
     profile: Vec<(Point2<f64>, Segment, Option<f64>)>,
@@ -104,18 +106,7 @@ impl LtcaModel {
             material,
             Side::Left,
         )?;
-        let res = OutlineResolution {
-            root: 4,
-            fillet: 64,
-            flank: 2000,
-            tip: 16,
-        };
-        let outline = pair.gears[1].tooth_outline(&modifications[1], res);
-        let mid = (outline.len() - 1) / 2;
-        let profile = outline[mid..]
-            .iter()
-            .map(|p| (p.position, p.segment, p.roll_angle))
-            .collect();
+        let profile = loaded_profile(pair, &modifications[1]);
         let z2 = pair.gears[1].teeth() as usize;
         let tooth_pairs = spec1
             .fine_teeth
@@ -125,11 +116,25 @@ impl LtcaModel {
             .collect();
         Ok(LtcaModel {
             pair: pair.clone(),
-            bodies: [body1, body2],
+            bodies: std::sync::Arc::new([body1, body2]),
             profile,
             tooth_pairs,
             modifications: *modifications,
         })
+    }
+
+    /// The same bodies with another relief: the exact modified profiles set the gaps, the
+    /// bodies (meshed with the relief this model was built with) keep their compliance — a
+    /// relief of a few µm does not change it measurably (tests/ltca.rs holds this against a
+    /// re-meshed relief LTCA). No meshing or factorization: what an optimizer's loop needs.
+    pub fn with_relief(&self, modifications: &[FlankModification; 2]) -> LtcaModel {
+        LtcaModel {
+            pair: self.pair.clone(),
+            bodies: self.bodies.clone(),
+            profile: loaded_profile(&self.pair, &modifications[1]),
+            tooth_pairs: self.tooth_pairs.clone(),
+            modifications: *modifications,
+        }
     }
 
     /// Global rotations of the two gears' tooth-local frames at driver rotation θ₁ (unloaded
@@ -197,7 +202,7 @@ impl LtcaModel {
         let [rot1, rot2] = self.rotations(driver_rotation);
         let placement = pair.mesh_placement();
         let (o1, o2) = (placement[0].centre, placement[1].centre);
-        let [body1, body2] = &self.bodies;
+        let [body1, body2] = &*self.bodies;
         let gear1 = &pair.gears[0];
         let aw = pair.operating_pressure_angle;
         let loa_direction = Vector2::new(aw.sin(), aw.cos());
@@ -394,6 +399,26 @@ impl LtcaModel {
             })
             .collect()
     }
+}
+
+/// Gear 2's loaded-side profile (tooth-local) with `modification`: dense polyline from the tip
+/// centre down to the root, with the roll angle of flank points.
+fn loaded_profile(
+    pair: &GearPair,
+    modification: &FlankModification,
+) -> Vec<(Point2<f64>, Segment, Option<f64>)> {
+    let res = OutlineResolution {
+        root: 4,
+        fillet: 64,
+        flank: 2000,
+        tip: 16,
+    };
+    let outline = pair.gears[1].tooth_outline(modification, res);
+    let mid = (outline.len() - 1) / 2;
+    outline[mid..]
+        .iter()
+        .map(|p| (p.position, p.segment, p.roll_angle))
+        .collect()
 }
 
 /// Half the number of lattice points per tooth pair: the lattice spans ±8 node spacings around

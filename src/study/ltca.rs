@@ -163,7 +163,7 @@ pub fn run(
         let cycle_started = std::time::Instant::now();
         let results = model.run(positions, torque, &|done| progress(&stage, done, positions))?;
         let cycle_s = cycle_started.elapsed().as_secs_f64();
-        let [b1, b2] = &model.bodies;
+        let [b1, b2] = &*model.bodies;
         let summary = variant_summary(
             &variant.name,
             &results,

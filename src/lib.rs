@@ -2,7 +2,7 @@
 //!
 //! One gear pair, three fidelities, one currency: the periodic mesh stiffness k(θ).
 //! This crate holds the numerical kernels (no IO, no case schema: geometry, mesh, fe, contact,
-//! ltca, explicit, stiffness, lumped, sweep, signal), the studies that drive them, and the IO
+//! ltca, explicit, stiffness, lumped, sweep, signal, optimize), the studies that drive them, and the IO
 //! edges (`case`, `report`); the `geardyn` binary only parses arguments and wires them.
 //!
 //! * [`case`] — TOML case files (engineering units at the edge, SI inside), validation,
@@ -26,6 +26,7 @@ pub mod geometry;
 pub mod ltca;
 pub mod lumped;
 pub mod mesh;
+pub mod optimize;
 pub mod report;
 pub mod samples;
 pub mod signal;

@@ -1,0 +1,6 @@
+//! Optimization kernels: the quadratic programs of the relief optimizer, solved by Clarabel.
+//!
+//! * [`qp`] — a dense convex QP (equalities and inequalities) through Clarabel's interior-point
+//!   solver, with its own KKT check.
+
+pub mod qp;

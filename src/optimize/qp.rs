@@ -143,19 +143,19 @@ pub fn kkt_residual(
     z: &DVector<f64>,
 ) -> f64 {
     let mut gradient = &problem.p * x + &problem.q;
-    if y.len() > 0 {
+    if !y.is_empty() {
         gradient += problem.a.transpose() * y;
     }
-    if z.len() > 0 {
+    if !z.is_empty() {
         gradient += problem.g.transpose() * z;
     }
     let scale = 1.0 + problem.q.amax() + (&problem.p * x).amax();
-    let slack = if z.len() > 0 {
+    let slack = if !z.is_empty() {
         &problem.h - &problem.g * x
     } else {
         DVector::zeros(0)
     };
-    let equality = if y.len() > 0 {
+    let equality = if !y.is_empty() {
         (&problem.a * x - &problem.b).amax()
     } else {
         0.0

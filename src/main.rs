@@ -139,7 +139,7 @@ enum Command {
         paper_stiffness: bool,
         /// Also the accuracy-versus-cost chart (accuracy_cost.{csv,md,png,svg}): LTCA at three
         /// mesh levels, ISO, potential energy and explicit FE stiffness runs, against the finest
-        /// unscaled FE run and the first FE run's DTE.
+        /// unscaled FE run and the primary FE run's DTE (the one nearest 3000 rpm).
         #[arg(long)]
         chart: bool,
         /// Finished stiffness-scene folders for the chart (repeatable); default: run the

@@ -73,6 +73,23 @@ pub struct AccuracyCost {
 /// LTCA mesh levels: flank / body element sizes [mm].
 pub const LTCA_LEVELS: [(f64, f64); 3] = [(1.0, 3.0), (0.5, 1.5), (0.2, 1.5)];
 
+/// The explicit stiffness runs the chart makes when none are given: flank element size [mm]
+/// and mass scaling.
+pub const CHART_RUNS: [(f64, bool); 4] = [(1.0, true), (1.0, false), (0.7, true), (0.7, false)];
+
+/// The case overrides of one of [`CHART_RUNS`], and its folder name.
+pub fn chart_run(fine_mm: f64, scaled: bool) -> (Vec<crate::case::Override>, String) {
+    use crate::case::Override;
+    let tag = if scaled { "scaled" } else { "unscaled" };
+    (
+        vec![
+            Override::set("fe.explicit_fine_element_mm", fine_mm),
+            Override::set("fe.mass_scaling", scaled),
+        ],
+        format!("chart-fe-{fine_mm}-{tag}"),
+    )
+}
+
 /// LTCA positions per base pitch for the chart.
 const POSITIONS: usize = 64;
 

@@ -204,6 +204,27 @@ pub struct CompareSummary {
     pub wall_s: f64,
 }
 
+/// The explicit scene `compare` runs at each speed, and the one that gives the FE k(θ).
+pub const SPEED_SCENE: &str = "high-unmodified";
+pub const STIFFNESS_SCENE: &str = "stiffness";
+
+/// The speeds of `speeds` [rpm] that no given run covers: the FE runs still to make.
+pub fn speeds_to_run(speeds: &[f64], given: &[FeDte]) -> Vec<f64> {
+    speeds
+        .iter()
+        .copied()
+        .filter(|rpm| !given.iter().any(|r| (r.speed_rpm - rpm).abs() < 1e-6 * rpm))
+        .collect()
+}
+
+/// The case overrides that put [`SPEED_SCENE`] at `rpm`.
+pub fn speed_overrides(rpm: f64) -> Vec<crate::case::Override> {
+    vec![crate::case::Override::set(
+        format!("scene[{SPEED_SCENE}].speed_rpm"),
+        rpm,
+    )]
+}
+
 /// The FE run the headline numbers, the paper-stiffness study and the chart use: the one
 /// nearest the speed of the case's `high-unmodified` scene (the seed paper's 3000 rpm), else
 /// the first.
@@ -211,7 +232,7 @@ pub fn primary_run(case: &Case, runs: &[FeDte]) -> Option<usize> {
     let target = case
         .scenes
         .iter()
-        .find(|s| s.name == "high-unmodified")
+        .find(|s| s.name == SPEED_SCENE)
         .map(|s| s.driver_speed * 60.0 / std::f64::consts::TAU);
     match target {
         Some(rpm) => (0..runs.len()).min_by(|&a, &b| {

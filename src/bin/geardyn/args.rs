@@ -1,0 +1,190 @@
+//! The command line's arguments (clap): the commands, their flags and help texts.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+use geardyn::case::Override;
+use geardyn::study::{fe::FeShorthands, lumped::LumpedShorthands, RpmRange};
+
+/// Spur-gear mesh dynamics: exact geometry, loaded contact, explicit dynamics, lumped sweeps.
+///
+/// Every command takes an optional case file (TOML); without one it runs the embedded default
+/// case, the seed paper's pair (Z1 = Z2 = 36, m = 3.18 mm, alpha = 20 deg, B = 25.4 mm).
+/// `--set KEY=VALUE` changes any value of the case before it is checked (e.g. `--set
+/// fe.plane=stress --set mesh.fine_element_mm=0.5`); the commands' own flags are shorthands for
+/// it. Outputs go to a fresh folder under out/ unless --out is given; each holds the effective
+/// case as case.toml.
+#[derive(Parser)]
+#[command(name = "geardyn", version, about, long_about)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// The whole pipeline built so far on one case: geometry, meshes, LTCA (every relief
+    /// variant) and the lumped speed sweep on the LTCA stiffness, each in its own sub-folder of
+    /// one output folder.
+    Run(CommonArgs),
+    /// Derived geometry of the pair: radii, contact ratio, line of action, contact points,
+    /// backlash, resolved reliefs; writes summary.json, a drawing (SVG, PNG) and profile CSVs.
+    Geometry(CommonArgs),
+    /// FE meshes of both gears (8-node quadrilaterals, fine on the teeth that engage at the mesh
+    /// position): writes mesh_gear{1,2}.vtk (ParaView, meshio) and mesh_gear{1,2}.png, and
+    /// prints element and node counts.
+    Mesh {
+        #[command(flatten)]
+        common: CommonArgs,
+        /// Relief variant of the case to mesh; default: the first one.
+        #[arg(long, value_name = "NAME")]
+        relief: Option<String>,
+    },
+    /// Quasi-static loaded tooth contact analysis over one base pitch for every relief variant
+    /// (or the one named): static transmission error, load sharing and the mesh stiffness k(θ),
+    /// next to ISO 6336-1 method B. Writes ltca_<variant>.csv, ste/stiffness/load-sharing plots
+    /// (SVG, PNG) and summary.json.
+    Ltca {
+        #[command(flatten)]
+        common: CommonArgs,
+        /// Load torque on the driven gear [N·m] (sets operating_point[0].torque_nm).
+        #[arg(long, value_name = "T", allow_negative_numbers = true)]
+        torque_nm: Option<f64>,
+        /// Mesh positions over one base pitch.
+        #[arg(long, default_value_t = 64, value_name = "N")]
+        positions: usize,
+        /// Only this relief variant; default: every variant of the case.
+        #[arg(long, value_name = "NAME")]
+        relief: Option<String>,
+    },
+    /// Speed sweep of the lumped mesh model driven by the mesh stiffness k(θ): periodic steady
+    /// state per driver speed (up- and down-sweep), DTE rms and peak-to-peak, dynamic factor,
+    /// separation, mesh-harmonic amplitudes, Floquet stability. Writes sweep.csv, plots and
+    /// summary.json.
+    Sweep {
+        #[command(flatten)]
+        common: CommonArgs,
+        /// Driver speeds FROM:TO:N in rpm.
+        #[arg(long, default_value = "100:12000:600", value_name = "FROM:TO:N")]
+        rpm: RpmRange,
+        #[command(flatten)]
+        model: LumpedShorthands,
+        /// Also run up through the same speed range in this many seconds (a linear speed ramp,
+        /// transient): writes runup.csv and runup.png.
+        #[arg(long, value_name = "SECONDS")]
+        run_up_s: Option<f64>,
+    },
+    /// Floquet stability map of the linear time-periodic mesh model over a speed range: the
+    /// largest multiplier of the monodromy matrix per driver speed (> 1: parametric
+    /// instability, near f_mesh ≈ 2 f_n / j). Writes stability.csv, a plot and summary.json.
+    Stability {
+        #[command(flatten)]
+        common: CommonArgs,
+        /// Driver speeds FROM:TO:N in rpm.
+        #[arg(long, default_value = "100:20000:2000", value_name = "FROM:TO:N")]
+        rpm: RpmRange,
+        #[command(flatten)]
+        model: LumpedShorthands,
+    },
+    /// Explicit dynamic contact FE of the meshing pair (central difference, penalty contact with
+    /// Coulomb friction, corotational bodies on rigid hubs): a scene of the case, or a speed and
+    /// a duration. Writes history.csv (DTE, speeds, contact forces, db5 impacts, energy),
+    /// dte_spectrum.csv, stiffness.csv (k from the DTE, readable by sweep --stiffness), plots
+    /// and summary.json; a diverged run keeps what it computed and says why.
+    Fe {
+        #[command(flatten)]
+        common: CommonArgs,
+        #[command(flatten)]
+        options: FeShorthands,
+    },
+    /// FE versus lumped: the mesh-mode frequency by every method (lumped sqrt(k/m) with k from
+    /// the LTCA and the FE DTE, Floquet, FE modal analysis of the meshed pair) for both boundary
+    /// conditions (driver held, both free), and the explicit FE's DTE spectra against the lumped
+    /// model's at each FE speed (labelled peaks, early vs late window, first three mesh
+    /// harmonics). Writes summary.json, frequencies/modal/harmonics/peaks CSVs, spectra plots
+    /// and table.md.
+    Compare {
+        #[command(flatten)]
+        common: CommonArgs,
+        /// Explicit FE runs to make: scene high-unmodified at these driver speeds [rpm], into
+        /// DIR/fe-<rpm> (skipped for speeds given by --fe-run).
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "1200,3000,4800",
+            value_name = "RPM"
+        )]
+        speed_rpm: Vec<f64>,
+        /// Finished `geardyn fe` output folders to use instead of running their speeds
+        /// (repeatable).
+        #[arg(long = "fe-run", value_name = "DIR")]
+        fe_runs: Vec<PathBuf>,
+        /// k(θ) from the FE DTE (stiffness.csv of `geardyn fe --scene stiffness`); default: run
+        /// that scene into DIR/fe-stiffness.
+        #[arg(long, value_name = "FILE")]
+        fe_stiffness: Option<PathBuf>,
+        /// Mesh positions over one base pitch for the FE modal analysis.
+        #[arg(long, default_value_t = 16, value_name = "N")]
+        positions: usize,
+        /// Also the labelled paper-stiffness study: the lumped model given the seed paper's
+        /// mean stiffness (1.3427e8 N/m, by a compliance in series), never a default.
+        #[arg(long)]
+        paper_stiffness: bool,
+        /// Also the accuracy-versus-cost chart (accuracy_cost.{csv,md,png,svg}): LTCA at three
+        /// mesh levels, ISO, potential energy and explicit FE stiffness runs, against the finest
+        /// unscaled FE run and the primary FE run's DTE (the one nearest 3000 rpm).
+        #[arg(long)]
+        chart: bool,
+        /// Finished stiffness-scene folders for the chart (repeatable); default: run the
+        /// stiffness scene at 1.0 and 0.7 mm flanks, scaled and unscaled, into DIR/chart-fe-*.
+        #[arg(long = "chart-fe-run", value_name = "DIR")]
+        chart_fe_runs: Vec<PathBuf>,
+    },
+    /// Validation studies too wide for the test suite; each writes a table (CSV and Markdown)
+    /// and summary.json.
+    Validate {
+        #[arg(value_enum, value_name = "STUDY")]
+        study: ValidationStudy,
+        #[command(flatten)]
+        common: CommonArgs,
+        #[command(flatten)]
+        model: LumpedShorthands,
+        /// The explicit FE scene of `mass-scaling` (default: stiffness).
+        #[arg(long, value_name = "NAME", default_value = "stiffness")]
+        scene: String,
+    },
+    /// Prints a case file: the given one, or the embedded default (start your own from it:
+    /// `geardyn case > my.toml`); with --set, the effective case.
+    Case {
+        /// Case file to check and print; default: the embedded paper36 case.
+        case: Option<PathBuf>,
+        /// Change a value of the case, as in the other commands.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<Override>,
+    },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum ValidationStudy {
+    /// Where each fixed-step scheme of the lumped model fails: stability and 1 %
+    /// frequency-accuracy limits in ωh, predicted vs observed, and the order of convergence
+    /// with and without tooth separation.
+    Integrators,
+    /// The explicit FE's low-speed mass scaling against the same scene unscaled (--scene):
+    /// DTE mean and peak-to-peak, k(θ) bin by bin, the cost of each.
+    MassScaling,
+}
+
+#[derive(Args, Clone)]
+pub struct CommonArgs {
+    /// Case file (TOML). Default: the embedded paper36 case.
+    pub case: Option<PathBuf>,
+    /// Output folder. Default: a fresh folder out/<command>-<case>-NNN.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Change a value of the case before it is checked, e.g. fe.plane=stress,
+    /// mesh.fine_element_mm=0.05, scene[low-unmodified].duration_s=0.02 (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<Override>,
+}

@@ -1,0 +1,323 @@
+//! The `geardyn` command line: parses the arguments, turns the commands' flags into overrides of
+//! the case, calls one study of `geardyn::study` and hands its result to `geardyn::report`.
+
+mod args;
+mod progress;
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Context, Result};
+use clap::Parser;
+
+use geardyn::case::{Case, Override, StiffnessSource};
+use geardyn::report::{self, OutputDir};
+use geardyn::study::{self, fe::FeShorthands, lumped::LumpedShorthands, RpmRange};
+
+use args::{Cli, Command, CommonArgs, ValidationStudy};
+use progress::{fe_run, progress_bar, stage, staged_bar};
+
+fn main() -> ExitCode {
+    let result = match Cli::parse().command {
+        Command::Run(args) => run(&args),
+        Command::Geometry(args) => geometry(&args),
+        Command::Mesh { common, relief } => mesh(&common, relief.as_deref()),
+        Command::Ltca {
+            common,
+            torque_nm,
+            positions,
+            relief,
+        } => ltca(&common, torque_nm, positions, relief),
+        Command::Sweep {
+            common,
+            rpm,
+            model,
+            run_up_s,
+        } => sweep(&common, rpm, &model, run_up_s),
+        Command::Stability { common, rpm, model } => stability(&common, &rpm, &model),
+        Command::Fe { common, options } => fe(&common, &options),
+        Command::Validate {
+            study: ValidationStudy::Integrators,
+            common,
+            model,
+            ..
+        } => validate_integrators(&common, &model),
+        Command::Validate {
+            study: ValidationStudy::MassScaling,
+            common,
+            scene,
+            ..
+        } => validate_mass_scaling(&common, &scene),
+        Command::Compare {
+            common,
+            speed_rpm,
+            fe_runs,
+            fe_stiffness,
+            positions,
+            paper_stiffness,
+            chart,
+            chart_fe_runs,
+        } => compare(
+            &common,
+            &speed_rpm,
+            &fe_runs,
+            (fe_stiffness.as_deref(), positions, paper_stiffness),
+            chart.then_some(&chart_fe_runs[..]),
+        ),
+        Command::Case { case, set } => Case::load_with(case.as_deref(), &set)
+            .map(|c| print!("{}", c.text))
+            .map_err(Into::into),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The case with the command's shorthands, then the user's `--set`s, applied.
+fn load(args: &CommonArgs, shorthands: Vec<Override>) -> Result<Case> {
+    let mut overrides = shorthands;
+    overrides.extend(args.set.iter().cloned());
+    Ok(Case::load_with(args.case.as_deref(), &overrides)?)
+}
+
+/// The output folder: the one asked for (created), or a fresh one under out/.
+fn output_dir(args: &CommonArgs, command: &str, case: &Case) -> Result<PathBuf> {
+    match &args.out {
+        Some(dir) => {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("cannot create output folder {}", dir.display()))?;
+            Ok(dir.clone())
+        }
+        None => report::fresh_output_dir(Path::new("out"), command, case.name())
+            .context("cannot create an output folder under out/"),
+    }
+}
+
+fn run(args: &CommonArgs) -> Result<()> {
+    let case = load(args, Vec::new())?;
+    let dir = output_dir(args, "run", &case)?;
+    let stage = |name: &str| CommonArgs {
+        out: Some(dir.join(name)),
+        ..args.clone()
+    };
+    println!("== geometry");
+    geometry(&stage("geometry"))?;
+    println!("\n== mesh");
+    mesh(&stage("mesh"), None)?;
+    println!("\n== ltca");
+    ltca(&stage("ltca"), None, 64, None)?;
+    println!("\n== sweep");
+    let rpm = "100:12000:600".parse().map_err(anyhow::Error::msg)?;
+    sweep(&stage("sweep"), rpm, &LumpedShorthands::default(), None)?;
+    println!("\nall outputs in {}", dir.display());
+    Ok(())
+}
+
+fn geometry(args: &CommonArgs) -> Result<()> {
+    let case = load(args, Vec::new())?;
+    let dir = output_dir(args, "geometry", &case)?;
+    let summary = study::geometry::GeometrySummary::new(&case);
+    print!("{}", summary.table());
+    report::geometry::write(OutputDir(&dir), &case, &summary)?;
+    println!("\nwrote {}", dir.display());
+    Ok(())
+}
+
+fn mesh(args: &CommonArgs, relief: Option<&str>) -> Result<()> {
+    let case = load(args, Vec::new())?;
+    let result = study::mesh::run(&case, relief)?;
+    let dir = output_dir(args, "mesh", &case)?;
+    print!("{}", report::mesh::console(&result));
+    report::mesh::write(OutputDir(&dir), &case, &result)?;
+    println!("wrote {}", dir.display());
+    Ok(())
+}
+
+fn ltca(
+    args: &CommonArgs,
+    torque_nm: Option<f64>,
+    positions: usize,
+    relief: Option<String>,
+) -> Result<()> {
+    let case = load(
+        args,
+        study::torque_override(torque_nm).into_iter().collect(),
+    )?;
+    let dir = output_dir(args, "ltca", &case)?;
+    let bar = progress_bar("{msg} [{bar:40}] {pos}/{len} positions, ETA {eta}");
+    let options = study::ltca::LtcaOptions { positions, relief };
+    let result = study::ltca::run(&case, &options, &stage(&bar))?;
+    bar.finish_and_clear();
+    print!("{}", report::ltca::console(&result));
+    report::ltca::write(OutputDir(&dir), &case, &result)?;
+    println!("wrote {}", dir.display());
+    Ok(())
+}
+
+/// The case with the lumped flags applied.
+fn lumped_case(args: &CommonArgs, options: &LumpedShorthands) -> Result<Case> {
+    let case = load(args, options.overrides()?)?;
+    if case.lumped.stiffness == StiffnessSource::Ltca {
+        eprintln!("computing the LTCA stiffness ...");
+    }
+    Ok(case)
+}
+
+fn sweep(
+    args: &CommonArgs,
+    rpm: RpmRange,
+    options: &LumpedShorthands,
+    run_up_s: Option<f64>,
+) -> Result<()> {
+    let case = lumped_case(args, options)?;
+    let result = study::sweep::run(&case, &study::sweep::SweepOptions { rpm, run_up_s })?;
+    print!("{}", report::lumped::setup_console(&result.setup));
+    let dir = output_dir(args, "sweep", &case)?;
+    report::lumped::write_sweep(OutputDir(&dir), &case, &result)?;
+    print!("{}", report::lumped::sweep_console(&result));
+    println!("wrote {}", dir.display());
+    Ok(())
+}
+
+fn stability(args: &CommonArgs, rpm: &RpmRange, options: &LumpedShorthands) -> Result<()> {
+    let case = lumped_case(args, options)?;
+    let result = study::stability::run(&case, rpm)?;
+    print!("{}", report::lumped::setup_console(&result.setup));
+    let dir = output_dir(args, "stability", &case)?;
+    report::lumped::write_stability(OutputDir(&dir), &case, &result)?;
+    print!("{}", report::lumped::stability_console(&result));
+    println!("wrote {}", dir.display());
+    Ok(())
+}
+
+fn validate_integrators(args: &CommonArgs, options: &LumpedShorthands) -> Result<()> {
+    let case = lumped_case(args, options)?;
+    let summary = study::validate::integrators(&case)?;
+    let dir = output_dir(args, "validate-integrators", &case)?;
+    print!(
+        "{}",
+        report::lumped::write_integrators(OutputDir(&dir), &summary)?
+    );
+    println!("wrote {}", dir.display());
+    Ok(())
+}
+
+fn validate_mass_scaling(args: &CommonArgs, scene: &str) -> Result<()> {
+    let scaled = load(args, Vec::new())?;
+    let unscaled = load(args, vec![Override::set("fe.mass_scaling", false)])?;
+    let dir = output_dir(args, "validate-mass-scaling", &scaled)?;
+    let mut runs = Vec::new();
+    for (case, name) in [(&scaled, "scaled"), (&unscaled, "unscaled")] {
+        let out = dir.join(name);
+        runs.push(fe_run(case, study::fe::scene(case, scene)?, &out)?);
+        study::validate::check_scaled(&runs[0])?;
+    }
+    let result = study::validate::mass_scaling(scaled.name(), &scaled.pair, &runs[0], &runs[1])?;
+    let table = report::fe::write_mass_scaling(OutputDir(&dir), &scaled, &result)?;
+    println!("{table}wrote {}", dir.display());
+    Ok(())
+}
+
+fn fe(args: &CommonArgs, options: &FeShorthands) -> Result<()> {
+    let base = load(args, Vec::new())?;
+    let (overrides, scene_name) = study::fe::overrides(&base, options)?;
+    let case = load(args, overrides)?;
+    let scene = study::fe::scene(&case, &scene_name)?;
+    let dir = output_dir(args, &format!("fe-{}", scene.name), &case)?;
+    fe_run(&case, scene, &dir)?;
+    println!("wrote {}", dir.display());
+    Ok(())
+}
+
+fn compare(
+    args: &CommonArgs,
+    speeds: &[f64],
+    fe_runs: &[PathBuf],
+    (fe_stiffness, positions, paper): (Option<&Path>, usize, bool),
+    chart: Option<&[PathBuf]>,
+) -> Result<()> {
+    use study::compare::{self as cmp, CompareInput};
+    let case = load(args, Vec::new())?;
+    let dir = output_dir(args, "compare", &case)?;
+    let read = |d: &Path| report::compare::read_fe_run(d).map_err(anyhow::Error::msg);
+    let mut runs = fe_runs
+        .iter()
+        .map(|d| read(d))
+        .collect::<Result<Vec<_>>>()?;
+    for rpm in cmp::speeds_to_run(speeds, &runs) {
+        let at_speed = load(args, cmp::speed_overrides(rpm))?;
+        let out = dir.join(format!("fe-{rpm:.0}"));
+        fe_run(
+            &at_speed,
+            study::fe::scene(&at_speed, cmp::SPEED_SCENE)?,
+            &out,
+        )?;
+        runs.push(read(&out)?);
+    }
+    let stiffness_file = match fe_stiffness {
+        Some(file) => file.to_path_buf(),
+        None => {
+            let out = dir.join("fe-stiffness");
+            fe_run(&case, study::fe::scene(&case, cmp::STIFFNESS_SCENE)?, &out)?;
+            out.join("stiffness.csv")
+        }
+    };
+    let pitch = case.pair.gears[0].angular_pitch();
+    let fe_stiffness = report::stiffness_csv::read_stiffness_csv(&stiffness_file, pitch)
+        .map_err(anyhow::Error::msg)?;
+    let input = CompareInput {
+        fe_runs: runs,
+        fe_stiffness,
+    };
+    let bar = staged_bar();
+    let summary = cmp::run(&case, &input, positions, paper, &stage(&bar))?;
+    bar.finish_and_clear();
+    println!(
+        "{}",
+        report::compare::write(OutputDir(&dir), &case, &summary)?
+    );
+    if let Some(folders) = chart {
+        let primary = cmp::primary_run(&case, &input.fe_runs)
+            .context("the chart needs an FE run at speed")?;
+        accuracy_chart(args, &case, folders, &input.fe_runs[primary], &dir)?;
+    }
+    println!("wrote {}", dir.display());
+    Ok(())
+}
+
+/// The accuracy-versus-cost chart of `compare --chart`, into `dir`.
+fn accuracy_chart(
+    args: &CommonArgs,
+    case: &Case,
+    folders: &[PathBuf],
+    dte_run: &study::compare::FeDte,
+    dir: &Path,
+) -> Result<()> {
+    let mut folders = folders.to_vec();
+    if folders.is_empty() {
+        for (mm, scaled) in study::accuracy::CHART_RUNS {
+            let (overrides, name) = study::accuracy::chart_run(mm, scaled);
+            let at_level = load(args, overrides)?;
+            let scene = study::fe::scene(&at_level, study::compare::STIFFNESS_SCENE)?;
+            fe_run(&at_level, scene, &dir.join(&name))?;
+            folders.push(dir.join(name));
+        }
+    }
+    let pitch = case.pair.gears[0].angular_pitch();
+    let runs = folders
+        .iter()
+        .map(|d| report::compare::read_fe_stiffness_run(d, pitch).map_err(anyhow::Error::msg))
+        .collect::<Result<Vec<_>>>()?;
+    let bar = staged_bar();
+    let chart = study::accuracy::run(case, &runs, dte_run, &stage(&bar))?;
+    bar.finish_and_clear();
+    print!(
+        "{}",
+        report::compare::write_accuracy_cost(OutputDir(dir), &chart)?
+    );
+    Ok(())
+}

@@ -1,0 +1,67 @@
+//! Progress on the console: bars on a terminal, plain lines in a log; and the explicit FE run
+//! every FE-driven command shares (prepare, run with progress, write, report divergence).
+
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+
+use geardyn::case::Case;
+use geardyn::explicit::scene::Scene;
+use geardyn::report::{self, OutputDir};
+use geardyn::study;
+
+/// Prepares and runs an explicit scene with progress (a bar, or a line every 10 % without a
+/// terminal) and writes it to `dir`; a diverged run is written too, then reported as an error.
+pub fn fe_run(case: &Case, scene: &Scene, dir: &Path) -> Result<study::fe::FeStudy> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    eprintln!("{}", report::fe::scene_line(scene));
+    let prepared = study::fe::prepare(case, scene)?;
+    print!("{}", report::fe::prepared_console(case, &prepared, scene));
+    let bar = progress_bar("explicit FE [{bar:40}] {percent}% elapsed {elapsed}, ETA {eta}");
+    bar.set_length(1000);
+    // Without a terminal (a log file, CI) the bar is hidden: a line every 10 % instead.
+    let plain_log = bar.is_hidden();
+    let started = std::time::Instant::now();
+    let mut logged = 0;
+    let result = study::fe::run(case, scene, &prepared, &mut |f| {
+        bar.set_position((f * 1000.0) as u64);
+        let tenth = (f * 10.0).floor() as usize;
+        if plain_log && tenth > logged {
+            logged = tenth;
+            let elapsed = started.elapsed().as_secs_f64();
+            eprintln!(
+                "explicit FE {:3.0} % after {elapsed:.0} s, about {:.0} s to go",
+                f * 100.0,
+                elapsed * (1.0 - f) / f.max(1e-9)
+            );
+        }
+    })?;
+    bar.finish_and_clear();
+    report::fe::write(OutputDir(dir), case, &result)?;
+    if let Some(message) = &result.summary.diverged {
+        anyhow::bail!("{message}; partial results in {}", dir.display());
+    }
+    print!("{}", report::fe::console(&result));
+    Ok(result)
+}
+
+pub fn progress_bar(template: &str) -> ProgressBar {
+    let bar = ProgressBar::new(0);
+    bar.set_style(ProgressStyle::with_template(template).expect("valid template"));
+    bar
+}
+
+/// A bar for a study's staged progress (stage name, done, total).
+pub fn staged_bar() -> ProgressBar {
+    progress_bar("{msg} [{bar:40}] {pos}/{len}")
+}
+
+/// Drives `bar` from a study's progress callback.
+pub fn stage(bar: &ProgressBar) -> impl Fn(&str, usize, usize) + Sync + '_ {
+    move |name, done, total| {
+        bar.set_message(name.to_string());
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    }
+}

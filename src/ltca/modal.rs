@@ -32,7 +32,9 @@
 use nalgebra::{Point2, Vector2};
 
 use super::{body::BodyMaterial, LoadedContacts, LtcaError, LtcaModel};
-use crate::fe::assembly::{element_triplets, stiffness_triplets, FactorizedStiffness};
+use crate::fe::assembly::{
+    element_triplets, stiffness_triplets, symmetric_product, FactorizedStiffness,
+};
 use crate::fe::modal::{lowest_modes, Mode};
 use crate::fe::{elasticity_matrix, q8};
 
@@ -158,6 +160,8 @@ struct PairSystem {
     mass: Vec<(usize, usize, f64)>,
     /// Hub rotation unknown of each gear (None: held).
     hubs: [Option<usize>; 2],
+    /// Rotary inertia of each gear [kg·m²].
+    inertias: [f64; 2],
 }
 
 fn assemble(
@@ -176,6 +180,7 @@ fn assemble(
     let mut mass = Vec::new();
     let mut maps: Vec<DofMap> = Vec::new();
     let mut hub_index = [None, None];
+    let mut inertias = [0.0; 2];
     let mut next = 0;
     for (g, body) in model.bodies.iter().enumerate() {
         let mesh = &body.mesh;
@@ -190,6 +195,10 @@ fn assemble(
         map_triplets(&k, &map, &mut stiffness);
         let m = mass_triplets(&mesh.nodes, &mesh.elements, density, thickness);
         map_triplets(&m, &map, &mut mass);
+        // The gear's inertia: its rigid rotation (ψ ẑ × X at every node) through its mass.
+        let rotation: Vec<f64> = mesh.nodes.iter().flat_map(|p| [-p.y, p.x]).collect();
+        let mr = symmetric_product(&m, &rotation);
+        inertias[g] = rotation.iter().zip(&mr).map(|(a, b)| a * b).sum::<f64>();
         maps.push(map);
     }
     for tie in &contacts.active {
@@ -215,6 +224,7 @@ fn assemble(
         }
     }
     PairSystem {
+        inertias,
         n: next,
         stiffness,
         mass,
@@ -238,16 +248,6 @@ pub fn pair_modes(
     let n = system.n;
     let driven = system.hubs[1].expect("the driven hub is free");
     let rb2 = model.pair.gears[1].base_radius;
-
-    // Inertias: the rigid rotation of each gear through the mass (interior DOFs ψ ẑ × X too).
-    let inertias = std::array::from_fn(|g| {
-        let body = &model.bodies[g];
-        let thickness = model.pair.gears[g].spec.face_width;
-        let m = mass_triplets(&body.mesh.nodes, &body.mesh.elements, density, thickness);
-        let rotation: Vec<f64> = body.mesh.nodes.iter().flat_map(|p| [-p.y, p.x]).collect();
-        let mr = crate::fe::assembly::symmetric_product(&m, &rotation);
-        rotation.iter().zip(&mr).map(|(a, b)| a * b).sum::<f64>()
-    });
 
     // Static tangent: the driver held, a unit torque on the driven hub.
     let held: Vec<usize> = system.hubs[0].into_iter().collect();
@@ -299,7 +299,7 @@ pub fn pair_modes(
         static_mesh_stiffness,
         ltca_mesh_stiffness: contacts.result.mesh_stiffness,
         ltca_tangent_stiffness: contacts.result.tangent_stiffness,
-        inertias,
+        inertias: system.inertias,
         ties: contacts.active.len(),
         dofs: n,
         residual,

@@ -446,6 +446,16 @@ impl Drawing for MeshDrawing {
     }
 }
 
+/// Series colours of the charts, in order.
+const PALETTE: [RGBColor; 6] = [
+    RGBColor(31, 90, 180),
+    RGBColor(200, 50, 40),
+    RGBColor(20, 140, 60),
+    RGBColor(150, 80, 170),
+    RGBColor(230, 140, 20),
+    RGBColor(60, 60, 60),
+];
+
 /// A line chart of one or more named series.
 pub struct LinePlot {
     pub title: String,
@@ -501,16 +511,8 @@ impl Drawing for LinePlot {
             .axis_desc_style(("sans-serif", 16))
             .draw()
             .map_err(&err)?;
-        let palette = [
-            RGBColor(31, 90, 180),
-            RGBColor(200, 50, 40),
-            RGBColor(20, 140, 60),
-            RGBColor(150, 80, 170),
-            RGBColor(230, 140, 20),
-            RGBColor(60, 60, 60),
-        ];
         for (i, (name, data)) in self.series.iter().enumerate() {
-            let colour = palette[i % palette.len()];
+            let colour = PALETTE[i % PALETTE.len()];
             chart
                 .draw_series(LineSeries::new(
                     data.iter().copied().filter(|p| p.1.is_finite()),
@@ -590,14 +592,8 @@ impl Drawing for LogScatter {
             .axis_desc_style(("sans-serif", 16))
             .draw()
             .map_err(&err)?;
-        let palette = [
-            RGBColor(31, 90, 180),
-            RGBColor(200, 50, 40),
-            RGBColor(20, 140, 60),
-            RGBColor(150, 80, 170),
-        ];
         for (i, (name, points)) in self.series.iter().enumerate() {
-            let colour = palette[i % palette.len()];
+            let colour = PALETTE[i % PALETTE.len()];
             let visible: Vec<&LabelledPoint> = points.iter().filter(shown).collect();
             chart
                 .draw_series(

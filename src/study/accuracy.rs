@@ -25,13 +25,14 @@
 use serde::Serialize;
 
 use crate::case::Case;
-use crate::lumped::{steady_state, Drive, MeshModel};
+use crate::lumped::{steady_state, Drive};
 use crate::signal::{amplitude_spectrum, harmonic_amplitudes};
 use crate::stiffness::{self, potential_energy, MeshStiffness};
 
-use super::compare::FeDte;
+use super::compare::{lumped_twin, twist_behind_free_hubs, FeDte};
 use super::lumped::gear_inertias;
 use super::{Progress, StudyError};
+use crate::explicit::scene::static_te;
 
 /// An explicit FE stiffness run read from its folder.
 #[derive(Debug, Clone)]
@@ -112,11 +113,7 @@ fn answers(
     let started = std::time::Instant::now();
     let pair = &case.pair;
     let rb = [pair.gears[0].base_radius, pair.gears[1].base_radius];
-    let inertias = gear_inertias(case);
-    let twist = rb[1]
-        * rb[1]
-        * pair.gears[1]
-            .body_torsional_compliance(case.material.youngs_modulus, case.material.poisson_ratio);
+    let twist = twist_behind_free_hubs(case, Drive::Speed);
     // Only a hub-to-hub stiffness (LTCA, FE) holds the body's twist; ISO 6336 and the
     // potential-energy method stop at the tooth's foundation. A k too soft to hold the twist
     // keeps its own value.
@@ -126,27 +123,17 @@ fn answers(
             .unwrap_or_else(|| mesh.clone()),
         false => mesh.clone(),
     };
-    let m = Drive::Speed.effective_mass(inertias, rb);
+    let m = Drive::Speed.effective_mass(gear_inertias(case), rb);
     let f_n = (rim.mean() / m).sqrt() / std::f64::consts::TAU;
     let teeth = pair.gears[0].teeth() as f64;
     let pitch = pair.gears[0].angular_pitch();
-    let te: Vec<f64> = (0..256)
-        .map(|j| {
-            let theta = j as f64 / 256.0 * pitch;
-            (torque / (rb[1] * mesh.stiffness.at(theta)) + mesh.unloaded_te.at(theta)) / rb[1]
-        })
+    let bins: Vec<Option<f64>> = (0..256)
+        .map(|j| Some(mesh.stiffness.at(j as f64 / 256.0 * pitch)))
         .collect();
-    let (lo, hi) = crate::signal::extremes(&te);
-    let zeta = case.fe.mesh_damping_ratio;
-    let model = MeshModel {
-        effective_mass: m,
-        damping: 2.0 * zeta * (rim.mean() * m).sqrt(),
-        force: torque / rb[1],
-        backlash: Some(pair.backlash_normal.max(0.0)),
-        bearings: None,
-        back_reflection: Some(pair.back_flank_reflection() - 2.0 * rim.origin),
-        mesh: rim,
-    };
+    let static_te_pp = static_te(pair, torque, &bins, &mesh.unloaded_te)
+        .map_or(f64::NAN, |te| te.peak_to_peak_rad);
+    let damping = 2.0 * case.fe.mesh_damping_ratio * (rim.mean() * m).sqrt();
+    let model = lumped_twin(case, rim, Drive::Speed, torque, damping);
     let speed = speed_rpm * std::f64::consts::TAU / 60.0;
     let steps = crate::sweep::steps_per_period(&model, speed);
     let steady = steady_state(&model, speed, steps, model.static_state(), 1e-9, 2000);
@@ -157,7 +144,7 @@ fn answers(
         / rb[1];
     Answers {
         mean: mesh.mean(),
-        static_te_pp: hi - lo,
+        static_te_pp,
         resonance_rpm: 60.0 * f_n / teeth,
         dte_amplitude,
         lumped_s: started.elapsed().as_secs_f64(),

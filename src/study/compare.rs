@@ -225,6 +225,52 @@ pub fn speed_overrides(rpm: f64) -> Vec<crate::case::Override> {
     )]
 }
 
+/// Each gear body's twist between bore and root circle along the line of action,
+/// r_b² φ/T [m/N] ([`crate::geometry::Gear::body_torsional_compliance`]).
+pub fn body_twist(case: &Case) -> [f64; 2] {
+    std::array::from_fn(|g| {
+        let gear = &case.pair.gears[g];
+        gear.base_radius.powi(2)
+            * gear.body_torsional_compliance(
+                case.material.youngs_modulus,
+                case.material.poisson_ratio,
+            )
+    })
+}
+
+/// The twist a light free hub leaves out of the mesh mode: the driven gear's with the driver
+/// held (speed drive), both gears' with both free (torque drive).
+pub fn twist_behind_free_hubs(case: &Case, drive: Drive) -> f64 {
+    let twist = body_twist(case);
+    match drive {
+        Drive::Speed => twist[1],
+        Drive::Torque => twist[0] + twist[1],
+    }
+}
+
+/// The lumped twin of a pair on `mesh`: 1 DOF with `drive`'s mass, rigid bearings, mesh force
+/// T/r_b2, viscous mesh damping `damping` [N·s/m], and with zero backlash the back flanks
+/// engaging with their own mirrored k and e.
+pub fn lumped_twin(
+    case: &Case,
+    mesh: MeshStiffness,
+    drive: Drive,
+    torque: f64,
+    damping: f64,
+) -> MeshModel {
+    let pair = &case.pair;
+    let rb = [pair.gears[0].base_radius, pair.gears[1].base_radius];
+    MeshModel {
+        effective_mass: drive.effective_mass(gear_inertias(case), rb),
+        back_reflection: Some(super::lumped::back_reflection(pair, &mesh)),
+        mesh,
+        damping,
+        force: torque / rb[1],
+        backlash: Some(pair.backlash_normal.max(0.0)),
+        bearings: None,
+    }
+}
+
 /// The FE run the headline numbers, the paper-stiffness study and the chart use: the one
 /// nearest the speed of the case's `high-unmodified` scene (the seed paper's 3000 rpm), else
 /// the first.
@@ -309,19 +355,7 @@ pub fn run(
     let damping_of =
         |drive: Drive| 2.0 * zeta * (k_secant * drive.effective_mass(inertias, rb)).sqrt();
     let damping = damping_of(Drive::Speed);
-    // Body twist: bore to root circle, along the line of action (r_b² φ/T).
-    let twist: [f64; 2] = std::array::from_fn(|g| {
-        rb[g]
-            * rb[g]
-            * pair.gears[g].body_torsional_compliance(
-                case.material.youngs_modulus,
-                case.material.poisson_ratio,
-            )
-    });
-    let removed = |drive: Drive| match drive {
-        Drive::Speed => twist[1],
-        Drive::Torque => twist[0] + twist[1],
-    };
+    let removed = |drive: Drive| twist_behind_free_hubs(case, drive);
     let rim_stiffness = |drive: Drive| {
         input
             .fe_stiffness
@@ -333,14 +367,8 @@ pub fn run(
                 ))
             })
     };
-    let lumped = |drive: Drive, mesh: MeshStiffness| MeshModel {
-        effective_mass: drive.effective_mass(inertias, rb),
-        mesh,
-        damping: damping_of(drive),
-        force: torque / rb[1],
-        backlash: Some(pair.backlash_normal.max(0.0)),
-        bearings: None,
-        back_reflection: Some(pair.back_flank_reflection() - 2.0 * input.fe_stiffness.origin),
+    let lumped = |drive: Drive, mesh: MeshStiffness| {
+        lumped_twin(case, mesh, drive, torque, damping_of(drive))
     };
     let frequencies = |hubs: Hubs, drive: Drive| -> Result<Frequencies, StudyError> {
         let rim = rim_stiffness(drive)?;

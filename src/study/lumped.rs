@@ -129,6 +129,12 @@ pub fn mesh_stiffness(
     })
 }
 
+/// Where the lumped model reads the back flanks' own k and e ([`MeshModel::back_reflection`]):
+/// the pair's mirror angle in the stiffness tables' θ, which counts from their origin.
+pub fn back_reflection(pair: &crate::geometry::GearPair, mesh: &MeshStiffness) -> f64 {
+    pair.back_flank_reflection() - 2.0 * mesh.origin
+}
+
 /// Builds the case's lumped model (`[lumped]`, the first operating point's torque).
 pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
     let settings = &case.lumped;
@@ -166,8 +172,7 @@ pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
         force: torque / base_radii[1],
         backlash,
         bearings,
-        // The back flanks' own k and e: the tables' θ is counted from their origin.
-        back_reflection: Some(pair.back_flank_reflection() - 2.0 * mesh.origin),
+        back_reflection: Some(back_reflection(pair, &mesh)),
     };
     // A coefficient in the case wins over its ratio (`--damping-ratio` removes the coefficient).
     let damping_ratio = match settings.mesh_damping {

@@ -197,6 +197,24 @@ impl LtcaModel {
         positions: usize,
         torque: f64,
     ) -> Result<ContactState, LtcaError> {
+        let geometry = self.position_geometry(index, positions)?;
+        let (result, forces) = geometry.solve(self, torque)?;
+        Ok(ContactState {
+            result,
+            points: geometry.points,
+            compliance: geometry.compliance,
+            forces,
+        })
+    }
+
+    /// The torque-independent part of one position: the candidate contact points with their
+    /// initial gaps, arms and compliance (the geometric search is most of an LTCA's cost, so a
+    /// torque sweep does it once per position).
+    fn position_geometry(
+        &self,
+        index: usize,
+        positions: usize,
+    ) -> Result<PositionGeometry, LtcaError> {
         let pair = &self.pair;
         let driver_rotation = index as f64 / positions as f64 * pair.gears[0].angular_pitch();
         let [rot1, rot2] = self.rotations(driver_rotation);
@@ -246,18 +264,32 @@ impl LtcaModel {
                     y,
                 })
             };
-            // Geometric contact: the flank point that closes first (min g/a) on a fine grid.
+            // Geometric contact: the flank point that closes first (min g/a) on a grid of 800
+            // spacings, searched coarse (every 8th point) then fine around the coarse minimum:
+            // g/a is smooth along the flank, so this finds the grid's minimum with 1/6 of the
+            // probes (the search is most of a position's cost).
             let samples = 800;
-            let mut best: Option<(f64, f64)> = None;
-            for i in 0..=samples {
+            let stride = 8;
+            let closing_at = |i: usize| {
                 let xi = xi_first + (xi_last - xi_first) * i as f64 / samples as f64;
-                if let Some(p) = probe(xi) {
-                    let closing = p.gap / p.arm;
-                    if best.is_none_or(|(_, c)| closing < c) {
-                        best = Some((xi, closing));
+                probe(xi).map(|p| (xi, p.gap / p.arm))
+            };
+            let lowest = |indices: &mut dyn Iterator<Item = usize>| {
+                let mut best: Option<(usize, f64, f64)> = None;
+                for i in indices {
+                    if let Some((xi, closing)) = closing_at(i) {
+                        if best.is_none_or(|(_, _, c)| closing < c) {
+                            best = Some((i, xi, closing));
+                        }
                     }
                 }
-            }
+                best
+            };
+            let best = lowest(&mut (0..=samples).step_by(stride)).and_then(|(coarse, _, _)| {
+                let from = coarse.saturating_sub(stride);
+                lowest(&mut (from..=(coarse + stride).min(samples)))
+            });
+            let best = best.map(|(_, xi, closing)| (xi, closing));
             let Some((xi_contact, closing)) = best else {
                 continue;
             };
@@ -305,53 +337,12 @@ impl LtcaModel {
             }
             c
         });
-        let gaps = DVector::from_iterator(m, points.iter().map(|p| p.gap));
-        let arms = DVector::from_iterator(m, points.iter().map(|p| p.arm));
-        let mut forces = DVector::zeros(m);
-        let solution =
-            solve_contact(&compliance, &gaps, &arms, torque, &mut forces).map_err(|source| {
-                LtcaError::Contact {
-                    position: index,
-                    rotation_deg: driver_rotation.to_degrees(),
-                    source,
-                }
-            })?;
-        let total_force: f64 = forces.iter().sum();
-        let rb2 = pair.gears[1].base_radius;
-        let mut pair_forces = vec![0.0; self.tooth_pairs.len()];
-        let mut pair_moment = vec![0.0; self.tooth_pairs.len()];
-        for (i, p) in points.iter().enumerate() {
-            pair_forces[p.pair] += forces[i];
-            pair_moment[p.pair] += forces[i] * p.loa;
-        }
-        let pair_positions = pair_forces
-            .iter()
-            .zip(&pair_moment)
-            .map(|(f, fm)| if *f > 0.0 { Some(fm / f) } else { None })
-            .collect();
-        let roll_pitch = pair.roll_angle_at(1, pair.contact_points.pitch);
-        let tangent_stiffness =
-            tangent_torsional_stiffness(&compliance, &arms, &forces) / (rb2 * rb2);
-        let result = PositionResult {
+        Ok(PositionGeometry {
+            index,
             driver_rotation,
-            roll_angle: roll_pitch + driver_rotation,
-            ste: solution.rotation,
-            unloaded_te: unloaded,
-            total_force,
-            pair_forces,
-            pair_positions,
-            mesh_stiffness: total_force / (rb2 * (solution.rotation - unloaded)),
-            tangent_stiffness,
-            kkt_residual: solution.kkt_residual,
-            active_points: forces.iter().filter(|f| **f > 0.0).count(),
-            candidate_points: m,
-            iterations: solution.iterations,
-        };
-        Ok(ContactState {
-            result,
+            unloaded,
             points,
             compliance,
-            forces,
         })
     }
 
@@ -399,6 +390,35 @@ impl LtcaModel {
             })
             .collect()
     }
+
+    /// One base pitch at each of `torques`: `[torque][position]`. The geometric contact search of
+    /// a position is done once and solved for every torque — what a load-range objective (a
+    /// Harris map, the robust relief optimizer) needs; each result equals [`LtcaModel::run`]'s.
+    pub fn run_torques(
+        &self,
+        positions: usize,
+        torques: &[f64],
+    ) -> Result<Vec<Vec<PositionResult>>, LtcaError> {
+        if let Some(&torque) = torques.iter().find(|t| !(**t > 0.0 && t.is_finite())) {
+            return Err(LtcaError::Torque { torque });
+        }
+        if positions < 4 {
+            return Err(LtcaError::Positions { positions });
+        }
+        let by_position: Vec<Vec<PositionResult>> = (0..positions)
+            .into_par_iter()
+            .map(|j| {
+                let geometry = self.position_geometry(j, positions)?;
+                torques
+                    .iter()
+                    .map(|&torque| Ok(geometry.solve(self, torque)?.0))
+                    .collect()
+            })
+            .collect::<Result<_, LtcaError>>()?;
+        Ok((0..torques.len())
+            .map(|t| by_position.iter().map(|p| p[t].clone()).collect())
+            .collect())
+    }
 }
 
 /// Gear 2's loaded-side profile (tooth-local) with `modification`: dense polyline from the tip
@@ -425,12 +445,85 @@ fn loaded_profile(
 /// the geometric contact point, several times the Hertzian contact width at any sensible mesh.
 const LATTICE_HALF_WIDTH: i32 = 8;
 
+/// The candidate contact points of one position, before a torque is applied.
+struct PositionGeometry {
+    index: usize,
+    driver_rotation: f64,
+    /// Unloaded transmission error φ₀ [rad].
+    unloaded: f64,
+    points: Vec<ContactPoint>,
+    compliance: DMatrix<f64>,
+}
+
 /// The contact problem of one position, solved.
 struct ContactState {
     result: PositionResult,
     points: Vec<ContactPoint>,
     compliance: DMatrix<f64>,
     forces: DVector<f64>,
+}
+
+impl PositionGeometry {
+    /// The contact problem of this position at `torque`, solved.
+    fn solve(
+        &self,
+        model: &LtcaModel,
+        torque: f64,
+    ) -> Result<(PositionResult, DVector<f64>), LtcaError> {
+        let pair = &model.pair;
+        let PositionGeometry {
+            index,
+            driver_rotation,
+            unloaded,
+            points,
+            compliance,
+        } = self;
+        let (index, driver_rotation, unloaded) = (*index, *driver_rotation, *unloaded);
+        let m = points.len();
+        let gaps = DVector::from_iterator(m, points.iter().map(|p| p.gap));
+        let arms = DVector::from_iterator(m, points.iter().map(|p| p.arm));
+        let mut forces = DVector::zeros(m);
+        let solution =
+            solve_contact(compliance, &gaps, &arms, torque, &mut forces).map_err(|source| {
+                LtcaError::Contact {
+                    position: index,
+                    rotation_deg: driver_rotation.to_degrees(),
+                    source,
+                }
+            })?;
+        let total_force: f64 = forces.iter().sum();
+        let rb2 = pair.gears[1].base_radius;
+        let mut pair_forces = vec![0.0; model.tooth_pairs.len()];
+        let mut pair_moment = vec![0.0; model.tooth_pairs.len()];
+        for (i, p) in points.iter().enumerate() {
+            pair_forces[p.pair] += forces[i];
+            pair_moment[p.pair] += forces[i] * p.loa;
+        }
+        let pair_positions = pair_forces
+            .iter()
+            .zip(&pair_moment)
+            .map(|(f, fm)| if *f > 0.0 { Some(fm / f) } else { None })
+            .collect();
+        let roll_pitch = pair.roll_angle_at(1, pair.contact_points.pitch);
+        let tangent_stiffness =
+            tangent_torsional_stiffness(compliance, &arms, &forces) / (rb2 * rb2);
+        let result = PositionResult {
+            driver_rotation,
+            roll_angle: roll_pitch + driver_rotation,
+            ste: solution.rotation,
+            unloaded_te: unloaded,
+            total_force,
+            pair_forces,
+            pair_positions,
+            mesh_stiffness: total_force / (rb2 * (solution.rotation - unloaded)),
+            tangent_stiffness,
+            kkt_residual: solution.kkt_residual,
+            active_points: forces.iter().filter(|f| **f > 0.0).count(),
+            candidate_points: m,
+            iterations: solution.iterations,
+        };
+        Ok((result, forces))
+    }
 }
 
 /// The tangent torsional mesh stiffness dT/dφ = aᵀ C_AA⁻¹ a [N·m/rad] on the active set A (the
@@ -586,4 +679,102 @@ pub struct PositionResult {
     pub active_points: usize,
     pub candidate_points: usize,
     pub iterations: usize,
+}
+
+/// The loaded contact ratio ε_load of one base pitch: the mean number of tooth pairs carrying
+/// load, ε = (1/N) Σ_p L_p, where L_p is the length (in position spacings, window [0, N)) over
+/// which pair p carries load. A loaded run of samples starts and ends between samples: the
+/// crossing is extrapolated linearly from the run's first (last) two forces and clamped to the
+/// half-open spacing before (after) it, so ε changes continuously with the relief rather than in
+/// steps of 1/N — what a linearized constraint needs. A run touching the window's edge continues
+/// beyond it and is counted to the window's edge (sample j stands for [j − ½, j + ½), so the
+/// window is [−½, N − ½) and with every extension ½ this is the plain count of loaded samples). Unmodified gears load a little beyond the geometric
+/// path (ε_load ≳ ε_α); relief that exceeds the deflection shortens it.
+pub fn loaded_contact_ratio(results: &[PositionResult]) -> f64 {
+    let n = results.len();
+    let pairs = results.first().map_or(0, |r| r.pair_forces.len());
+    let mut loaded = 0.0;
+    for p in 0..pairs {
+        let force = |j: usize| results[j].pair_forces[p];
+        let mut j = 0;
+        while j < n {
+            if force(j) <= 0.0 {
+                j += 1;
+                continue;
+            }
+            let first = j;
+            while j < n && force(j) > 0.0 {
+                j += 1;
+            }
+            let last = j - 1;
+            // Extension beyond a boundary sample with force f, next inside sample g: the linear
+            // zero of the two, within one spacing.
+            let extension = |f: f64, g: Option<f64>| match g {
+                Some(g) if g > f => (f / (g - f)).min(1.0),
+                _ => 0.5,
+            };
+            let start = if first == 0 {
+                -0.5
+            } else {
+                let inside = (first < last).then(|| force(first + 1));
+                first as f64 - extension(force(first), inside)
+            };
+            let end = if last == n - 1 {
+                n as f64 - 0.5
+            } else {
+                let inside = (first < last).then(|| force(last - 1));
+                last as f64 + extension(force(last), inside)
+            };
+            loaded += end - start;
+        }
+    }
+    loaded / n as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn position(pair_forces: Vec<f64>) -> PositionResult {
+        PositionResult {
+            driver_rotation: 0.0,
+            roll_angle: 0.0,
+            ste: 0.0,
+            unloaded_te: 0.0,
+            total_force: pair_forces.iter().sum(),
+            pair_positions: vec![None; pair_forces.len()],
+            pair_forces,
+            mesh_stiffness: 0.0,
+            tangent_stiffness: 0.0,
+            kkt_residual: 0.0,
+            active_points: 0,
+            candidate_points: 0,
+            iterations: 0,
+        }
+    }
+
+    /// Linear load ramps with known zero crossings give the exact loaded contact ratio: a
+    /// leaving pair unloading at 10.3 spacings, an entering pair loading from 5.6, one pair
+    /// loaded throughout (N = 20, window [−½, 19½)).
+    #[test]
+    fn loaded_contact_ratio_finds_the_crossings_of_linear_ramps() {
+        let n = 20;
+        let results: Vec<_> = (0..n)
+            .map(|j| {
+                let j = j as f64;
+                position(vec![
+                    (10.3 - j).max(0.0) * 100.0,
+                    (j - 5.6).max(0.0) * 70.0,
+                    1000.0,
+                ])
+            })
+            .collect();
+        let expected = ((10.3 + 0.5) + (19.5 - 5.6) + 20.0) / 20.0;
+        assert!((loaded_contact_ratio(&results) - expected).abs() < 1e-12);
+        // A pair loaded at one sample only counts one spacing; a pair never loaded counts 0.
+        let single: Vec<_> = (0..n)
+            .map(|j| position(vec![if j == 7 { 5.0 } else { 0.0 }, 0.0, 1.0]))
+            .collect();
+        assert!((loaded_contact_ratio(&single) - 21.0 / 20.0).abs() < 1e-12);
+    }
 }

@@ -9,6 +9,7 @@ pub mod geometry;
 pub mod ltca;
 pub mod lumped;
 pub mod mesh;
+pub mod optimize;
 pub mod plot;
 pub mod stiffness_csv;
 pub mod vtk;

@@ -139,10 +139,39 @@ pub fn back_reflection(pair: &crate::geometry::GearPair, mesh: &MeshStiffness) -
 pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
     let settings = &case.lumped;
     let torque = load_torque(case)?;
-    let pair = &case.pair;
     let started = std::time::Instant::now();
     let mesh = mesh_stiffness(case, &settings.stiffness, torque)?;
     let stiffness_wall_s = started.elapsed().as_secs_f64();
+    let inertias = gear_inertias(case);
+    let (model, damping_ratio) = model_on(case, mesh, torque);
+    let natural_frequency_hz = model.natural_frequency() / std::f64::consts::TAU;
+    let drive = settings.drive.name();
+    let model_note = match &model.bearings {
+        None => format!(
+            "1-DOF along the line of action ({drive} drive; the torsional 2-DOF with rigid shafts and bearings reduced exactly: torque drive -> relative coordinate, speed drive -> driven gear only); mesh stiffness periodic in the driver roll angle"
+        ),
+        Some(b) => format!(
+            "3-DOF: relative rotation along the line of action ({drive} drive) + each gear's translation on its bearings along the line of action (k_b = {:.3e} / {:.3e} N/m, m = {:.3} / {:.3} kg); translations across the line of action left out (a frictionless spur mesh force does not excite them)",
+            b.stiffness[0], b.stiffness[1], b.mass[0], b.mass[1]
+        ),
+    };
+    Ok(LumpedSetup {
+        torque,
+        model,
+        stiffness_wall_s,
+        inertias,
+        drive: settings.drive,
+        damping_ratio,
+        natural_frequency_hz,
+        model_note,
+    })
+}
+
+/// The case's lumped model (`[lumped]`: drive, inertias, bearings, damping) on the mesh
+/// stiffness `mesh` under `torque`, with the damping ratio it was given.
+pub fn model_on(case: &Case, mesh: MeshStiffness, torque: f64) -> (MeshModel, f64) {
+    let settings = &case.lumped;
+    let pair = &case.pair;
     let inertias = gear_inertias(case);
     let base_radii = [pair.gears[0].base_radius, pair.gears[1].base_radius];
     let effective_mass = settings.drive.effective_mass(inertias, base_radii);
@@ -167,12 +196,12 @@ pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
     });
     let mut model = MeshModel {
         effective_mass,
-        mesh: mesh.clone(),
+        back_reflection: Some(back_reflection(pair, &mesh)),
+        mesh,
         damping: 0.0,
         force: torque / base_radii[1],
         backlash,
         bearings,
-        back_reflection: Some(back_reflection(pair, &mesh)),
     };
     // A coefficient in the case wins over its ratio (`--damping-ratio` removes the coefficient).
     let damping_ratio = match settings.mesh_damping {
@@ -180,27 +209,7 @@ pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
         None => settings.damping_ratio,
     };
     model.damping = model.damping_from_ratio(damping_ratio);
-    let natural_frequency_hz = model.natural_frequency() / std::f64::consts::TAU;
-    let drive = settings.drive.name();
-    let model_note = match &model.bearings {
-        None => format!(
-            "1-DOF along the line of action ({drive} drive; the torsional 2-DOF with rigid shafts and bearings reduced exactly: torque drive -> relative coordinate, speed drive -> driven gear only); mesh stiffness periodic in the driver roll angle"
-        ),
-        Some(b) => format!(
-            "3-DOF: relative rotation along the line of action ({drive} drive) + each gear's translation on its bearings along the line of action (k_b = {:.3e} / {:.3e} N/m, m = {:.3} / {:.3} kg); translations across the line of action left out (a frictionless spur mesh force does not excite them)",
-            b.stiffness[0], b.stiffness[1], b.mass[0], b.mass[1]
-        ),
-    };
-    Ok(LumpedSetup {
-        torque,
-        model,
-        stiffness_wall_s,
-        inertias,
-        drive: settings.drive,
-        damping_ratio,
-        natural_frequency_hz,
-        model_note,
-    })
+    (model, damping_ratio)
 }
 
 /// Undamped natural frequencies of the lumped model at the mean mesh stiffness [Hz].

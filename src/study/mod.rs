@@ -13,6 +13,7 @@ pub mod geometry;
 pub mod ltca;
 pub mod lumped;
 pub mod mesh;
+pub mod optimize;
 pub mod stability;
 pub mod sweep;
 pub mod validate;

@@ -141,6 +141,18 @@ pub enum Command {
         #[arg(long = "chart-fe-run", value_name = "DIR")]
         chart_fe_runs: Vec<PathBuf>,
     },
+    /// Tip/root relief optimization: the relief (amount per gear and end, relief length, linear
+    /// or parabolic) that minimizes the loaded STE peak-to-peak averaged over a torque range,
+    /// by LTCA sensitivities and a Clarabel QP in a trust region, against no relief, the
+    /// case's relief and the classic rule; Harris map and a lumped sweep per candidate; with
+    /// --fe-check the explicit FE at low and high speed. Writes summary.json, iterations,
+    /// candidates, harris, ste and sweep CSVs with plots.
+    Optimize {
+        #[command(flatten)]
+        common: CommonArgs,
+        #[command(flatten)]
+        options: OptimizeArgs,
+    },
     /// Validation studies too wide for the test suite; each writes a table (CSV and Markdown)
     /// and summary.json.
     Validate {
@@ -187,4 +199,49 @@ pub struct CommonArgs {
     /// mesh.fine_element_mm=0.05, scene[low-unmodified].duration_s=0.02 (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<Override>,
+}
+
+/// The flags of `geardyn optimize`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct OptimizeArgs {
+    /// Load torque on the driven gear [N·m] (sets operating_point[0].torque_nm): the design
+    /// torque.
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
+    pub torque_nm: Option<f64>,
+    /// Torques of the robust objective, FROM:TO:N in percent of the design torque.
+    #[arg(long, default_value = "50:150:5", value_name = "FROM:TO:N")]
+    pub torque_range: geardyn::study::optimize::TorqueRange,
+    /// LTCA positions per base pitch.
+    #[arg(long, default_value_t = 64, value_name = "N")]
+    pub positions: usize,
+    /// Smallest loaded contact ratio allowed at any torque of the range.
+    #[arg(long, default_value_t = 1.2, value_name = "EPS")]
+    pub min_contact_ratio: f64,
+    /// Largest relief amount [µm].
+    #[arg(long, default_value_t = 40.0, value_name = "UM")]
+    pub max_relief_um: f64,
+    /// Shortest relief, as a fraction of the double-contact zone (1 = long relief).
+    #[arg(long, default_value_t = 0.25, value_name = "FRACTION")]
+    pub min_relief_length: f64,
+    /// Driver speeds of each candidate's lumped sweep, FROM:TO:N in rpm.
+    #[arg(long, default_value = "100:12000:300", value_name = "FROM:TO:N")]
+    pub rpm: RpmRange,
+    /// Also run the explicit FE cross-check of the candidates at the case's low and high speed
+    /// (long: about 15 minutes per candidate on 2 cores).
+    #[arg(long)]
+    pub fe_check: bool,
+}
+
+impl OptimizeArgs {
+    pub fn options(&self) -> geardyn::study::optimize::OptimizeOptions {
+        geardyn::study::optimize::OptimizeOptions {
+            torque_range: self.torque_range,
+            positions: self.positions,
+            min_contact_ratio: self.min_contact_ratio,
+            max_relief_um: self.max_relief_um,
+            min_length: self.min_relief_length,
+            rpm: self.rpm.clone(),
+            ..Default::default()
+        }
+    }
 }

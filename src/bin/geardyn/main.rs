@@ -14,7 +14,7 @@ use geardyn::case::{Case, Override, StiffnessSource};
 use geardyn::report::{self, OutputDir};
 use geardyn::study::{self, fe::FeShorthands, lumped::LumpedShorthands, RpmRange};
 
-use args::{Cli, Command, CommonArgs, ValidationStudy};
+use args::{Cli, Command, CommonArgs, OptimizeArgs, ValidationStudy};
 use progress::{fe_run, progress_bar, stage, staged_bar};
 
 fn main() -> ExitCode {
@@ -64,6 +64,7 @@ fn main() -> ExitCode {
             (fe_stiffness.as_deref(), positions, paper_stiffness),
             chart.then_some(&chart_fe_runs[..]),
         ),
+        Command::Optimize { common, options } => optimize(&common, &options),
         Command::Case { case, set } => Case::load_with(case.as_deref(), &set)
             .map(|c| print!("{}", c.text))
             .map_err(Into::into),
@@ -154,6 +155,21 @@ fn ltca(
     bar.finish_and_clear();
     print!("{}", report::ltca::console(&result));
     report::ltca::write(OutputDir(&dir), &case, &result)?;
+    println!("wrote {}", dir.display());
+    Ok(())
+}
+
+fn optimize(args: &CommonArgs, options: &OptimizeArgs) -> Result<()> {
+    let case = load(
+        args,
+        study::torque_override(options.torque_nm).into_iter().collect(),
+    )?;
+    let dir = output_dir(args, "optimize", &case)?;
+    let bar = staged_bar();
+    let result = study::optimize::run(&case, &options.options(), &stage(&bar))?;
+    bar.finish_and_clear();
+    print!("{}", report::optimize::console(&result));
+    report::optimize::write(OutputDir(&dir), &case, &result)?;
     println!("wrote {}", dir.display());
     Ok(())
 }

@@ -1,0 +1,511 @@
+//! The robust relief optimizer: the relief that keeps the loaded static transmission error flat
+//! over a load range, by sequential linearization and a Clarabel QP with a trust region.
+//!
+//! # Problem
+//! Variables v = (C_a1, C_f1, C_a2, C_f2 in µm, 10·λ) ([`super::relief::ReliefDesign`]); loaded
+//! STE s_ij(v) = r_b2 φ at position i and torque T_j from the LTCA on fixed bodies
+//! ([`LtcaModel::with_relief`]). Objective, the weighted peak-to-peak over the load range plus a
+//! small regularization that breaks ties between designs the STE cannot tell apart:
+//! ```text
+//! f(v) = Σ_j w_j (max_i s_ij − min_i s_ij) + ½ ρ ‖v‖²,      Σ_j w_j = 1
+//! ```
+//! Subject to bounds v_lo ≤ v ≤ v_hi; no loss of contact at the design torque — the combined
+//! relief at each end of the path (C_a1 + C_f2 at the end of recess, C_a2 + C_f1 at the start of
+//! approach) at most the single-pair deflection δ_s of the unmodified pair there, beyond which
+//! the relieved end is not reached under the design load (Smith, *Gear Noise and Vibration*,
+//! §3.3); and the loaded contact ratio ε_j ([`loaded_contact_ratio`]) ≥ ε_min at every torque.
+//!
+//! # Method
+//! Each iteration linearizes s_ij and ε_j about v₀ by forward differences (one LTCA per
+//! variable, every torque solved on one contact search per position) and solves the epigraph QP
+//! in (Δv, u, l):
+//! ```text
+//! minimize   Σ_j w_j (u_j − l_j) + ½ ρ ‖v₀ + Δv‖²
+//! subject to l_j ≤ s_ij + ∇s_ij·Δv ≤ u_j,   ε_j + ∇ε_j·Δv ≥ ε_min,   linear limits,
+//!            |Δv_k| ≤ Δ  (trust region),     v_lo ≤ v₀ + Δv ≤ v_hi
+//! ```
+//! The step is re-evaluated with the LTCA; with ρ = actual/predicted reduction it is accepted
+//! when ρ ≥ 0.1 and ε_j ≥ ε_min holds in the LTCA, and the radius grows (×2, ρ ≥ 0.75 on the
+//! boundary) or shrinks (×½, ρ < 0.25) — the basic trust-region method of Nocedal & Wright,
+//! *Numerical Optimization*, Alg. 4.1, with the model's max terms kept exact by the epigraph.
+//! It stops when the predicted reduction is below the tolerance or the radius below 1e-3.
+
+use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+
+use super::qp::{self, QpError, QuadraticProgram};
+use super::relief::{ReliefDesign, VARIABLES};
+use crate::geometry::{FlankModification, GeometryError, ReliefShape};
+use crate::ltca::{loaded_contact_ratio, LtcaError, LtcaModel};
+
+#[derive(Debug, thiserror::Error)]
+pub enum OptimizeError {
+    #[error("{0}")]
+    Input(String),
+    #[error(transparent)]
+    Geometry(#[from] GeometryError),
+    #[error(transparent)]
+    Ltca(#[from] LtcaError),
+    #[error(transparent)]
+    Qp(#[from] QpError),
+}
+
+/// Scale of the variables: amounts in µm, λ in tenths.
+const SCALE: [f64; VARIABLES] = [1e-6, 1e-6, 1e-6, 1e-6, 0.1];
+
+/// The load range of the robust objective.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LoadRange {
+    /// Torques on the driven gear [N·m].
+    pub torques: Vec<f64>,
+    /// Weights w_j, summing to 1.
+    pub weights: Vec<f64>,
+}
+
+impl LoadRange {
+    /// `count` torques evenly from `from` to `to` (fractions of `design`), equal weights.
+    pub fn uniform(design: f64, from: f64, to: f64, count: usize) -> Result<Self, OptimizeError> {
+        if !(from > 0.0 && to >= from && to.is_finite() && count >= 1 && (count > 1 || from == to))
+        {
+            return Err(OptimizeError::Input(format!(
+                "torque range {from}:{to}:{count} is invalid: use FROM:TO:N with 0 < FROM ≤ TO \
+                 (fractions of the design torque) and N ≥ 2 torques (N = 1 only with FROM = TO)"
+            )));
+        }
+        let torques = (0..count)
+            .map(|j| {
+                let f = if count == 1 {
+                    from
+                } else {
+                    from + (to - from) * j as f64 / (count - 1) as f64
+                };
+                f * design
+            })
+            .collect();
+        Ok(LoadRange {
+            torques,
+            weights: vec![1.0 / count as f64; count],
+        })
+    }
+}
+
+/// The limits a design must keep.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Limits {
+    /// Largest relief amount [m] (manufacturing).
+    pub max_amount: f64,
+    /// Shortest relief, as the fraction λ of the double-contact zone.
+    pub min_length: f64,
+    /// Smallest loaded contact ratio at any torque of the range.
+    pub min_contact_ratio: f64,
+    /// Single-pair deflection δ_s of the unmodified pair at the design torque [m]: the combined
+    /// relief at each end of the path may not exceed it (no loss of contact at the design torque).
+    pub contact_deflection: f64,
+}
+
+/// Settings of the iteration.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Settings {
+    /// LTCA positions per base pitch.
+    pub positions: usize,
+    /// ρ [µm per scaled unit²] of the regularization.
+    pub regularization: f64,
+    /// Initial trust radius [scaled units: µm, or tenths of λ].
+    pub initial_radius: f64,
+    pub max_iterations: usize,
+    /// Stop when the predicted reduction is below this [µm].
+    pub tolerance_um: f64,
+    /// Forward-difference step [scaled units].
+    pub step: f64,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            positions: 64,
+            regularization: 1e-4,
+            initial_radius: 4.0,
+            max_iterations: 30,
+            tolerance_um: 1e-3,
+            step: 0.25,
+        }
+    }
+}
+
+/// The loaded STE of one relief over a load range.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LoadResponse {
+    /// Loaded STE r_b2 φ [µm], `[torque][position]`.
+    pub ste_um: Vec<Vec<f64>>,
+    /// STE peak-to-peak per torque [µm].
+    pub ste_pp_um: Vec<f64>,
+    /// Loaded contact ratio per torque.
+    pub contact_ratio: Vec<f64>,
+    /// Mean secant mesh stiffness per torque [N/m].
+    pub mesh_stiffness_mean: Vec<f64>,
+    /// The robust objective Σ w_j pp_j [µm] (without the regularization).
+    pub objective_um: f64,
+    /// Largest KKT residual of the contact solves.
+    pub max_kkt_residual: f64,
+}
+
+/// The LTCA over `range` of `modifications` on `model`'s bodies.
+pub fn load_response(
+    model: &LtcaModel,
+    modifications: &[FlankModification; 2],
+    range: &LoadRange,
+    positions: usize,
+) -> Result<LoadResponse, LtcaError> {
+    let runs = model
+        .with_relief(modifications)
+        .run_torques(positions, &range.torques)?;
+    let rb2 = model.pair.gears[1].base_radius;
+    let ste_um: Vec<Vec<f64>> = runs
+        .iter()
+        .map(|run| run.iter().map(|r| r.ste * rb2 * 1e6).collect())
+        .collect();
+    let ste_pp_um: Vec<f64> = ste_um.iter().map(|s| peak_to_peak(s)).collect();
+    let objective_um = ste_pp_um
+        .iter()
+        .zip(&range.weights)
+        .map(|(pp, w)| pp * w)
+        .sum();
+    Ok(LoadResponse {
+        contact_ratio: runs.iter().map(|run| loaded_contact_ratio(run)).collect(),
+        mesh_stiffness_mean: runs
+            .iter()
+            .map(|run| run.iter().map(|r| r.mesh_stiffness).sum::<f64>() / run.len() as f64)
+            .collect(),
+        max_kkt_residual: runs
+            .iter()
+            .flatten()
+            .map(|r| r.kkt_residual)
+            .fold(0.0, f64::max),
+        ste_um,
+        ste_pp_um,
+        objective_um,
+    })
+}
+
+/// A design evaluated by the LTCA over the load range.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Evaluation {
+    pub design: ReliefDesign,
+    #[serde(flatten)]
+    pub response: LoadResponse,
+}
+
+/// Evaluates `design` on `model`'s bodies over `range`.
+pub fn evaluate(
+    model: &LtcaModel,
+    design: &ReliefDesign,
+    range: &LoadRange,
+    positions: usize,
+) -> Result<Evaluation, OptimizeError> {
+    let modifications = design.modifications(&model.pair)?;
+    Ok(Evaluation {
+        design: *design,
+        response: load_response(model, &modifications, range, positions)?,
+    })
+}
+
+fn peak_to_peak(v: &[f64]) -> f64 {
+    v.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+        - v.iter().copied().fold(f64::INFINITY, f64::min)
+}
+
+/// One iteration of the trust-region loop.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct IterationRecord {
+    pub iteration: usize,
+    /// Robust objective at the iterate before the step [µm].
+    pub objective_um: f64,
+    /// Reduction of f the linear model predicts [µm].
+    pub predicted_reduction_um: f64,
+    /// Reduction of f the LTCA gives for the step [µm] (NaN: the step was not evaluable).
+    pub actual_reduction_um: f64,
+    pub trust_radius: f64,
+    pub accepted: bool,
+    /// The trial design's variables (C_a1, C_f1, C_a2, C_f2 [µm], λ).
+    pub trial: [f64; VARIABLES],
+    pub qp_iterations: u32,
+    pub kkt_residual: f64,
+    pub qp_solve_s: f64,
+}
+
+/// The result of one start.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Optimum {
+    pub shape: ReliefShape,
+    pub start: Evaluation,
+    pub best: Evaluation,
+    pub iterations: Vec<IterationRecord>,
+    /// The predicted reduction fell below the tolerance (not only the radius or the count).
+    pub converged: bool,
+    /// Time in Clarabel over all iterations [s].
+    pub qp_solve_s: f64,
+    pub ltca_evaluations: usize,
+}
+
+/// f(v): the robust objective plus the regularization.
+fn merit(evaluation: &Evaluation, regularization: f64) -> f64 {
+    let v = scaled(&evaluation.design);
+    evaluation.response.objective_um + 0.5 * regularization * v.iter().map(|x| x * x).sum::<f64>()
+}
+
+fn scaled(design: &ReliefDesign) -> [f64; VARIABLES] {
+    let x = design.to_vector();
+    std::array::from_fn(|k| x[k] / SCALE[k])
+}
+
+fn unscaled(v: &[f64; VARIABLES], shape: ReliefShape) -> ReliefDesign {
+    ReliefDesign::from_vector(&std::array::from_fn(|k| v[k] * SCALE[k]), shape)
+}
+
+/// The bounds of the scaled variables.
+fn bounds(limits: &Limits) -> ([f64; VARIABLES], [f64; VARIABLES]) {
+    let amount = limits.max_amount / SCALE[0];
+    (
+        [0.0, 0.0, 0.0, 0.0, limits.min_length / SCALE[4]],
+        [amount, amount, amount, amount, 1.0 / SCALE[4]],
+    )
+}
+
+/// Whether `design` keeps the limits (with a small tolerance for the LTCA's contact ratio).
+pub fn feasible(evaluation: &Evaluation, limits: &Limits) -> bool {
+    let v = scaled(&evaluation.design);
+    let (lo, hi) = bounds(limits);
+    let ends = end_relief(&evaluation.design);
+    (0..VARIABLES).all(|k| v[k] >= lo[k] - 1e-9 && v[k] <= hi[k] + 1e-9)
+        && ends.iter().all(|e| *e <= limits.contact_deflection * (1.0 + 1e-9))
+        && evaluation
+            .response.contact_ratio
+            .iter()
+            .all(|e| *e >= limits.min_contact_ratio - 1e-6)
+}
+
+/// Combined relief at the end of recess (C_a1 + C_f2) and at the start of approach (C_a2 + C_f1).
+pub fn end_relief(design: &ReliefDesign) -> [f64; 2] {
+    [
+        design.tip[0] + design.root[1],
+        design.tip[1] + design.root[0],
+    ]
+}
+
+/// Runs the trust-region loop from `start`; `progress` sees each iteration's record.
+pub fn optimize(
+    model: &LtcaModel,
+    start: &ReliefDesign,
+    range: &LoadRange,
+    limits: &Limits,
+    settings: &Settings,
+    progress: &dyn Fn(&IterationRecord),
+) -> Result<Optimum, OptimizeError> {
+    let shape = start.shape;
+    let (lo, hi) = bounds(limits);
+    let first = evaluate(model, start, range, settings.positions)?;
+    if !feasible(&first, limits) {
+        return Err(OptimizeError::Input(format!(
+            "the start design {:?} breaks the limits (contact ratio {:?}, minimum {})",
+            start, first.response.contact_ratio, limits.min_contact_ratio
+        )));
+    }
+    let mut evaluations = 1;
+    let mut current = first.clone();
+    let mut radius = settings.initial_radius;
+    let mut records = Vec::new();
+    let mut converged = false;
+    let mut qp_solve_s = 0.0;
+    for iteration in 1..=settings.max_iterations {
+        let v0 = scaled(&current.design);
+        let jacobian = linearize(model, &current, range, settings, (&lo, &hi))?;
+        evaluations += VARIABLES;
+        let problem = step_problem(&current, &jacobian, range, limits, settings, radius, (&lo, &hi));
+        let solution = qp::solve(&problem)?;
+        qp_solve_s += solution.solve_s;
+        let dv: [f64; VARIABLES] = std::array::from_fn(|k| solution.x[k]);
+        let f0 = merit(&current, settings.regularization);
+        let constant = 0.5 * settings.regularization * v0.iter().map(|x| x * x).sum::<f64>();
+        // The QP objective drops the constant ½ρ‖v₀‖²; the model value is it plus that.
+        let predicted = f0 - (solution.objective + constant);
+        let trial_v: [f64; VARIABLES] = std::array::from_fn(|k| (v0[k] + dv[k]).clamp(lo[k], hi[k]));
+        let trial_design = unscaled(&trial_v, shape);
+        let mut record = IterationRecord {
+            iteration,
+            objective_um: current.response.objective_um,
+            predicted_reduction_um: predicted,
+            actual_reduction_um: f64::NAN,
+            trust_radius: radius,
+            accepted: false,
+            trial: std::array::from_fn(|k| trial_v[k] * if k == 4 { SCALE[4] } else { 1.0 }),
+            qp_iterations: solution.iterations,
+            kkt_residual: solution.kkt_residual,
+            qp_solve_s: solution.solve_s,
+        };
+        if predicted < settings.tolerance_um {
+            converged = true;
+            progress(&record);
+            records.push(record);
+            break;
+        }
+        let step_norm = dv.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+        match evaluate(model, &trial_design, range, settings.positions) {
+            Ok(trial) => {
+                evaluations += 1;
+                let actual = f0 - merit(&trial, settings.regularization);
+                record.actual_reduction_um = actual;
+                let ratio = actual / predicted;
+                if ratio >= 0.1 && feasible(&trial, limits) {
+                    record.accepted = true;
+                    current = trial;
+                }
+                if ratio < 0.25 || !record.accepted {
+                    radius *= 0.5;
+                } else if ratio >= 0.75 && step_norm >= 0.99 * radius {
+                    radius *= 2.0;
+                }
+            }
+            // A step the geometry cannot carry (a relief too steep for its length) is a failed
+            // step: the radius shrinks and the loop goes on from the current design.
+            Err(OptimizeError::Geometry(_)) => radius *= 0.5,
+            Err(e) => return Err(e),
+        }
+        progress(&record);
+        records.push(record);
+        if radius < 1e-3 {
+            break;
+        }
+    }
+    Ok(Optimum {
+        shape,
+        start: first,
+        best: current,
+        iterations: records,
+        converged,
+        qp_solve_s,
+        ltca_evaluations: evaluations,
+    })
+}
+
+/// Forward-difference sensitivities of the STE ([torque][position][variable], µm per scaled
+/// unit) and of the contact ratio ([torque][variable]) about `current`. A step that would leave
+/// the bounds, or that the geometry rejects, is taken backwards.
+struct Jacobian {
+    ste: Vec<Vec<[f64; VARIABLES]>>,
+    contact_ratio: Vec<[f64; VARIABLES]>,
+}
+
+fn linearize(
+    model: &LtcaModel,
+    current: &Evaluation,
+    range: &LoadRange,
+    settings: &Settings,
+    (lo, hi): (&[f64; VARIABLES], &[f64; VARIABLES]),
+) -> Result<Jacobian, OptimizeError> {
+    let v0 = scaled(&current.design);
+    let mut jacobian = Jacobian {
+        ste: current
+            .response.ste_um
+            .iter()
+            .map(|s| vec![[0.0; VARIABLES]; s.len()])
+            .collect(),
+        contact_ratio: vec![[0.0; VARIABLES]; range.torques.len()],
+    };
+    for k in 0..VARIABLES {
+        let forward = v0[k] + settings.step <= hi[k];
+        let attempt = |h: f64| {
+            let mut v = v0;
+            v[k] = (v[k] + h).clamp(lo[k], hi[k]);
+            evaluate(model, &unscaled(&v, current.design.shape), range, settings.positions)
+                .map(|e| (e, v[k] - v0[k]))
+        };
+        let (shifted, h) = match attempt(if forward { settings.step } else { -settings.step }) {
+            Ok(r) => r,
+            Err(OptimizeError::Geometry(_)) => attempt(if forward { -settings.step } else { settings.step })?,
+            Err(e) => return Err(e),
+        };
+        for (j, (after, before)) in shifted.response.ste_um.iter().zip(&current.response.ste_um).enumerate() {
+            for (i, (a, b)) in after.iter().zip(before).enumerate() {
+                jacobian.ste[j][i][k] = (a - b) / h;
+            }
+            jacobian.contact_ratio[j][k] =
+                (shifted.response.contact_ratio[j] - current.response.contact_ratio[j]) / h;
+        }
+    }
+    Ok(jacobian)
+}
+
+/// The epigraph QP of one step in (Δv, u, l).
+fn step_problem(
+    current: &Evaluation,
+    jacobian: &Jacobian,
+    range: &LoadRange,
+    limits: &Limits,
+    settings: &Settings,
+    radius: f64,
+    (lo, hi): (&[f64; VARIABLES], &[f64; VARIABLES]),
+) -> QuadraticProgram {
+    let torques = range.torques.len();
+    let n = VARIABLES + 2 * torques;
+    let (u, l) = (|j: usize| VARIABLES + j, |j: usize| VARIABLES + torques + j);
+    let v0 = scaled(&current.design);
+    let rho = settings.regularization;
+    let mut p = DMatrix::zeros(n, n);
+    let mut q = DVector::zeros(n);
+    for k in 0..VARIABLES {
+        p[(k, k)] = rho;
+        q[k] = rho * v0[k];
+    }
+    for j in 0..torques {
+        q[u(j)] = range.weights[j];
+        q[l(j)] = -range.weights[j];
+    }
+    let mut rows: Vec<(Vec<(usize, f64)>, f64)> = Vec::new();
+    for (j, ste) in current.response.ste_um.iter().enumerate() {
+        for (i, s) in ste.iter().enumerate() {
+            let grad = jacobian.ste[j][i];
+            // s + ∇s·Δv ≤ u  and  l ≤ s + ∇s·Δv
+            let mut upper: Vec<_> = (0..VARIABLES).map(|k| (k, grad[k])).collect();
+            upper.push((u(j), -1.0));
+            rows.push((upper, -s));
+            let mut lower: Vec<_> = (0..VARIABLES).map(|k| (k, -grad[k])).collect();
+            lower.push((l(j), 1.0));
+            rows.push((lower, *s));
+        }
+        // ε + ∇ε·Δv ≥ ε_min
+        rows.push((
+            (0..VARIABLES)
+                .map(|k| (k, -jacobian.contact_ratio[j][k]))
+                .collect(),
+            (current.response.contact_ratio[j] - limits.min_contact_ratio).max(0.0),
+        ));
+    }
+    for k in 0..VARIABLES {
+        rows.push((vec![(k, 1.0)], radius.min(hi[k] - v0[k])));
+        rows.push((vec![(k, -1.0)], radius.min(v0[k] - lo[k])));
+    }
+    // No loss of contact: (C_a1 + C_f2), (C_a2 + C_f1) ≤ δ_s, in µm.
+    let deflection = limits.contact_deflection / SCALE[0];
+    for (a, b) in [(0, 3), (2, 1)] {
+        rows.push((
+            vec![(a, 1.0), (b, 1.0)],
+            (deflection - v0[a] - v0[b]).max(0.0),
+        ));
+    }
+    let mut g = DMatrix::zeros(rows.len(), n);
+    let mut h = DVector::zeros(rows.len());
+    for (r, (entries, bound)) in rows.iter().enumerate() {
+        for &(c, value) in entries {
+            g[(r, c)] = value;
+        }
+        h[r] = *bound;
+    }
+    QuadraticProgram {
+        p,
+        q,
+        a: DMatrix::zeros(0, n),
+        b: DVector::zeros(0),
+        g,
+        h,
+    }
+}

@@ -1,0 +1,244 @@
+//! Writes the relief optimization study: summary.json, the iterations, the candidates, the
+//! Harris map, the STE and the lumped sweep of every candidate (CSV, SVG, PNG).
+
+use super::plot::LinePlot;
+use super::{OutputDir, ReportError};
+use crate::case::Case;
+use crate::study::optimize::{shape_name, CandidateKind, OptimizeStudy};
+
+/// The console lines.
+pub fn console(study: &OptimizeStudy) -> String {
+    let s = &study.summary;
+    let mut out = format!(
+        "design torque {:.1} N·m, load range {:?} N·m; single-pair deflection {:.2} um\n",
+        s.design_torque_nm,
+        s.torque_range_nm
+            .iter()
+            .map(|t| (t * 10.0).round() / 10.0)
+            .collect::<Vec<_>>(),
+        s.single_pair_deflection_um
+    );
+    for start in &s.starts {
+        out += &format!(
+            "  {} from {}: objective {:.4} -> {:.4} um in {} iterations ({} LTCA runs, {:.2} s){}\n",
+            shape_name(start.shape),
+            start.start,
+            start.objective_start_um,
+            start.objective_um,
+            start.iterations,
+            start.ltca_evaluations,
+            start.wall_s,
+            if start.converged { "" } else { ", not converged" }
+        );
+    }
+    out += &format!(
+        "optimum ({} relief, length {:.3} of the double-contact zone): tip {:.2} / {:.2} um, root {:.2} / {:.2} um (gear 1 / gear 2)\n",
+        shape_name(s.shape),
+        s.relief_length_fraction,
+        s.tip_relief_um[0],
+        s.tip_relief_um[1],
+        s.root_relief_um[0],
+        s.root_relief_um[1]
+    );
+    out += "candidate            robust STE p-p  at design  min contact ratio  max dyn. factor\n";
+    for c in &s.candidates {
+        out += &format!(
+            "  {:<18} {:>10.3} um {:>8.3} um {:>12.3}{} {:>12.3} at {:.0} rpm\n",
+            c.name,
+            c.objective_um,
+            c.ste_pp_design_um,
+            c.contact_ratio_min,
+            if c.kind == CandidateKind::Optimum || c.feasible {
+                " "
+            } else {
+                "*"
+            },
+            c.max_dynamic_factor,
+            c.max_dynamic_factor_rpm
+        );
+    }
+    out += &format!(
+        "  (* breaks a limit of the optimizer)\nQP loop {:.2} s ({:.3} s in Clarabel), bodies {:.2} s, all {:.2} s\n",
+        s.qp_loop_s, s.qp_solve_s, s.model_s, s.wall_s
+    );
+    out
+}
+
+/// Writes everything but the FE cross-check.
+pub fn write(dir: OutputDir, case: &Case, study: &OptimizeStudy) -> Result<(), ReportError> {
+    dir.case(case)?;
+    let f = |v: f64| format!("{v:.9e}");
+    let candidates = &study.candidates;
+    dir.csv(
+        "iterations.csv",
+        &[
+            "start",
+            "iteration",
+            "objective_um",
+            "predicted_reduction_um",
+            "actual_reduction_um",
+            "trust_radius",
+            "accepted",
+            "trial_tip1_um",
+            "trial_root1_um",
+            "trial_tip2_um",
+            "trial_root2_um",
+            "trial_length_fraction",
+            "qp_iterations",
+            "kkt_residual",
+            "qp_solve_s",
+        ],
+        study.optima.iter().flat_map(|(name, o)| {
+            o.iterations.iter().map(move |r| {
+                let mut row = vec![
+                    name.clone(),
+                    r.iteration.to_string(),
+                    f(r.objective_um),
+                    f(r.predicted_reduction_um),
+                    f(r.actual_reduction_um),
+                    f(r.trust_radius),
+                    r.accepted.to_string(),
+                ];
+                row.extend(r.trial.iter().map(|v| f(*v)));
+                row.extend([
+                    r.qp_iterations.to_string(),
+                    f(r.kkt_residual),
+                    f(r.qp_solve_s),
+                ]);
+                row
+            })
+        }),
+    )?;
+    dir.csv(
+        "candidates.csv",
+        &[
+            "candidate",
+            "kind",
+            "objective_um",
+            "ste_pp_design_um",
+            "contact_ratio_design",
+            "end_relief_recess_um",
+            "end_relief_approach_um",
+            "feasible",
+            "max_dynamic_factor",
+            "max_dynamic_factor_rpm",
+        ],
+        candidates.iter().map(|c| {
+            vec![
+                c.name.clone(),
+                format!("{:?}", c.kind).to_lowercase(),
+                f(c.response.objective_um),
+                f(c.ste_pp_design_um),
+                f(c.contact_ratio_design),
+                f(c.end_relief_um[0]),
+                f(c.end_relief_um[1]),
+                c.feasible.to_string(),
+                f(c.sweep.max_dynamic_factor),
+                f(c.sweep.max_dynamic_factor_rpm),
+            ]
+        }),
+    )?;
+    let names: Vec<&str> = candidates.iter().map(|c| c.name.as_str()).collect();
+    let header = |first: &str, suffix: &str| {
+        std::iter::once(first.to_string())
+            .chain(names.iter().map(|n| format!("{n}{suffix}")))
+            .collect::<Vec<_>>()
+    };
+    let harris_header = header("torque_nm", "_ste_pp_um");
+    let torques = &study.harris_range.torques;
+    dir.csv(
+        "harris.csv",
+        &harris_header.iter().map(|s| s.as_str()).collect::<Vec<_>>(),
+        torques.iter().enumerate().map(|(j, t)| {
+            std::iter::once(f(*t))
+                .chain(candidates.iter().map(|c| f(c.harris.ste_pp_um[j])))
+                .collect()
+        }),
+    )?;
+    let ste_header = header("roll_angle_deg", "_ste_um");
+    dir.csv(
+        "ste_design.csv",
+        &ste_header.iter().map(|s| s.as_str()).collect::<Vec<_>>(),
+        (0..candidates[0].roll_deg.len()).map(|i| {
+            std::iter::once(f(candidates[0].roll_deg[i]))
+                .chain(candidates.iter().map(|c| f(c.ste_design_um[i])))
+                .collect()
+        }),
+    )?;
+    let sweep_header = header("driver_rpm", "_dynamic_factor");
+    dir.csv(
+        "sweep.csv",
+        &sweep_header.iter().map(|s| s.as_str()).collect::<Vec<_>>(),
+        study.rpms.iter().enumerate().map(|(i, rpm)| {
+            std::iter::once(f(*rpm))
+                .chain(candidates.iter().map(|c| f(c.sweep.dynamic_factor[i])))
+                .collect()
+        }),
+    )?;
+    let series = |points: &dyn Fn(&crate::study::optimize::Candidate) -> Vec<(f64, f64)>| {
+        candidates
+            .iter()
+            .map(|c| (c.name.clone(), points(c)))
+            .collect::<Vec<_>>()
+    };
+    dir.chart(
+        "harris",
+        &LinePlot {
+            title: format!(
+                "{}: Harris map, loaded STE peak-to-peak against torque",
+                case.name()
+            ),
+            x_label: "torque on the driven gear [N·m]".into(),
+            y_label: "STE peak-to-peak [um]".into(),
+            series: series(&|c| torques.iter().copied().zip(c.harris.ste_pp_um.iter().copied()).collect()),
+        },
+    )?;
+    dir.chart(
+        "ste_design",
+        &LinePlot {
+            title: format!(
+                "{}: loaded STE at the design torque {:.1} N·m",
+                case.name(),
+                study.design_torque
+            ),
+            x_label: "driver roll angle [deg]".into(),
+            y_label: "STE along the line of action [um]".into(),
+            series: series(&|c| c.roll_deg.iter().copied().zip(c.ste_design_um.iter().copied()).collect()),
+        },
+    )?;
+    dir.chart(
+        "sweep",
+        &LinePlot {
+            title: format!("{}: lumped dynamic factor per candidate", case.name()),
+            x_label: "driver speed [rpm]".into(),
+            y_label: "dynamic factor".into(),
+            series: series(&|c| study.rpms.iter().copied().zip(c.sweep.dynamic_factor.iter().copied()).collect()),
+        },
+    )?;
+    dir.chart(
+        "convergence",
+        &LinePlot {
+            title: format!("{}: robust objective per trust-region iteration", case.name()),
+            x_label: "iteration".into(),
+            y_label: "weighted STE peak-to-peak [um]".into(),
+            series: study
+                .optima
+                .iter()
+                .map(|(name, o)| {
+                    (
+                        name.clone(),
+                        o.iterations
+                            .iter()
+                            .map(|r| (r.iteration as f64, r.objective_um))
+                            .chain(std::iter::once((
+                                o.iterations.len() as f64 + 1.0,
+                                o.best.response.objective_um,
+                            )))
+                            .collect(),
+                    )
+                })
+                .collect(),
+        },
+    )?;
+    dir.json("summary.json", &study.summary)
+}

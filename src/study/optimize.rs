@@ -1,0 +1,613 @@
+//! The relief optimization study (`geardyn optimize`): the tip/root relief that keeps the loaded
+//! STE flat across the load range ([`crate::optimize::robust`]), judged against the baselines —
+//! no relief, the case's own relief (the seed paper's 20/10 µm for the embedded case) and the
+//! classic rule — on the same bodies: the robust objective, the Harris map (STE peak-to-peak
+//! against torque), and a lumped rpm sweep on each candidate's k(θ), e(θ). The explicit-FE
+//! cross-check of the candidates is planned and tabulated here; the binary runs the scenes.
+//!
+//! The classic rule (Harris 1958; Smith, *Gear Noise and Vibration*, §3.3): tip relief on both
+//! gears equal to the single-pair deflection δ_s at the design torque, linear, long (from the
+//! HPSTC) or short (half the double-contact zone); δ_s is the largest approach r_b2(φ − φ₀) of
+//! the unmodified pair over the cycle — the approach where one pair carries the whole load.
+
+use serde::Serialize;
+
+use crate::case::Case;
+use crate::geometry::{FlankModification, ReliefShape};
+use crate::ltca::LtcaModel;
+use crate::optimize::relief::ReliefDesign;
+use crate::optimize::robust::{
+    self, end_relief, load_response, LoadRange, LoadResponse, Optimum, OptimizeError,
+};
+use crate::stiffness::{self, MeshStiffness};
+use crate::sweep::{self, SweepPoint};
+
+use super::{load_torque, Progress, RpmRange, StudyError};
+
+impl From<OptimizeError> for StudyError {
+    fn from(e: OptimizeError) -> Self {
+        match e {
+            OptimizeError::Ltca(e) => StudyError::Ltca(e),
+            other => StudyError::Input(other.to_string()),
+        }
+    }
+}
+
+/// The load range as percentages of the design torque, `FROM:TO:N`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct TorqueRange {
+    pub from_percent: f64,
+    pub to_percent: f64,
+    pub count: usize,
+}
+
+impl std::str::FromStr for TorqueRange {
+    type Err = String;
+
+    /// Parses `FROM:TO:N` in percent of the design torque, 0 < FROM ≤ TO, N ≥ 1.
+    fn from_str(text: &str) -> Result<Self, String> {
+        let bad = || {
+            format!(
+                "{text:?} is invalid: write FROM:TO:N in percent of the design torque with \
+                 0 < FROM ≤ TO and N ≥ 1 torques, e.g. 50:150:5"
+            )
+        };
+        let parts: Vec<&str> = text.split(':').collect();
+        let [from, to, n] = parts[..] else {
+            return Err(bad());
+        };
+        let range = TorqueRange {
+            from_percent: from.parse().map_err(|_| bad())?,
+            to_percent: to.parse().map_err(|_| bad())?,
+            count: n.parse().map_err(|_| bad())?,
+        };
+        let ok = range.from_percent > 0.0
+            && range.to_percent >= range.from_percent
+            && range.to_percent.is_finite()
+            && range.count >= 1
+            && (range.count > 1 || range.from_percent == range.to_percent);
+        ok.then_some(range).ok_or_else(bad)
+    }
+}
+
+/// Options of the study.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OptimizeOptions {
+    pub torque_range: TorqueRange,
+    /// LTCA positions per base pitch.
+    pub positions: usize,
+    /// Smallest loaded contact ratio allowed at any torque of the range.
+    pub min_contact_ratio: f64,
+    /// Largest relief amount [µm].
+    pub max_relief_um: f64,
+    /// Shortest relief, as a fraction of the double-contact zone.
+    pub min_length: f64,
+    /// Driver speeds of each candidate's lumped sweep.
+    pub rpm: RpmRange,
+    /// Torques of the Harris map, in percent of the design torque.
+    pub harris_range: TorqueRange,
+}
+
+impl Default for OptimizeOptions {
+    fn default() -> Self {
+        OptimizeOptions {
+            torque_range: TorqueRange {
+                from_percent: 50.0,
+                to_percent: 150.0,
+                count: 5,
+            },
+            positions: 64,
+            min_contact_ratio: 1.2,
+            max_relief_um: 40.0,
+            min_length: 0.25,
+            rpm: RpmRange(
+                (0..300)
+                    .map(|i| 100.0 + (12000.0 - 100.0) * i as f64 / 299.0)
+                    .collect(),
+            ),
+            harris_range: TorqueRange {
+                from_percent: 10.0,
+                to_percent: 200.0,
+                count: 20,
+            },
+        }
+    }
+}
+
+/// What a candidate is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CandidateKind {
+    /// No relief, the case's own variants, the classic rule.
+    Baseline,
+    /// A trust-region optimum.
+    Optimum,
+}
+
+/// The lumped rpm sweep on one candidate's k(θ), e(θ) at the design torque.
+#[derive(Debug, Clone, Serialize)]
+pub struct CandidateSweep {
+    pub max_dynamic_factor: f64,
+    pub max_dynamic_factor_rpm: f64,
+    /// Dynamic factor per speed of the up-sweep.
+    pub dynamic_factor: Vec<f64>,
+    /// DTE rms per speed of the up-sweep [µm].
+    pub dte_rms_um: Vec<f64>,
+    /// Speeds where the teeth separate.
+    pub separated_points: usize,
+}
+
+/// One design judged by every measure of the study.
+#[derive(Debug, Clone, Serialize)]
+pub struct Candidate {
+    pub name: String,
+    pub kind: CandidateKind,
+    /// The design variables (None: a case variant that is not of the optimizer's family).
+    pub design: Option<ReliefDesign>,
+    #[serde(skip)]
+    pub modifications: [FlankModification; 2],
+    /// Over the robust load range.
+    pub response: LoadResponse,
+    /// Over the Harris-map torques.
+    pub harris: LoadResponse,
+    /// Driver roll angle of the positions [°] and the STE there at the design torque [µm].
+    #[serde(skip)]
+    pub roll_deg: Vec<f64>,
+    #[serde(skip)]
+    pub ste_design_um: Vec<f64>,
+    /// STE peak-to-peak at the design torque [µm].
+    pub ste_pp_design_um: f64,
+    /// Loaded contact ratio at the design torque.
+    pub contact_ratio_design: f64,
+    /// Combined relief at the end of recess and the start of approach [µm].
+    pub end_relief_um: [f64; 2],
+    /// Keeps every limit of the optimizer (baselines need not).
+    pub feasible: bool,
+    #[serde(skip)]
+    pub mesh_stiffness: MeshStiffness,
+    pub sweep: CandidateSweep,
+}
+
+/// One start of the trust-region loop.
+#[derive(Debug, Clone, Serialize)]
+pub struct StartSummary {
+    pub shape: ReliefShape,
+    pub start: String,
+    pub objective_start_um: f64,
+    pub objective_um: f64,
+    pub iterations: usize,
+    pub converged: bool,
+    pub ltca_evaluations: usize,
+    pub qp_solve_s: f64,
+    pub wall_s: f64,
+}
+
+/// Where each relief zone of the optimum starts, as the gear's own roll angle [°] (None: no zone).
+#[derive(Debug, Clone, Serialize)]
+pub struct StartRoll {
+    pub tip: [Option<f64>; 2],
+    pub root: [Option<f64>; 2],
+}
+
+/// The headline numbers (`summary.json`).
+#[derive(Debug, Clone, Serialize)]
+pub struct OptimizeSummary {
+    pub case: String,
+    pub design_torque_nm: f64,
+    pub torque_range_nm: Vec<f64>,
+    pub positions: usize,
+    pub limits: robust::Limits,
+    /// Single-pair deflection δ_s of the unmodified pair at the design torque [µm].
+    pub single_pair_deflection_um: f64,
+    pub shape: ReliefShape,
+    pub tip_relief_um: [f64; 2],
+    pub root_relief_um: [f64; 2],
+    /// Relief length as the fraction λ of the double-contact zone.
+    pub relief_length_fraction: f64,
+    pub start_roll_deg: StartRoll,
+    pub ste_pp_before_um: f64,
+    pub ste_pp_after_um: f64,
+    pub objective_none: f64,
+    pub objective_optimum: f64,
+    /// The case's own relief (the first variant with one): the seed paper's 20/10 µm here.
+    pub paper_variant: Option<String>,
+    pub objective_paper: Option<f64>,
+    pub objective_classic: f64,
+    pub objective_classic_short: f64,
+    pub contact_ratio_optimum: Vec<f64>,
+    /// Trust-region iterations of the winning start, and of all starts.
+    pub iterations: usize,
+    pub iterations_all_starts: usize,
+    pub ltca_evaluations: usize,
+    /// Time in Clarabel over all starts [s] (timing).
+    pub qp_solve_s: f64,
+    /// The whole trust-region loop over all starts, LTCA evaluations included [s] (timing).
+    pub qp_loop_s: f64,
+    /// Meshing and factorizing the bodies once [s] (timing).
+    pub model_s: f64,
+    /// The study without the FE cross-check [s] (timing).
+    pub wall_s: f64,
+    pub starts: Vec<StartSummary>,
+    pub candidates: Vec<CandidateLine>,
+    pub model: &'static str,
+}
+
+/// One candidate's row of the summary.
+#[derive(Debug, Clone, Serialize)]
+pub struct CandidateLine {
+    pub name: String,
+    pub kind: CandidateKind,
+    pub objective_um: f64,
+    pub ste_pp_design_um: f64,
+    pub contact_ratio_min: f64,
+    pub feasible: bool,
+    pub max_dynamic_factor: f64,
+    pub max_dynamic_factor_rpm: f64,
+}
+
+/// The study's result.
+pub struct OptimizeStudy {
+    pub design_torque: f64,
+    pub range: LoadRange,
+    pub harris_range: LoadRange,
+    pub rpms: Vec<f64>,
+    pub optima: Vec<(String, Optimum)>,
+    /// Baselines first, then the optima best first.
+    pub candidates: Vec<Candidate>,
+    pub summary: OptimizeSummary,
+}
+
+/// Number of optima carried forward as candidates.
+pub const CANDIDATES: usize = 3;
+
+/// Runs the study; `progress` sees the stages.
+pub fn run(
+    case: &Case,
+    options: &OptimizeOptions,
+    progress: Progress,
+) -> Result<OptimizeStudy, StudyError> {
+    let started = std::time::Instant::now();
+    let torque = load_torque(case)?;
+    let percent = |r: &TorqueRange| {
+        LoadRange::uniform(torque, r.from_percent / 100.0, r.to_percent / 100.0, r.count)
+    };
+    let range = percent(&options.torque_range)?;
+    let harris_range = percent(&options.harris_range)?;
+    if !(options.min_length > 0.0 && options.min_length <= 1.0) {
+        return Err(StudyError::Input(format!(
+            "--min-relief-length {} is invalid: give a fraction of the double-contact zone in (0, 1]",
+            options.min_length
+        )));
+    }
+    progress("meshing and factorizing the bodies", 0, 1);
+    let none = [FlankModification::none(); 2];
+    let model = super::ltca::model(case, &none)?;
+    let model_s = started.elapsed().as_secs_f64();
+    let pair = &case.pair;
+    let rb2 = pair.gears[1].base_radius;
+    let unmodified = model.run(options.positions, torque, &|_| {})?;
+    let deflection = unmodified
+        .iter()
+        .map(|r| rb2 * (r.ste - r.unloaded_te))
+        .fold(0.0, f64::max);
+    let limits = robust::Limits {
+        max_amount: options.max_relief_um * 1e-6,
+        min_length: options.min_length,
+        min_contact_ratio: options.min_contact_ratio,
+        contact_deflection: deflection,
+    };
+    let settings = robust::Settings {
+        positions: options.positions,
+        ..Default::default()
+    };
+    let classic = |length: f64, shape: ReliefShape| ReliefDesign {
+        tip: [deflection; 2],
+        root: [0.0; 2],
+        length,
+        shape,
+    };
+
+    // The trust-region loop from two starts per shape.
+    let loop_started = std::time::Instant::now();
+    let starts = [
+        (ReliefShape::Linear, "none"),
+        (ReliefShape::Linear, "classic"),
+        (ReliefShape::Parabolic, "none"),
+        (ReliefShape::Parabolic, "classic"),
+    ];
+    let mut optima = Vec::new();
+    let mut start_lines = Vec::new();
+    for (s, (shape, start_name)) in starts.iter().enumerate() {
+        let stage = format!("optimizing ({} relief from {start_name})", shape_name(*shape));
+        progress(&stage, s, starts.len());
+        let start = match *start_name {
+            "none" => ReliefDesign::none(*shape),
+            _ => classic(1.0, *shape),
+        };
+        let t = std::time::Instant::now();
+        let optimum = robust::optimize(&model, &start, &range, &limits, &settings, &|_| {})?;
+        start_lines.push(StartSummary {
+            shape: *shape,
+            start: start_name.to_string(),
+            objective_start_um: optimum.start.response.objective_um,
+            objective_um: optimum.best.response.objective_um,
+            iterations: optimum.iterations.len(),
+            converged: optimum.converged,
+            ltca_evaluations: optimum.ltca_evaluations,
+            qp_solve_s: optimum.qp_solve_s,
+            wall_s: t.elapsed().as_secs_f64(),
+        });
+        optima.push((format!("{}-from-{start_name}", shape_name(*shape)), optimum));
+    }
+    progress("optimizing", starts.len(), starts.len());
+    let qp_loop_s = loop_started.elapsed().as_secs_f64();
+
+    // Candidates: the baselines, then the distinct optima best first.
+    let mut order: Vec<usize> = (0..optima.len()).collect();
+    order.sort_by(|&a, &b| {
+        optima[a]
+            .1
+            .best
+            .response
+            .objective_um
+            .total_cmp(&optima[b].1.best.response.objective_um)
+    });
+    let mut chosen: Vec<usize> = Vec::new();
+    for i in order {
+        let x = optima[i].1.best.design.to_vector();
+        let same = chosen.iter().any(|&j| {
+            let y = optima[j].1.best.design.to_vector();
+            optima[j].1.best.design.shape == optima[i].1.best.design.shape
+                && (0..4).all(|k| (x[k] - y[k]).abs() < 0.05e-6)
+                && (x[4] - y[4]).abs() < 0.005
+        });
+        if !same && chosen.len() < CANDIDATES {
+            chosen.push(i);
+        }
+    }
+    let mut plan: Vec<(String, CandidateKind, Option<ReliefDesign>, [FlankModification; 2])> =
+        Vec::new();
+    for variant in &case.relief_variants {
+        plan.push((
+            variant.name.clone(),
+            CandidateKind::Baseline,
+            None,
+            variant.modifications,
+        ));
+    }
+    for (name, design) in [
+        ("classic-long", classic(1.0, ReliefShape::Linear)),
+        ("classic-short", classic(0.5, ReliefShape::Linear)),
+    ] {
+        plan.push((
+            name.into(),
+            CandidateKind::Baseline,
+            Some(design),
+            design.modifications(pair).map_err(|e| StudyError::Input(e.to_string()))?,
+        ));
+    }
+    for (rank, &i) in chosen.iter().enumerate() {
+        let design = optima[i].1.best.design;
+        plan.push((
+            format!("optimum-{}", rank + 1),
+            CandidateKind::Optimum,
+            Some(design),
+            design.modifications(pair).map_err(|e| StudyError::Input(e.to_string()))?,
+        ));
+    }
+    let mut candidates = Vec::new();
+    let count = plan.len();
+    for (c, (name, kind, design, modifications)) in plan.into_iter().enumerate() {
+        progress("judging the candidates", c, count);
+        candidates.push(judge(
+            case,
+            &model,
+            (name, kind, design, modifications),
+            (&range, &harris_range, torque),
+            &limits,
+            options,
+        )?);
+    }
+
+    let summary = summarize(
+        case,
+        (&model, torque, deflection),
+        (&range, &limits, &optima, &chosen),
+        &candidates,
+        start_lines,
+        (model_s, qp_loop_s, started.elapsed().as_secs_f64()),
+    )?;
+    Ok(OptimizeStudy {
+        design_torque: torque,
+        range,
+        harris_range,
+        rpms: options.rpm.0.clone(),
+        optima,
+        candidates,
+        summary,
+    })
+}
+
+pub fn shape_name(shape: ReliefShape) -> &'static str {
+    match shape {
+        ReliefShape::Linear => "linear",
+        ReliefShape::Parabolic => "parabolic",
+    }
+}
+
+/// One candidate through the load range, the Harris map, the design torque and the lumped sweep.
+fn judge(
+    case: &Case,
+    model: &LtcaModel,
+    (name, kind, design, modifications): (
+        String,
+        CandidateKind,
+        Option<ReliefDesign>,
+        [FlankModification; 2],
+    ),
+    (range, harris_range, torque): (&LoadRange, &LoadRange, f64),
+    limits: &robust::Limits,
+    options: &OptimizeOptions,
+) -> Result<Candidate, StudyError> {
+    let pair = &case.pair;
+    let response = load_response(model, &modifications, range, options.positions)?;
+    let harris = load_response(model, &modifications, harris_range, options.positions)?;
+    let at_design = model
+        .with_relief(&modifications)
+        .run(options.positions, torque, &|_| {})?;
+    let rb2 = pair.gears[1].base_radius;
+    let ste: Vec<f64> = at_design.iter().map(|r| r.ste * rb2 * 1e6).collect();
+    let mesh_stiffness = stiffness::from_ltca(pair, &at_design, torque, format!("ltca ({name})"))
+        .map_err(StudyError::Input)?;
+    let (lumped, _) = super::lumped::model_on(case, mesh_stiffness.clone(), torque);
+    let (up, _) = sweep::sweep(&lumped, &options.rpm.0);
+    let ends = end_relief_of(&modifications);
+    let feasible = design.is_some_and(|d| {
+        robust::feasible(
+            &robust::Evaluation {
+                design: d,
+                response: response.clone(),
+            },
+            limits,
+        )
+    });
+    Ok(Candidate {
+        name,
+        kind,
+        design,
+        modifications,
+        ste_pp_design_um: peak_to_peak(&ste),
+        roll_deg: at_design.iter().map(|r| r.roll_angle.to_degrees()).collect(),
+        ste_design_um: ste,
+        contact_ratio_design: crate::ltca::loaded_contact_ratio(&at_design),
+        end_relief_um: ends.map(|e| e * 1e6),
+        feasible,
+        response,
+        harris,
+        mesh_stiffness,
+        sweep: candidate_sweep(&up, &options.rpm.0),
+    })
+}
+
+/// Combined relief at both ends of the path of any modification pair (the zone amounts).
+fn end_relief_of(modifications: &[FlankModification; 2]) -> [f64; 2] {
+    let amount = |z: Option<crate::geometry::ReliefZone>| z.map_or(0.0, |z| z.amount);
+    end_relief(&ReliefDesign {
+        tip: [amount(modifications[0].tip), amount(modifications[1].tip)],
+        root: [amount(modifications[0].root), amount(modifications[1].root)],
+        length: 1.0,
+        shape: ReliefShape::Linear,
+    })
+}
+
+fn candidate_sweep(up: &[SweepPoint], rpms: &[f64]) -> CandidateSweep {
+    let (at, max) = up
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (i, p.dynamic_factor))
+        .fold((0, 0.0), |m, (i, d)| if d > m.1 { (i, d) } else { m });
+    CandidateSweep {
+        max_dynamic_factor: max,
+        max_dynamic_factor_rpm: rpms[at],
+        dynamic_factor: up.iter().map(|p| p.dynamic_factor).collect(),
+        dte_rms_um: up.iter().map(|p| p.dte_rms * 1e6).collect(),
+        separated_points: up.iter().filter(|p| p.separated).count(),
+    }
+}
+
+fn peak_to_peak(v: &[f64]) -> f64 {
+    v.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+        - v.iter().copied().fold(f64::INFINITY, f64::min)
+}
+
+#[allow(clippy::type_complexity)]
+fn summarize(
+    case: &Case,
+    (model, torque, deflection): (&LtcaModel, f64, f64),
+    (range, limits, optima, chosen): (&LoadRange, &robust::Limits, &[(String, Optimum)], &[usize]),
+    candidates: &[Candidate],
+    starts: Vec<StartSummary>,
+    (model_s, qp_loop_s, wall_s): (f64, f64, f64),
+) -> Result<OptimizeSummary, StudyError> {
+    let find = |name: &str| candidates.iter().find(|c| c.name == name);
+    let best = &optima[chosen[0]].1;
+    let design = best.best.design;
+    let modifications = design
+        .modifications(&model.pair)
+        .map_err(|e| StudyError::Input(e.to_string()))?;
+    let deg = |z: Option<crate::geometry::ReliefZone>| z.map(|z| z.start_roll_angle.to_degrees());
+    let first_relief = case
+        .relief_variants
+        .iter()
+        .find(|v| !v.modifications.iter().all(|m| m.is_none()));
+    let objective = |name: &str| find(name).map(|c| c.response.objective_um);
+    let none_name = case
+        .relief_variants
+        .iter()
+        .find(|v| v.modifications.iter().all(|m| m.is_none()))
+        .map(|v| v.name.clone());
+    let before = none_name
+        .as_deref()
+        .and_then(find)
+        .map(|c| (c.ste_pp_design_um, c.response.objective_um));
+    let optimum = find("optimum-1").expect("the best optimum is a candidate");
+    let (before_pp, before_objective) = match before {
+        Some(b) => b,
+        None => {
+            let r = load_response(model, &[FlankModification::none(); 2], range, 64)?;
+            (f64::NAN, r.objective_um)
+        }
+    };
+    Ok(OptimizeSummary {
+        case: case.name().to_string(),
+        design_torque_nm: torque,
+        torque_range_nm: range.torques.clone(),
+        positions: optimum.response.ste_um[0].len(),
+        limits: *limits,
+        single_pair_deflection_um: deflection * 1e6,
+        shape: design.shape,
+        tip_relief_um: design.tip.map(|a| a * 1e6),
+        root_relief_um: design.root.map(|a| a * 1e6),
+        relief_length_fraction: design.length,
+        start_roll_deg: StartRoll {
+            tip: [deg(modifications[0].tip), deg(modifications[1].tip)],
+            root: [deg(modifications[0].root), deg(modifications[1].root)],
+        },
+        ste_pp_before_um: before_pp,
+        ste_pp_after_um: optimum.ste_pp_design_um,
+        objective_none: before_objective,
+        objective_optimum: optimum.response.objective_um,
+        paper_variant: first_relief.map(|v| v.name.clone()),
+        objective_paper: first_relief.and_then(|v| objective(&v.name)),
+        objective_classic: objective("classic-long").unwrap_or(f64::NAN),
+        objective_classic_short: objective("classic-short").unwrap_or(f64::NAN),
+        contact_ratio_optimum: optimum.response.contact_ratio.clone(),
+        iterations: best.iterations.len(),
+        iterations_all_starts: optima.iter().map(|(_, o)| o.iterations.len()).sum(),
+        ltca_evaluations: optima.iter().map(|(_, o)| o.ltca_evaluations).sum(),
+        qp_solve_s: optima.iter().map(|(_, o)| o.qp_solve_s).sum(),
+        qp_loop_s,
+        model_s,
+        wall_s,
+        starts,
+        candidates: candidates
+            .iter()
+            .map(|c| CandidateLine {
+                name: c.name.clone(),
+                kind: c.kind,
+                objective_um: c.response.objective_um,
+                ste_pp_design_um: c.ste_pp_design_um,
+                contact_ratio_min: c
+                    .response
+                    .contact_ratio
+                    .iter()
+                    .copied()
+                    .fold(f64::INFINITY, f64::min),
+                feasible: c.feasible,
+                max_dynamic_factor: c.sweep.max_dynamic_factor,
+                max_dynamic_factor_rpm: c.sweep.max_dynamic_factor_rpm,
+            })
+            .collect(),
+        model: "LTCA on the unmodified bodies meshed once (case mesh); the relief enters as the initial gap of the exact modified profiles; frictionless, quasi-static; STE = r_b2 phi of the driven gear",
+    })
+}

@@ -7,8 +7,17 @@
 //! ([`LtcaModel::with_relief`]). Objective, the weighted peak-to-peak over the load range plus a
 //! small regularization that breaks ties between designs the STE cannot tell apart:
 //! ```text
-//! f(v) = Σ_j w_j (max_i s_ij − min_i s_ij) + ½ ρ ‖v‖²,      Σ_j w_j = 1
+//! f(v) = Σ_j w_j (max_i s_ij − min_i s_ij) + ρ Σ_k r_k c_k,   Σ_j w_j = 1
 //! ```
+//! with c ≥ 0 the four amounts [µm] and r_k = 1 for tip, [`ROOT_WEIGHT`] for root relief: an L1
+//! penalty, which moves a design only where the objective is flatter than ρ r_k µm per µm. It
+//! decides what the STE cannot: with one λ for all zones, gear 1's tip zone and
+//! gear 2's root zone cover the same stretch of the path of contact with the same shape, so the
+//! STE sees only the sums C_a1 + C_f2 (end of recess) and C_a2 + C_f1 (start of approach). The
+//! split goes to the tips (the L1 penalty picks the corner, where a quadratic one would split
+//! 4 : 1), as root relief near the fillet is the costlier to grind; root relief appears only
+//! where a tip amount reaches its bound.
+//!
 //! Subject to bounds v_lo ≤ v ≤ v_hi; no loss of contact at the design torque — the combined
 //! relief at each end of the path (C_a1 + C_f2 at the end of recess, C_a2 + C_f1 at the start of
 //! approach) at most the single-pair deflection δ_s of the unmodified pair there, beyond which
@@ -20,15 +29,16 @@
 //! variable, every torque solved on one contact search per position) and solves the epigraph QP
 //! in (Δv, u, l):
 //! ```text
-//! minimize   Σ_j w_j (u_j − l_j) + ½ ρ ‖v₀ + Δv‖²
+//! minimize   Σ_j w_j (u_j − l_j) + ρ Σ_k r_k Δc_k     (a linear program in the trust region)
 //! subject to l_j ≤ s_ij + ∇s_ij·Δv ≤ u_j,   ε_j + ∇ε_j·Δv ≥ ε_min,   linear limits,
 //!            |Δv_k| ≤ Δ  (trust region),     v_lo ≤ v₀ + Δv ≤ v_hi
 //! ```
 //! The step is re-evaluated with the LTCA; with ρ = actual/predicted reduction it is accepted
-//! when ρ ≥ 0.1 and ε_j ≥ ε_min holds in the LTCA, and the radius grows (×2, ρ ≥ 0.75 on the
+//! when ρ ≥ 0.1 and ε_j ≥ ε_min holds in the LTCA (a rejected step keeps the linearization for
+//! the next, smaller one), and the radius grows (×2, ρ ≥ 0.75 on the
 //! boundary) or shrinks (×½, ρ < 0.25) — the basic trust-region method of Nocedal & Wright,
 //! *Numerical Optimization*, Alg. 4.1, with the model's max terms kept exact by the epigraph.
-//! It stops when the predicted reduction is below the tolerance or the radius below 1e-3.
+//! It stops when the predicted reduction is below the tolerance or the radius below 1e-3 ([`Stop`]).
 
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
@@ -106,9 +116,7 @@ pub struct Limits {
 /// Settings of the iteration.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Settings {
-    /// LTCA positions per base pitch.
-    pub positions: usize,
-    /// ρ [µm per scaled unit²] of the regularization.
+    /// ρ [µm of objective per µm of tip relief] of the L1 regularization.
     pub regularization: f64,
     /// Initial trust radius [scaled units: µm, or tenths of λ].
     pub initial_radius: f64,
@@ -122,11 +130,10 @@ pub struct Settings {
 impl Default for Settings {
     fn default() -> Self {
         Settings {
-            positions: 64,
-            regularization: 1e-4,
+            regularization: 1e-3,
             initial_radius: 4.0,
             max_iterations: 30,
-            tolerance_um: 1e-3,
+            tolerance_um: 1e-5,
             step: 0.25,
         }
     }
@@ -214,6 +221,25 @@ fn peak_to_peak(v: &[f64]) -> f64 {
         - v.iter().copied().fold(f64::INFINITY, f64::min)
 }
 
+/// Why the loop stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Stop {
+    /// The linear model predicts less than the tolerance: stationary.
+    PredictedReduction,
+    /// The trust radius fell below 1e-3 (0.001 µm, or 1e-4 in λ): no step the LTCA can resolve
+    /// improves the design — stationary to the response's resolution (its max terms are kinks).
+    TrustRadius,
+    /// The iteration limit was reached first: not converged.
+    Iterations,
+}
+
+impl Stop {
+    pub fn converged(self) -> bool {
+        self != Stop::Iterations
+    }
+}
+
 /// One iteration of the trust-region loop.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct IterationRecord {
@@ -240,17 +266,28 @@ pub struct Optimum {
     pub start: Evaluation,
     pub best: Evaluation,
     pub iterations: Vec<IterationRecord>,
-    /// The predicted reduction fell below the tolerance (not only the radius or the count).
-    pub converged: bool,
+    pub stop: Stop,
     /// Time in Clarabel over all iterations [s].
     pub qp_solve_s: f64,
     pub ltca_evaluations: usize,
 }
 
-/// f(v): the robust objective plus the regularization.
+/// The relief amounts among the variables (the regularization's).
+const AMOUNTS: usize = 4;
+
+/// Regularization weight r_k of root relief against tip relief (variables C_a1, C_f1, C_a2, C_f2).
+pub const ROOT_WEIGHT: f64 = 4.0;
+const REGULARIZATION_WEIGHTS: [f64; AMOUNTS] = [1.0, ROOT_WEIGHT, 1.0, ROOT_WEIGHT];
+
+/// f(v): the robust objective plus the regularization of the amounts.
 fn merit(evaluation: &Evaluation, regularization: f64) -> f64 {
     let v = scaled(&evaluation.design);
-    evaluation.response.objective_um + 0.5 * regularization * v.iter().map(|x| x * x).sum::<f64>()
+    evaluation.response.objective_um + regularization * weighted_amounts(&v)
+}
+
+/// Σ r_k c_k over the scaled amounts (c ≥ 0).
+fn weighted_amounts(v: &[f64; VARIABLES]) -> f64 {
+    (0..AMOUNTS).map(|k| REGULARIZATION_WEIGHTS[k] * v[k]).sum()
 }
 
 fn scaled(design: &ReliefDesign) -> [f64; VARIABLES] {
@@ -258,9 +295,26 @@ fn scaled(design: &ReliefDesign) -> [f64; VARIABLES] {
     std::array::from_fn(|k| x[k] / SCALE[k])
 }
 
+/// The design of scaled variables; an amount below [`ZERO_AMOUNT_UM`] (an interior-point
+/// solver's round-off of a bound at 0) is no relief zone.
 fn unscaled(v: &[f64; VARIABLES], shape: ReliefShape) -> ReliefDesign {
-    ReliefDesign::from_vector(&std::array::from_fn(|k| v[k] * SCALE[k]), shape)
+    ReliefDesign::from_vector(
+        &std::array::from_fn(|k| {
+            if k < AMOUNTS && v[k] < ZERO_AMOUNT_UM {
+                0.0
+            } else {
+                v[k] * SCALE[k]
+            }
+        }),
+        shape,
+    )
 }
+
+/// The smallest trust radius [scaled units].
+const MIN_RADIUS: f64 = 1e-3;
+
+/// Amounts below this [µm] are zero.
+const ZERO_AMOUNT_UM: f64 = 1e-4;
 
 /// The bounds of the scaled variables.
 fn bounds(limits: &Limits) -> ([f64; VARIABLES], [f64; VARIABLES]) {
@@ -292,9 +346,13 @@ pub fn end_relief(design: &ReliefDesign) -> [f64; 2] {
     ]
 }
 
-/// Runs the trust-region loop from `start`; `progress` sees each iteration's record.
+/// The load response of a design: [`evaluate`] on the LTCA, or a synthetic one in a test.
+pub type Respond<'a> = &'a dyn Fn(&ReliefDesign) -> Result<LoadResponse, OptimizeError>;
+
+/// Runs the trust-region loop from `start` on the responses `respond` gives (their torques are
+/// `range`'s); `progress` sees each iteration's record.
 pub fn optimize(
-    model: &LtcaModel,
+    respond: Respond,
     start: &ReliefDesign,
     range: &LoadRange,
     limits: &Limits,
@@ -303,7 +361,13 @@ pub fn optimize(
 ) -> Result<Optimum, OptimizeError> {
     let shape = start.shape;
     let (lo, hi) = bounds(limits);
-    let first = evaluate(model, start, range, settings.positions)?;
+    let evaluate = |design: &ReliefDesign| {
+        respond(design).map(|response| Evaluation {
+            design: *design,
+            response,
+        })
+    };
+    let first = evaluate(start)?;
     if !feasible(&first, limits) {
         return Err(OptimizeError::Input(format!(
             "the start design {:?} breaks the limits (contact ratio {:?}, minimum {})",
@@ -314,19 +378,24 @@ pub fn optimize(
     let mut current = first.clone();
     let mut radius = settings.initial_radius;
     let mut records = Vec::new();
-    let mut converged = false;
+    let mut stop = Stop::Iterations;
     let mut qp_solve_s = 0.0;
+    // The linearization of the current design (kept while steps from it are rejected).
+    let mut jacobian: Option<Jacobian> = None;
     for iteration in 1..=settings.max_iterations {
         let v0 = scaled(&current.design);
-        let jacobian = linearize(model, &current, range, settings, (&lo, &hi))?;
-        evaluations += VARIABLES;
-        let problem = step_problem(&current, &jacobian, range, limits, settings, radius, (&lo, &hi));
+        if jacobian.is_none() {
+            jacobian = Some(linearize(&evaluate, &current, settings, (&lo, &hi))?);
+            evaluations += VARIABLES;
+        }
+        let linear = jacobian.as_ref().expect("linearized above");
+        let problem = step_problem(&current, linear, range, limits, settings, radius, (&lo, &hi));
         let solution = qp::solve(&problem)?;
         qp_solve_s += solution.solve_s;
         let dv: [f64; VARIABLES] = std::array::from_fn(|k| solution.x[k]);
         let f0 = merit(&current, settings.regularization);
-        let constant = 0.5 * settings.regularization * v0.iter().map(|x| x * x).sum::<f64>();
-        // The QP objective drops the constant ½ρ‖v₀‖²; the model value is it plus that.
+        let constant = settings.regularization * weighted_amounts(&v0);
+        // The QP objective drops the constant ρ Σ r_k c₀ₖ; the model value is it plus that.
         let predicted = f0 - (solution.objective + constant);
         let trial_v: [f64; VARIABLES] = std::array::from_fn(|k| (v0[k] + dv[k]).clamp(lo[k], hi[k]));
         let trial_design = unscaled(&trial_v, shape);
@@ -343,13 +412,14 @@ pub fn optimize(
             qp_solve_s: solution.solve_s,
         };
         if predicted < settings.tolerance_um {
-            converged = true;
+            stop = Stop::PredictedReduction;
             progress(&record);
             records.push(record);
             break;
         }
         let step_norm = dv.iter().fold(0.0f64, |m, d| m.max(d.abs()));
-        match evaluate(model, &trial_design, range, settings.positions) {
+        let mut accepted = None;
+        match evaluate(&trial_design) {
             Ok(trial) => {
                 evaluations += 1;
                 let actual = f0 - merit(&trial, settings.regularization);
@@ -357,7 +427,7 @@ pub fn optimize(
                 let ratio = actual / predicted;
                 if ratio >= 0.1 && feasible(&trial, limits) {
                     record.accepted = true;
-                    current = trial;
+                    accepted = Some(trial);
                 }
                 if ratio < 0.25 || !record.accepted {
                     radius *= 0.5;
@@ -370,9 +440,14 @@ pub fn optimize(
             Err(OptimizeError::Geometry(_)) => radius *= 0.5,
             Err(e) => return Err(e),
         }
+        if let Some(trial) = accepted {
+            current = trial;
+            jacobian = None;
+        }
         progress(&record);
         records.push(record);
-        if radius < 1e-3 {
+        if radius < MIN_RADIUS {
+            stop = Stop::TrustRadius;
             break;
         }
     }
@@ -381,7 +456,7 @@ pub fn optimize(
         start: first,
         best: current,
         iterations: records,
-        converged,
+        stop,
         qp_solve_s,
         ltca_evaluations: evaluations,
     })
@@ -396,9 +471,8 @@ struct Jacobian {
 }
 
 fn linearize(
-    model: &LtcaModel,
+    evaluate: &dyn Fn(&ReliefDesign) -> Result<Evaluation, OptimizeError>,
     current: &Evaluation,
-    range: &LoadRange,
     settings: &Settings,
     (lo, hi): (&[f64; VARIABLES], &[f64; VARIABLES]),
 ) -> Result<Jacobian, OptimizeError> {
@@ -409,15 +483,14 @@ fn linearize(
             .iter()
             .map(|s| vec![[0.0; VARIABLES]; s.len()])
             .collect(),
-        contact_ratio: vec![[0.0; VARIABLES]; range.torques.len()],
+        contact_ratio: vec![[0.0; VARIABLES]; current.response.contact_ratio.len()],
     };
     for k in 0..VARIABLES {
         let forward = v0[k] + settings.step <= hi[k];
         let attempt = |h: f64| {
             let mut v = v0;
             v[k] = (v[k] + h).clamp(lo[k], hi[k]);
-            evaluate(model, &unscaled(&v, current.design.shape), range, settings.positions)
-                .map(|e| (e, v[k] - v0[k]))
+            evaluate(&unscaled(&v, current.design.shape)).map(|e| (e, v[k] - v0[k]))
         };
         let (shifted, h) = match attempt(if forward { settings.step } else { -settings.step }) {
             Ok(r) => r,
@@ -450,11 +523,10 @@ fn step_problem(
     let (u, l) = (|j: usize| VARIABLES + j, |j: usize| VARIABLES + torques + j);
     let v0 = scaled(&current.design);
     let rho = settings.regularization;
-    let mut p = DMatrix::zeros(n, n);
+    let p = DMatrix::zeros(n, n);
     let mut q = DVector::zeros(n);
-    for k in 0..VARIABLES {
-        p[(k, k)] = rho;
-        q[k] = rho * v0[k];
+    for k in 0..AMOUNTS {
+        q[k] = rho * REGULARIZATION_WEIGHTS[k];
     }
     for j in 0..torques {
         q[u(j)] = range.weights[j];

@@ -28,7 +28,11 @@ pub fn console(study: &OptimizeStudy) -> String {
             start.iterations,
             start.ltca_evaluations,
             start.wall_s,
-            if start.converged { "" } else { ", not converged" }
+            if start.stop.converged() {
+                ""
+            } else {
+                ", NOT CONVERGED (iteration limit)"
+            }
         );
     }
     out += &format!(

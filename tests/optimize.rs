@@ -1,0 +1,193 @@
+//! The relief optimizer: the trust-region loop on synthetic responses with known optima (free
+//! and with an active limit), and on the paper pair's LTCA (feasible, KKT-clean, monotone, below
+//! the unmodified STE).
+
+use geardyn::geometry::{FlankModification, ReliefShape};
+use geardyn::optimize::relief::ReliefDesign;
+use geardyn::optimize::robust::{
+    self, end_relief, LoadRange, LoadResponse, Limits, OptimizeError, Settings,
+};
+use geardyn::samples;
+use geardyn::study;
+
+/// A response with a known optimum: two torques (the second 1.5× the first), three positions,
+/// s₀ = 1 + u + 0.3u², u = 2 − (C_a1 + C_f2); s₁ = 1 + w + 0.3w², w = 1 − (C_a2 + C_f1);
+/// s₂ = 1 [µm]. Like the LTCA it sees only the sums at each end of the path; it is flat only at
+/// C_a1 + C_f2 = 2, C_a2 + C_f1 = 1, and the L1 regularization puts both on the tips.
+fn synthetic(design: &ReliefDesign) -> Result<LoadResponse, OptimizeError> {
+    let um = |x: f64| x * 1e6;
+    let recess = um(design.tip[0] + design.root[1]);
+    let approach = um(design.tip[1] + design.root[0]);
+    let (u, w) = (2.0 - recess, 1.0 - approach);
+    let base = [1.0 + u + 0.3 * u * u, 1.0 + w + 0.3 * w * w, 1.0];
+    let ste_um: Vec<Vec<f64>> = [1.0, 1.5]
+        .iter()
+        .map(|scale| base.iter().map(|s| s * scale).collect())
+        .collect();
+    let ste_pp_um: Vec<f64> = ste_um
+        .iter()
+        .map(|s| {
+            s.iter().copied().fold(f64::MIN, f64::max) - s.iter().copied().fold(f64::MAX, f64::min)
+        })
+        .collect();
+    Ok(LoadResponse {
+        objective_um: 0.5 * (ste_pp_um[0] + ste_pp_um[1]),
+        ste_um,
+        ste_pp_um,
+        contact_ratio: vec![1.7 - 0.1 * (recess + approach); 2],
+        mesh_stiffness_mean: vec![0.0; 2],
+        max_kkt_residual: 0.0,
+    })
+}
+
+fn synthetic_range() -> LoadRange {
+    LoadRange {
+        torques: vec![1.0, 1.5],
+        weights: vec![0.5, 0.5],
+    }
+}
+
+fn limits(contact_deflection: f64) -> Limits {
+    Limits {
+        max_amount: 40e-6,
+        min_length: 0.25,
+        min_contact_ratio: 1.2,
+        contact_deflection,
+    }
+}
+
+/// Free optimum: C_a1 = 2 µm, C_a2 = 1 µm, no root relief, objective 0 (to the tolerance),
+/// every QP's KKT residual small. Tolerances: 0.01 µm on the amounts (the loop stops when the
+/// linear model predicts < 1e-3 µm; the response's slope is ≥ 1 µm/µm near the optimum).
+#[test]
+fn trust_region_finds_the_known_optimum() {
+    let start = ReliefDesign::none(ReliefShape::Linear);
+    let optimum = robust::optimize(
+        &synthetic,
+        &start,
+        &synthetic_range(),
+        &limits(10e-6),
+        &Settings::default(),
+        &|_| {},
+    )
+    .unwrap();
+    let d = optimum.best.design;
+    assert!(optimum.stop.converged(), "{:#?}", optimum.iterations);
+    assert!((d.tip[0] * 1e6 - 2.0).abs() < 0.01, "{d:?}");
+    assert!((d.tip[1] * 1e6 - 1.0).abs() < 0.01, "{d:?}");
+    assert!(d.root.iter().all(|r| *r * 1e6 < 0.01), "{d:?}");
+    assert!(optimum.best.response.objective_um < 0.02);
+    assert!(optimum.iterations.len() > 1);
+    for record in &optimum.iterations {
+        assert!(record.kkt_residual < 1e-6, "{record:?}");
+    }
+}
+
+/// With the no-loss-of-contact limit at 1.5 µm the recess end is held there (s₀ = 1.575 µm) and
+/// the best the approach end can do is meet it: 1 + w + 0.3w² = 1.575 gives w = ½, so
+/// C_a2 = 0.5 µm (the L1 penalty takes the smallest such relief); objective ½(0.575 + 1.5·0.575).
+#[test]
+fn an_active_limit_holds_and_gives_the_known_constrained_optimum() {
+    let optimum = robust::optimize(
+        &synthetic,
+        &ReliefDesign::none(ReliefShape::Linear),
+        &synthetic_range(),
+        &limits(1.5e-6),
+        &Settings::default(),
+        &|_| {},
+    )
+    .unwrap();
+    let d = optimum.best.design;
+    assert!(end_relief(&d)[0] <= 1.5e-6 * (1.0 + 1e-9), "{d:?}");
+    assert!((d.tip[0] * 1e6 - 1.5).abs() < 0.01, "{d:?}");
+    assert!((d.tip[1] * 1e6 - 0.5).abs() < 0.01, "{d:?}");
+    let expected = 0.5 * (0.575 + 1.5 * 0.575);
+    assert!(
+        (optimum.best.response.objective_um - expected).abs() < 0.01,
+        "{} against {expected}",
+        optimum.best.response.objective_um
+    );
+    // A start that already breaks a limit is refused, not repaired silently.
+    let over = ReliefDesign {
+        tip: [3e-6, 0.0],
+        ..ReliefDesign::none(ReliefShape::Linear)
+    };
+    assert!(robust::optimize(
+        &synthetic,
+        &over,
+        &synthetic_range(),
+        &limits(1.5e-6),
+        &Settings::default(),
+        &|_| {}
+    )
+    .is_err());
+}
+
+/// On the paper pair's LTCA (case mesh, 32 positions, three torques 50–150 %): every accepted
+/// design keeps the limits and is a relief the geometry accepts; the objective falls
+/// monotonically over accepted steps; every QP is KKT-clean; the optimum's STE peak-to-peak at
+/// the design torque is below the unmodified pair's. Also with tight limits (3 µm at most,
+/// loaded contact ratio ≥ 1.55) the result keeps them.
+#[test]
+fn ltca_optimum_is_feasible_and_beats_the_unmodified_pair() {
+    let case = samples::paper36_case();
+    let torque = study::load_torque(&case).unwrap();
+    let model = study::ltca::model(&case, &[FlankModification::none(); 2]).unwrap();
+    let range = LoadRange::uniform(torque, 0.5, 1.5, 3).unwrap();
+    let positions = 32;
+    let respond = |d: &ReliefDesign| robust::evaluate(&model, d, &range, positions).map(|e| e.response);
+    let unmodified = respond(&ReliefDesign::none(ReliefShape::Linear)).unwrap();
+    let rb2 = case.pair.gears[1].base_radius;
+    let deflection = model
+        .run(positions, torque, &|_| {})
+        .unwrap()
+        .iter()
+        .map(|r| rb2 * (r.ste - r.unloaded_te))
+        .fold(0.0, f64::max);
+    for (max_um, min_ratio) in [(40.0, 1.2), (3.0, 1.55)] {
+        let limits = Limits {
+            max_amount: max_um * 1e-6,
+            min_length: 0.25,
+            min_contact_ratio: min_ratio,
+            contact_deflection: deflection,
+        };
+        let accepted = std::sync::Mutex::new(Vec::new());
+        let optimum = robust::optimize(
+            &respond,
+            &ReliefDesign::none(ReliefShape::Linear),
+            &range,
+            &limits,
+            &Settings::default(),
+            &|r| {
+                if r.accepted {
+                    accepted.lock().unwrap().push(r.clone());
+                }
+            },
+        )
+        .unwrap();
+        assert!(robust::feasible(&optimum.best, &limits), "{:?}", optimum.best);
+        assert!(optimum.best.design.modifications(&case.pair).is_ok());
+        assert!(optimum
+            .best
+            .design
+            .tip
+            .iter()
+            .chain(&optimum.best.design.root)
+            .all(|a| *a <= max_um * 1e-6));
+        for r in &optimum.iterations {
+            assert!(r.kkt_residual < 1e-6, "{r:?}");
+        }
+        let accepted = accepted.into_inner().unwrap();
+        for pair in accepted.windows(2) {
+            assert!(pair[1].objective_um < pair[0].objective_um);
+        }
+        assert!(optimum.best.response.objective_um < unmodified.objective_um);
+        // The design torque is the middle one of the range.
+        assert!(
+            optimum.best.response.ste_pp_um[1] < unmodified.ste_pp_um[1],
+            "{} against {}",
+            optimum.best.response.ste_pp_um[1],
+            unmodified.ste_pp_um[1]
+        );
+    }
+}

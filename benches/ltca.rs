@@ -1,7 +1,9 @@
 //! LTCA cost on the paper's pair at the default mesh (0.2 mm on the engaging flanks):
 //! factorization of one gear, the whole setup (mesh, factorize, condense; both gears), and the
 //! 64-position cycle after setup; and the modal analysis of the meshed pair at one position on
-//! the explicit FE's mesh (1 mm flanks, 3 mm body: assembly, static check, 10 lowest modes).
+//! the explicit FE's mesh (1 mm flanks, 3 mm body: assembly, static check, 10 lowest modes);
+//! and the relief optimizer: one design over the five torques of the default load range, and
+//! one whole trust-region loop (linear relief from none).
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use geardyn::fe::assembly::{stiffness_triplets, FactorizedStiffness};
@@ -67,6 +69,46 @@ fn ltca(c: &mut Criterion) {
             })
         });
     }
+    group.finish();
+
+    use geardyn::geometry::{FlankModification, ReliefShape};
+    use geardyn::optimize::relief::ReliefDesign;
+    use geardyn::optimize::robust::{self, LoadRange, Settings};
+    let mut group = c.benchmark_group("relief_optimizer_paper36_default_mesh");
+    group.sample_size(10);
+    let torque = 143.6;
+    let bodies = geardyn::study::ltca::model(&case, &[FlankModification::none(); 2]).unwrap();
+    let range = LoadRange::uniform(torque, 0.5, 1.5, 5).unwrap();
+    let design = ReliefDesign {
+        tip: [5.5e-6; 2],
+        root: [0.0; 2],
+        length: 0.93,
+        shape: ReliefShape::Linear,
+    };
+    group.bench_function("one_design_5_torques_64_positions", |b| {
+        b.iter(|| robust::evaluate(&bodies, black_box(&design), &range, 64).unwrap())
+    });
+    let deflection = 8.6e-6;
+    let limits = robust::Limits {
+        max_amount: 40e-6,
+        min_length: 0.25,
+        min_contact_ratio: 1.2,
+        contact_deflection: deflection,
+    };
+    let respond = |d: &ReliefDesign| robust::evaluate(&bodies, d, &range, 64).map(|e| e.response);
+    group.bench_function("trust_region_linear_from_none", |b| {
+        b.iter(|| {
+            robust::optimize(
+                &respond,
+                &ReliefDesign::none(ReliefShape::Linear),
+                &range,
+                &limits,
+                &Settings::default(),
+                &|_| {},
+            )
+            .unwrap()
+        })
+    });
     group.finish();
 }
 

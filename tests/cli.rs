@@ -947,3 +947,94 @@ fn compare_reads_a_known_fe_run_and_names_its_lines() {
     assert!(!refused.status.success());
     assert!(String::from_utf8_lossy(&refused.stderr).contains("not a geardyn fe output folder"));
 }
+
+/// `geardyn optimize` at a coarse setting (16 positions, three torques, 20 speeds): every key
+/// the issue asks for, the files, the optimum ahead of every baseline on the robust objective
+/// and below the unmodified STE at the design torque, start angles only where a zone is;
+/// impossible options fail with a message naming them.
+#[test]
+fn optimize_writes_its_summary_and_the_optimum_beats_the_baselines() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("opt");
+    run_ok(
+        geardyn()
+            .args([
+                "optimize",
+                "--positions",
+                "16",
+                "--torque-range",
+                "50:150:3",
+                "--rpm",
+                "100:12000:20",
+                "--out",
+            ])
+            .arg(&out),
+    );
+    let s = read_summary(&out);
+    for key in [
+        "tip_relief_um",
+        "root_relief_um",
+        "start_roll_deg",
+        "ste_pp_before_um",
+        "ste_pp_after_um",
+        "objective_optimum",
+        "objective_paper",
+        "objective_classic",
+        "iterations",
+        "qp_solve_s",
+        "wall_s",
+    ] {
+        assert!(s.get(key).is_some(), "summary.json has no {key}");
+    }
+    let number = |key: &str| s[key].as_f64().unwrap();
+    let optimum = number("objective_optimum");
+    for baseline in [
+        "objective_none",
+        "objective_paper",
+        "objective_classic",
+        "objective_classic_short",
+    ] {
+        assert!(
+            optimum < number(baseline),
+            "{optimum} against {baseline} {}",
+            number(baseline)
+        );
+    }
+    assert!(number("ste_pp_after_um") < number("ste_pp_before_um"));
+    assert!(s["iterations"].as_u64().unwrap() >= 1);
+    for (end, amounts) in [("tip", "tip_relief_um"), ("root", "root_relief_um")] {
+        for g in 0..2 {
+            let amount = s[amounts][g].as_f64().unwrap();
+            assert_eq!(
+                s["start_roll_deg"][end][g].is_null(),
+                amount == 0.0,
+                "{end} {g}"
+            );
+        }
+    }
+    for file in [
+        "iterations.csv",
+        "candidates.csv",
+        "harris.csv",
+        "harris.png",
+        "ste_design.csv",
+        "sweep.csv",
+        "convergence.png",
+        "case.toml",
+    ] {
+        assert!(out.join(file).exists(), "{file} missing");
+    }
+    for (flag, value, named) in [
+        ("--torque-range", "0:150:3", "torque-range"),
+        ("--min-relief-length", "0", "min-relief-length"),
+    ] {
+        let output = geardyn()
+            .args(["optimize", flag, value, "--out"])
+            .arg(dir.path().join("bad"))
+            .output()
+            .unwrap();
+        assert!(!output.status.success());
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(stderr.contains(named), "{stderr}");
+    }
+}

@@ -5,7 +5,7 @@
 use geardyn::geometry::{FlankModification, ReliefShape};
 use geardyn::optimize::relief::ReliefDesign;
 use geardyn::optimize::robust::{
-    self, end_relief, LoadRange, LoadResponse, Limits, OptimizeError, Settings,
+    self, end_relief, Limits, LoadRange, LoadResponse, OptimizeError, Settings,
 };
 use geardyn::samples;
 use geardyn::study;
@@ -135,7 +135,8 @@ fn ltca_optimum_is_feasible_and_beats_the_unmodified_pair() {
     let model = study::ltca::model(&case, &[FlankModification::none(); 2]).unwrap();
     let range = LoadRange::uniform(torque, 0.5, 1.5, 3).unwrap();
     let positions = 32;
-    let respond = |d: &ReliefDesign| robust::evaluate(&model, d, &range, positions).map(|e| e.response);
+    let respond =
+        |d: &ReliefDesign| robust::evaluate(&model, d, &range, positions).map(|e| e.response);
     let unmodified = respond(&ReliefDesign::none(ReliefShape::Linear)).unwrap();
     let rb2 = case.pair.gears[1].base_radius;
     let deflection = model
@@ -165,7 +166,11 @@ fn ltca_optimum_is_feasible_and_beats_the_unmodified_pair() {
             },
         )
         .unwrap();
-        assert!(robust::feasible(&optimum.best, &limits), "{:?}", optimum.best);
+        assert!(
+            robust::feasible(&optimum.best, &limits),
+            "{:?}",
+            optimum.best
+        );
         assert!(optimum.best.design.modifications(&case.pair).is_ok());
         assert!(optimum
             .best

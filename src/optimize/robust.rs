@@ -331,9 +331,12 @@ pub fn feasible(evaluation: &Evaluation, limits: &Limits) -> bool {
     let (lo, hi) = bounds(limits);
     let ends = end_relief(&evaluation.design);
     (0..VARIABLES).all(|k| v[k] >= lo[k] - 1e-9 && v[k] <= hi[k] + 1e-9)
-        && ends.iter().all(|e| *e <= limits.contact_deflection * (1.0 + 1e-9))
+        && ends
+            .iter()
+            .all(|e| *e <= limits.contact_deflection * (1.0 + 1e-9))
         && evaluation
-            .response.contact_ratio
+            .response
+            .contact_ratio
             .iter()
             .all(|e| *e >= limits.min_contact_ratio - 1e-6)
 }
@@ -389,7 +392,15 @@ pub fn optimize(
             evaluations += VARIABLES;
         }
         let linear = jacobian.as_ref().expect("linearized above");
-        let problem = step_problem(&current, linear, range, limits, settings, radius, (&lo, &hi));
+        let problem = step_problem(
+            &current,
+            linear,
+            range,
+            limits,
+            settings,
+            radius,
+            (&lo, &hi),
+        );
         let solution = qp::solve(&problem)?;
         qp_solve_s += solution.solve_s;
         let dv: [f64; VARIABLES] = std::array::from_fn(|k| solution.x[k]);
@@ -397,7 +408,8 @@ pub fn optimize(
         let constant = settings.regularization * weighted_amounts(&v0);
         // The QP objective drops the constant ρ Σ r_k c₀ₖ; the model value is it plus that.
         let predicted = f0 - (solution.objective + constant);
-        let trial_v: [f64; VARIABLES] = std::array::from_fn(|k| (v0[k] + dv[k]).clamp(lo[k], hi[k]));
+        let trial_v: [f64; VARIABLES] =
+            std::array::from_fn(|k| (v0[k] + dv[k]).clamp(lo[k], hi[k]));
         let trial_design = unscaled(&trial_v, shape);
         let mut record = IterationRecord {
             iteration,
@@ -479,7 +491,8 @@ fn linearize(
     let v0 = scaled(&current.design);
     let mut jacobian = Jacobian {
         ste: current
-            .response.ste_um
+            .response
+            .ste_um
             .iter()
             .map(|s| vec![[0.0; VARIABLES]; s.len()])
             .collect(),
@@ -492,12 +505,26 @@ fn linearize(
             v[k] = (v[k] + h).clamp(lo[k], hi[k]);
             evaluate(&unscaled(&v, current.design.shape)).map(|e| (e, v[k] - v0[k]))
         };
-        let (shifted, h) = match attempt(if forward { settings.step } else { -settings.step }) {
+        let (shifted, h) = match attempt(if forward {
+            settings.step
+        } else {
+            -settings.step
+        }) {
             Ok(r) => r,
-            Err(OptimizeError::Geometry(_)) => attempt(if forward { -settings.step } else { settings.step })?,
+            Err(OptimizeError::Geometry(_)) => attempt(if forward {
+                -settings.step
+            } else {
+                settings.step
+            })?,
             Err(e) => return Err(e),
         };
-        for (j, (after, before)) in shifted.response.ste_um.iter().zip(&current.response.ste_um).enumerate() {
+        for (j, (after, before)) in shifted
+            .response
+            .ste_um
+            .iter()
+            .zip(&current.response.ste_um)
+            .enumerate()
+        {
             for (i, (a, b)) in after.iter().zip(before).enumerate() {
                 jacobian.ste[j][i][k] = (a - b) / h;
             }

@@ -11,14 +11,18 @@ use crate::study::compare::{CompareSummary, FeDte, Peak};
 
 /// A `geardyn fe` folder's summary.json, and a reader of its numbers by key path whose message
 /// names the folder and the key.
-fn fe_summary(dir: &Path) -> Result<serde_json::Value, String> {
+pub(crate) fn fe_summary(dir: &Path) -> Result<serde_json::Value, String> {
     let shown = dir.display();
     let text = std::fs::read_to_string(dir.join("summary.json"))
         .map_err(|e| format!("{shown} is not a geardyn fe output folder (summary.json: {e})"))?;
     serde_json::from_str(&text).map_err(|e| format!("{shown}/summary.json: {e}"))
 }
 
-fn summary_number(summary: &serde_json::Value, dir: &Path, path: &[&str]) -> Result<f64, String> {
+pub(crate) fn summary_number(
+    summary: &serde_json::Value,
+    dir: &Path,
+    path: &[&str],
+) -> Result<f64, String> {
     path.iter()
         .try_fold(summary, |v, key| v.get(key))
         .and_then(|v| v.as_f64())

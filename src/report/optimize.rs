@@ -1,10 +1,12 @@
 //! Writes the relief optimization study: summary.json, the iterations, the candidates, the
 //! Harris map, the STE and the lumped sweep of every candidate (CSV, SVG, PNG).
 
+use std::path::Path;
+
 use super::plot::LinePlot;
 use super::{OutputDir, ReportError};
 use crate::case::Case;
-use crate::study::optimize::{shape_name, CandidateKind, OptimizeStudy};
+use crate::study::optimize::{shape_name, CandidateKind, FeCheck, FeCheckRun, OptimizeStudy};
 
 /// The console lines.
 pub fn console(study: &OptimizeStudy) -> String {
@@ -194,7 +196,13 @@ pub fn write(dir: OutputDir, case: &Case, study: &OptimizeStudy) -> Result<(), R
             ),
             x_label: "torque on the driven gear [N·m]".into(),
             y_label: "STE peak-to-peak [um]".into(),
-            series: series(&|c| torques.iter().copied().zip(c.harris.ste_pp_um.iter().copied()).collect()),
+            series: series(&|c| {
+                torques
+                    .iter()
+                    .copied()
+                    .zip(c.harris.ste_pp_um.iter().copied())
+                    .collect()
+            }),
         },
     )?;
     dir.chart(
@@ -207,7 +215,13 @@ pub fn write(dir: OutputDir, case: &Case, study: &OptimizeStudy) -> Result<(), R
             ),
             x_label: "driver roll angle [deg]".into(),
             y_label: "STE along the line of action [um]".into(),
-            series: series(&|c| c.roll_deg.iter().copied().zip(c.ste_design_um.iter().copied()).collect()),
+            series: series(&|c| {
+                c.roll_deg
+                    .iter()
+                    .copied()
+                    .zip(c.ste_design_um.iter().copied())
+                    .collect()
+            }),
         },
     )?;
     dir.chart(
@@ -216,13 +230,23 @@ pub fn write(dir: OutputDir, case: &Case, study: &OptimizeStudy) -> Result<(), R
             title: format!("{}: lumped dynamic factor per candidate", case.name()),
             x_label: "driver speed [rpm]".into(),
             y_label: "dynamic factor".into(),
-            series: series(&|c| study.rpms.iter().copied().zip(c.sweep.dynamic_factor.iter().copied()).collect()),
+            series: series(&|c| {
+                study
+                    .rpms
+                    .iter()
+                    .copied()
+                    .zip(c.sweep.dynamic_factor.iter().copied())
+                    .collect()
+            }),
         },
     )?;
     dir.chart(
         "convergence",
         &LinePlot {
-            title: format!("{}: robust objective per trust-region iteration", case.name()),
+            title: format!(
+                "{}: robust objective per trust-region iteration",
+                case.name()
+            ),
             x_label: "iteration".into(),
             y_label: "weighted STE peak-to-peak [um]".into(),
             series: study
@@ -245,4 +269,94 @@ pub fn write(dir: OutputDir, case: &Case, study: &OptimizeStudy) -> Result<(), R
         },
     )?;
     dir.json("summary.json", &study.summary)
+}
+
+/// Reads one cross-check run back from its `geardyn fe` folder; the message says what is missing.
+pub fn read_fe_check_run(dir: &Path) -> Result<FeCheckRun, String> {
+    let dte = super::compare::read_fe_run(dir)?;
+    let summary = super::compare::fe_summary(dir)?;
+    let number = |path: &[&str]| super::compare::summary_number(&summary, dir, path);
+    Ok(FeCheckRun {
+        dte,
+        dte_peak_to_peak_rad: number(&["dte_peak_to_peak_rad"])?,
+        dte_lowpass_peak_to_peak_rad: number(&["dte_lowpass", "peak_to_peak_rad"]).ok(),
+        ltca_same_mesh_peak_to_peak_rad: number(&["ltca_same_mesh", "ste_peak_to_peak_rad"]).ok(),
+        impact_d1_max_n: number(&["impact_d1_max_n"]).ok(),
+        mesh_frequency_hz: number(&["mesh_frequency_hz"])?,
+    })
+}
+
+/// The cross-check as fe_check.csv and fe_check.md; returns the Markdown table.
+pub fn write_fe_check(dir: OutputDir, check: &FeCheck) -> Result<String, ReportError> {
+    let f = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:.6e}"));
+    let harmonic =
+        |l: &crate::study::optimize::FeCheckLine, i: usize| l.fe_high_harmonics_um.map(|h| h[i]);
+    dir.csv(
+        "fe_check.csv",
+        &[
+            "candidate",
+            "kind",
+            "ltca_ste_pp_um",
+            "ltca_same_mesh_ste_pp_um",
+            "fe_low_dte_lowpass_pp_um",
+            "fe_low_dte_pp_um",
+            "fe_high_dte_pp_um",
+            "fe_high_h1_um",
+            "fe_high_h2_um",
+            "fe_high_h3_um",
+            "fe_high_impact_d1_max_n",
+            "lumped_dynamic_factor_high",
+            "fe_errors",
+        ],
+        check.lines.iter().map(|l| {
+            vec![
+                l.candidate.clone(),
+                format!("{:?}", l.kind).to_lowercase(),
+                f(Some(l.ltca_ste_pp_um)),
+                f(l.ltca_same_mesh_ste_pp_um),
+                f(l.fe_low_dte_lowpass_pp_um),
+                f(l.fe_low_dte_pp_um),
+                f(l.fe_high_dte_pp_um),
+                f(harmonic(l, 0)),
+                f(harmonic(l, 1)),
+                f(harmonic(l, 2)),
+                f(l.fe_high_impact_d1_max_n),
+                f(Some(l.lumped_dynamic_factor_high)),
+                l.fe_errors.join("; "),
+            ]
+        }),
+    )?;
+    let g = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.3}"));
+    let mut md = String::from(
+        "| candidate | LTCA STE p-p (case mesh) [um] | LTCA same mesh [um] | FE low speed DTE p-p, low-passed [um] | FE high speed DTE p-p [um] | FE high speed 1st / 2nd / 3rd harmonic [um] | impact d1 max [N] | lumped K_v at that speed |\n|---|---|---|---|---|---|---|---|\n",
+    );
+    for l in &check.lines {
+        md += &format!(
+            "| {} | {:.3} | {} | {} | {} | {} | {} | {:.3} |\n",
+            l.candidate,
+            l.ltca_ste_pp_um,
+            g(l.ltca_same_mesh_ste_pp_um),
+            g(l.fe_low_dte_lowpass_pp_um),
+            g(l.fe_high_dte_pp_um),
+            l.fe_high_harmonics_um.map_or("–".into(), |h| format!(
+                "{:.3} / {:.3} / {:.3}",
+                h[0], h[1], h[2]
+            )),
+            g(l.fe_high_impact_d1_max_n),
+            l.lumped_dynamic_factor_high
+        );
+    }
+    md += &format!(
+        "\nRanking, best first. LTCA: {}. FE low speed: {}. FE high speed (1st harmonic): {}.\nKendall tau against the LTCA: low speed {}, high speed {}; the best optimum ahead of every baseline: low speed {:?}, high speed {:?}. FE time {:.0} s.\n",
+        check.ltca_ranking.join(", "),
+        check.fe_low_ranking.join(", "),
+        check.fe_high_ranking.join(", "),
+        g(check.kendall_tau_low),
+        g(check.kendall_tau_high),
+        check.optimum_first_low,
+        check.optimum_first_high,
+        check.fe_wall_s
+    );
+    dir.bytes("fe_check.md", md.as_bytes())?;
+    Ok(md)
 }

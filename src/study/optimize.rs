@@ -12,12 +12,12 @@
 
 use serde::Serialize;
 
-use crate::case::Case;
+use crate::case::{Case, Override};
 use crate::geometry::{FlankModification, ReliefShape};
 use crate::ltca::LtcaModel;
 use crate::optimize::relief::ReliefDesign;
 use crate::optimize::robust::{
-    self, end_relief, load_response, LoadRange, LoadResponse, Optimum, OptimizeError,
+    self, end_relief, load_response, LoadRange, LoadResponse, OptimizeError, Optimum,
 };
 use crate::stiffness::{self, MeshStiffness};
 use crate::sweep::{self, SweepPoint};
@@ -231,6 +231,8 @@ pub struct OptimizeSummary {
     /// The optimum on fixed bodies against its own re-meshed LTCA.
     pub remeshed: RemeshedCheck,
     pub candidates: Vec<CandidateLine>,
+    /// The explicit-FE cross-check (`--fe-check`).
+    pub fe_check: Option<FeCheck>,
     pub model: &'static str,
 }
 
@@ -259,7 +261,8 @@ fn remeshed_check(
         .iter()
         .find(|c| c.name == "optimum-1")
         .ok_or_else(|| StudyError::Input("no optimum was found".into()))?;
-    let remeshed = super::ltca::model(case, &optimum.modifications)?.run(positions, torque, &|_| {})?;
+    let remeshed =
+        super::ltca::model(case, &optimum.modifications)?.run(positions, torque, &|_| {})?;
     let rb2 = case.pair.gears[1].base_radius;
     let ste: Vec<f64> = remeshed.iter().map(|r| r.ste * rb2 * 1e6).collect();
     let k = remeshed.iter().map(|r| r.mesh_stiffness).sum::<f64>() / positions as f64;
@@ -323,7 +326,12 @@ pub fn run(
     let started = std::time::Instant::now();
     let torque = load_torque(case)?;
     let percent = |r: &TorqueRange| {
-        LoadRange::uniform(torque, r.from_percent / 100.0, r.to_percent / 100.0, r.count)
+        LoadRange::uniform(
+            torque,
+            r.from_percent / 100.0,
+            r.to_percent / 100.0,
+            r.count,
+        )
     };
     let range = percent(&options.torque_range)?;
     let harris_range = percent(&options.harris_range)?;
@@ -372,7 +380,10 @@ pub fn run(
     let mut optima = Vec::new();
     let mut start_lines = Vec::new();
     for (s, (shape, start_name)) in starts.iter().enumerate() {
-        let stage = format!("optimizing ({} relief from {start_name})", shape_name(*shape));
+        let stage = format!(
+            "optimizing ({} relief from {start_name})",
+            shape_name(*shape)
+        );
         progress(&stage, s, starts.len());
         let start = match *start_name {
             "none" => ReliefDesign::none(*shape),
@@ -419,8 +430,12 @@ pub fn run(
             chosen.push(i);
         }
     }
-    let mut plan: Vec<(String, CandidateKind, Option<ReliefDesign>, [FlankModification; 2])> =
-        Vec::new();
+    let mut plan: Vec<(
+        String,
+        CandidateKind,
+        Option<ReliefDesign>,
+        [FlankModification; 2],
+    )> = Vec::new();
     for variant in &case.relief_variants {
         plan.push((
             variant.name.clone(),
@@ -437,7 +452,9 @@ pub fn run(
             name.into(),
             CandidateKind::Baseline,
             Some(design),
-            design.modifications(pair).map_err(|e| StudyError::Input(e.to_string()))?,
+            design
+                .modifications(pair)
+                .map_err(|e| StudyError::Input(e.to_string()))?,
         ));
     }
     for (rank, &i) in chosen.iter().enumerate() {
@@ -446,7 +463,9 @@ pub fn run(
             format!("optimum-{}", rank + 1),
             CandidateKind::Optimum,
             Some(design),
-            design.modifications(pair).map_err(|e| StudyError::Input(e.to_string()))?,
+            design
+                .modifications(pair)
+                .map_err(|e| StudyError::Input(e.to_string()))?,
         ));
     }
     let mut candidates = Vec::new();
@@ -533,7 +552,10 @@ fn judge(
         design,
         modifications,
         ste_pp_design_um: peak_to_peak(&ste),
-        roll_deg: at_design.iter().map(|r| r.roll_angle.to_degrees()).collect(),
+        roll_deg: at_design
+            .iter()
+            .map(|r| r.roll_angle.to_degrees())
+            .collect(),
         ste_design_um: ste,
         contact_ratio_design: crate::ltca::loaded_contact_ratio(&at_design),
         end_relief_um: ends.map(|e| e * 1e6),
@@ -667,6 +689,232 @@ fn summarize(
                 max_dynamic_factor_rpm: c.sweep.max_dynamic_factor_rpm,
             })
             .collect(),
+        fe_check: None,
         model: "LTCA on the unmodified bodies meshed once (case mesh); the relief enters as the initial gap of the exact modified profiles; frictionless, quasi-static; STE = r_b2 phi of the driven gear",
     })
+}
+
+/// The explicit-FE scenes of the cross-check: the case's stiffness scene (low speed, the
+/// quasi-static DTE over a base pitch) and its high-speed scene (the seed paper's 3000 rpm),
+/// each run with the candidate's relief.
+pub const FE_CHECK_SCENES: [&str; 2] =
+    [super::compare::STIFFNESS_SCENE, super::compare::SPEED_SCENE];
+
+/// The case changes that give the cross-check scenes `candidate`'s relief: a relief variant of
+/// the candidate's name (a case variant is used as it is) set as the scenes' relief.
+pub fn fe_check_overrides(case: &Case, candidate: &Candidate) -> Result<Vec<Override>, StudyError> {
+    let mut overrides = Vec::new();
+    if let Some(design) = &candidate.design {
+        if case.relief_variant(&candidate.name).is_some() {
+            return Err(StudyError::Input(format!(
+                "the case already has a relief variant {:?}: rename it to run the FE cross-check",
+                candidate.name
+            )));
+        }
+        let mut table = toml::Table::new();
+        table.insert("name".into(), candidate.name.clone().into());
+        for (g, modification) in candidate.modifications.iter().enumerate() {
+            let mut gear = toml::Table::new();
+            for (end, zone) in [("tip", modification.tip), ("root", modification.root)] {
+                if let Some(zone) = zone {
+                    let mut spec = toml::Table::new();
+                    spec.insert("amount_um".into(), (zone.amount * 1e6).into());
+                    spec.insert("shape".into(), shape_name(design.shape).into());
+                    spec.insert(
+                        "start_roll_deg".into(),
+                        zone.start_roll_angle.to_degrees().into(),
+                    );
+                    gear.insert(end.into(), spec.into());
+                }
+            }
+            if !gear.is_empty() {
+                table.insert(format!("gear{}", g + 1), gear.into());
+            }
+        }
+        overrides.push(Override::Append {
+            array: "relief_variant".into(),
+            table,
+        });
+    }
+    for scene in FE_CHECK_SCENES {
+        overrides.push(Override::set(
+            format!("scene[{scene}].relief"),
+            candidate.name.as_str(),
+        ));
+    }
+    Ok(overrides)
+}
+
+/// What the cross-check reads of one explicit run.
+#[derive(Debug, Clone)]
+pub struct FeCheckRun {
+    pub dte: super::compare::FeDte,
+    pub dte_peak_to_peak_rad: f64,
+    /// Of the DTE low-passed over the mesh mode's period (the quasi-static part).
+    pub dte_lowpass_peak_to_peak_rad: Option<f64>,
+    /// The LTCA's STE peak-to-peak on the run's own (explicit) mesh.
+    pub ltca_same_mesh_peak_to_peak_rad: Option<f64>,
+    pub impact_d1_max_n: Option<f64>,
+    pub mesh_frequency_hz: f64,
+}
+
+/// One candidate's row of the cross-check: the LTCA's prediction against the FE's result.
+#[derive(Debug, Clone, Serialize)]
+pub struct FeCheckLine {
+    pub candidate: String,
+    pub kind: CandidateKind,
+    /// LTCA at the design torque, case mesh and the explicit run's mesh [µm].
+    pub ltca_ste_pp_um: f64,
+    pub ltca_same_mesh_ste_pp_um: Option<f64>,
+    /// Low speed: the quasi-static DTE peak-to-peak (low-passed) and raw [µm].
+    pub fe_low_dte_lowpass_pp_um: Option<f64>,
+    pub fe_low_dte_pp_um: Option<f64>,
+    /// High speed: DTE peak-to-peak, first three mesh-harmonic amplitudes [µm] over the
+    /// statistics window, largest db5 level-1 detail of the contact force [N].
+    pub fe_high_dte_pp_um: Option<f64>,
+    pub fe_high_harmonics_um: Option<[f64; 3]>,
+    pub fe_high_impact_d1_max_n: Option<f64>,
+    /// The lumped sweep's dynamic factor at the speed nearest the high-speed scene's.
+    pub lumped_dynamic_factor_high: f64,
+    /// Why a run is missing (diverged, failed).
+    pub fe_errors: Vec<String>,
+}
+
+/// The cross-check table with the rankings compared.
+#[derive(Debug, Clone, Serialize)]
+pub struct FeCheck {
+    pub lines: Vec<FeCheckLine>,
+    /// Candidates by the LTCA's STE peak-to-peak at the design torque, best first.
+    pub ltca_ranking: Vec<String>,
+    /// By the FE's low-speed quasi-static DTE peak-to-peak, best first (runs that finished).
+    pub fe_low_ranking: Vec<String>,
+    /// By the FE's high-speed first mesh-harmonic amplitude, best first.
+    pub fe_high_ranking: Vec<String>,
+    /// Kendall's τ between the LTCA ranking and each FE ranking (1: the same order).
+    pub kendall_tau_low: Option<f64>,
+    pub kendall_tau_high: Option<f64>,
+    /// The FE puts the best optimum ahead of every baseline at low speed.
+    pub optimum_first_low: Option<bool>,
+    pub optimum_first_high: Option<bool>,
+    pub fe_wall_s: f64,
+}
+
+/// Tabulates the FE runs of the candidates (`runs[i]` belongs to `study.candidates[i]`, one
+/// result per [`FE_CHECK_SCENES`]).
+pub fn fe_check(
+    study: &OptimizeStudy,
+    runs: &[[Result<FeCheckRun, String>; 2]],
+    rb2: f64,
+) -> FeCheck {
+    let um = |rad: f64| rad * rb2 * 1e6;
+    let mut lines = Vec::new();
+    let mut wall = 0.0;
+    for (candidate, [low, high]) in study.candidates.iter().zip(runs) {
+        let mut errors = Vec::new();
+        for (scene, run) in FE_CHECK_SCENES.iter().zip([low, high]) {
+            match run {
+                Ok(r) => wall += r.dte.wall_s,
+                Err(e) => errors.push(format!("{scene}: {e}")),
+            }
+        }
+        let low = low.as_ref().ok();
+        let high = high.as_ref().ok();
+        let harmonics = high.map(|h| {
+            let start =
+                ((h.dte.statistics_start_s / h.dte.dt).ceil() as usize).min(h.dte.dte.len());
+            let a = crate::signal::harmonic_amplitudes(
+                &h.dte.dte[start..],
+                h.dte.dt,
+                h.mesh_frequency_hz,
+                3,
+            );
+            [um(a[0]), um(a[1]), um(a[2])]
+        });
+        let high_rpm = high.map(|h| h.dte.speed_rpm);
+        let nearest = high_rpm.map_or(0, |rpm| {
+            (0..study.rpms.len())
+                .min_by(|&a, &b| {
+                    (study.rpms[a] - rpm)
+                        .abs()
+                        .total_cmp(&(study.rpms[b] - rpm).abs())
+                })
+                .unwrap_or(0)
+        });
+        lines.push(FeCheckLine {
+            candidate: candidate.name.clone(),
+            kind: candidate.kind,
+            ltca_ste_pp_um: candidate.ste_pp_design_um,
+            ltca_same_mesh_ste_pp_um: low.and_then(|l| l.ltca_same_mesh_peak_to_peak_rad.map(um)),
+            fe_low_dte_lowpass_pp_um: low.and_then(|l| l.dte_lowpass_peak_to_peak_rad.map(um)),
+            fe_low_dte_pp_um: low.map(|l| um(l.dte_peak_to_peak_rad)),
+            fe_high_dte_pp_um: high.map(|h| um(h.dte_peak_to_peak_rad)),
+            fe_high_harmonics_um: harmonics,
+            fe_high_impact_d1_max_n: high.and_then(|h| h.impact_d1_max_n),
+            lumped_dynamic_factor_high: candidate.sweep.dynamic_factor[nearest],
+            fe_errors: errors,
+        });
+    }
+    let ranking = |value: &dyn Fn(&FeCheckLine) -> Option<f64>| {
+        let mut ranked: Vec<(&str, f64)> = lines
+            .iter()
+            .filter_map(|l| value(l).map(|v| (l.candidate.as_str(), v)))
+            .collect();
+        ranked.sort_by(|a, b| a.1.total_cmp(&b.1));
+        ranked
+            .into_iter()
+            .map(|(n, _)| n.to_string())
+            .collect::<Vec<_>>()
+    };
+    let ltca_ranking = ranking(&|l| Some(l.ltca_ste_pp_um));
+    let fe_low_ranking = ranking(&|l| l.fe_low_dte_lowpass_pp_um.or(l.fe_low_dte_pp_um));
+    let fe_high_ranking = ranking(&|l| l.fe_high_harmonics_um.map(|h| h[0]));
+    let first = |fe: &[String]| {
+        let best = study
+            .candidates
+            .iter()
+            .find(|c| c.kind == CandidateKind::Optimum)?;
+        let position = |name: &str| fe.iter().position(|n| n == name);
+        let at = position(&best.name)?;
+        Some(
+            study
+                .candidates
+                .iter()
+                .filter(|c| c.kind == CandidateKind::Baseline)
+                .all(|c| position(&c.name).is_none_or(|p| p > at)),
+        )
+    };
+    FeCheck {
+        kendall_tau_low: kendall_tau(&ltca_ranking, &fe_low_ranking),
+        kendall_tau_high: kendall_tau(&ltca_ranking, &fe_high_ranking),
+        optimum_first_low: first(&fe_low_ranking),
+        optimum_first_high: first(&fe_high_ranking),
+        lines,
+        ltca_ranking,
+        fe_low_ranking,
+        fe_high_ranking,
+        fe_wall_s: wall,
+    }
+}
+
+/// Kendall's τ_a of two rankings over the names both hold: (concordant − discordant) pairs over
+/// all pairs; None with fewer than two common names.
+pub fn kendall_tau(a: &[String], b: &[String]) -> Option<f64> {
+    let common: Vec<&String> = a.iter().filter(|n| b.contains(n)).collect();
+    let n = common.len();
+    if n < 2 {
+        return None;
+    }
+    let rank_b = |name: &String| b.iter().position(|m| m == name).expect("common");
+    let mut score = 0i64;
+    for i in 0..n {
+        for j in i + 1..n {
+            // In a, common[i] is ahead of common[j].
+            score += if rank_b(common[i]) < rank_b(common[j]) {
+                1
+            } else {
+                -1
+            };
+        }
+    }
+    Some(score as f64 / (n * (n - 1) / 2) as f64)
 }

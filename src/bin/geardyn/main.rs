@@ -162,14 +162,46 @@ fn ltca(
 fn optimize(args: &CommonArgs, options: &OptimizeArgs) -> Result<()> {
     let case = load(
         args,
-        study::torque_override(options.torque_nm).into_iter().collect(),
+        study::torque_override(options.torque_nm)
+            .into_iter()
+            .collect(),
     )?;
     let dir = output_dir(args, "optimize", &case)?;
     let bar = staged_bar();
-    let result = study::optimize::run(&case, &options.options(), &stage(&bar))?;
+    let mut result = study::optimize::run(&case, &options.options(), &stage(&bar))?;
     bar.finish_and_clear();
     print!("{}", report::optimize::console(&result));
     report::optimize::write(OutputDir(&dir), &case, &result)?;
+    if options.fe_check {
+        // Each candidate's scenes run into DIR/fe-check/<candidate>-<scene>; a run that fails
+        // is a row with its reason, not the end of the check.
+        let mut runs = Vec::new();
+        for candidate in &result.candidates {
+            let mut overrides: Vec<Override> = study::torque_override(options.torque_nm)
+                .into_iter()
+                .collect();
+            overrides.extend(study::optimize::fe_check_overrides(&case, candidate)?);
+            let with_relief = load(args, overrides)?;
+            runs.push(study::optimize::FE_CHECK_SCENES.map(|name| {
+                let out = dir
+                    .join("fe-check")
+                    .join(format!("{}-{name}", candidate.name));
+                study::fe::scene(&with_relief, name)
+                    .map_err(anyhow::Error::from)
+                    .and_then(|scene| fe_run(&with_relief, scene, &out))
+                    .map_err(|e| format!("{e:#}"))
+                    .and_then(|_| report::optimize::read_fe_check_run(&out))
+            }));
+        }
+        let rb2 = case.pair.gears[1].base_radius;
+        let check = study::optimize::fe_check(&result, &runs, rb2);
+        print!(
+            "{}",
+            report::optimize::write_fe_check(OutputDir(&dir), &check)?
+        );
+        result.summary.fe_check = Some(check);
+        OutputDir(&dir).json("summary.json", &result.summary)?;
+    }
     println!("wrote {}", dir.display());
     Ok(())
 }

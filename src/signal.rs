@@ -63,6 +63,21 @@ pub fn extremes(values: &[f64]) -> (f64, f64) {
         })
 }
 
+/// max − min of `values` (−∞ for none).
+pub fn peak_to_peak(values: &[f64]) -> f64 {
+    let (lo, hi) = extremes(values);
+    hi - lo
+}
+
+/// Index of the value nearest `target` (None for none).
+pub fn nearest_index(values: &[f64], target: f64) -> Option<usize> {
+    (0..values.len()).min_by(|&a, &b| {
+        (values[a] - target)
+            .abs()
+            .total_cmp(&(values[b] - target).abs())
+    })
+}
+
 /// One level of the periodized db5 DWT: (approximation, detail), each ⌈N/2⌉ long.
 pub fn dwt_db5(x: &[f64]) -> (Vec<f64>, Vec<f64>) {
     let mut signal = x.to_vec();

@@ -12,8 +12,10 @@ use geardyn::study;
 
 /// A response with a known optimum: two torques (the second 1.5× the first), three positions,
 /// s₀ = 1 + u + 0.3u², u = 2 − (C_a1 + C_f2); s₁ = 1 + w + 0.3w², w = 1 − (C_a2 + C_f1);
-/// s₂ = 1 [µm]. Like the LTCA it sees only the sums at each end of the path; it is flat only at
-/// C_a1 + C_f2 = 2, C_a2 + C_f1 = 1, and the L1 regularization puts both on the tips.
+/// s₂ = 1 [µm]. Like the LTCA it sees only the sums at each end of the path. It is flat at
+/// C_a1 + C_f2 = 2, C_a2 + C_f1 = 1 (and again at 16/3 and 13/3 µm, where u, w = −10/3: the L1
+/// regularization takes the smaller reliefs), and the regularization puts both on the tips. The
+/// loaded contact ratio falls by 0.1 per µm of relief from 1.7.
 fn synthetic(design: &ReliefDesign) -> Result<LoadResponse, OptimizeError> {
     let um = |x: f64| x * 1e6;
     let recess = um(design.tip[0] + design.root[1]);
@@ -58,7 +60,8 @@ fn limits(contact_deflection: f64) -> Limits {
 
 /// Free optimum: C_a1 = 2 µm, C_a2 = 1 µm, no root relief, objective 0 (to the tolerance),
 /// every QP's KKT residual small. Tolerances: 0.01 µm on the amounts (the loop stops when the
-/// linear model predicts < 1e-3 µm; the response's slope is ≥ 1 µm/µm near the optimum).
+/// linear model predicts < 1e-5 µm; the response's slope is ≥ 1 µm/µm near the optimum, the
+/// regularization's 1e-3 µm/µm).
 #[test]
 fn trust_region_finds_the_known_optimum() {
     let start = ReliefDesign::none(ReliefShape::Linear);
@@ -112,20 +115,51 @@ fn an_active_limit_holds_and_gives_the_known_constrained_optimum() {
         tip: [3e-6, 0.0],
         ..ReliefDesign::none(ReliefShape::Linear)
     };
-    assert!(robust::optimize(
+    assert!(matches!(
+        robust::optimize(
+            &synthetic,
+            &over,
+            &synthetic_range(),
+            &limits(1.5e-6),
+            &Settings::default(),
+            &|_| {}
+        ),
+        Err(OptimizeError::InfeasibleStart(_))
+    ));
+}
+
+/// With the loaded contact ratio held at ≥ 1.5 the sums may total 2 µm at most (1.7 − 0.1 · 2):
+/// the best split makes both ends equally short of flat, u = w = ½, so C_a1 = 1.5 µm,
+/// C_a2 = 0.5 µm, s₀ = s₁ = 1.575 µm, objective ½(0.575 + 1.5 · 0.575) — the contact-ratio
+/// rows of the QP, linearized by forward differences, hold the limit.
+#[test]
+fn the_contact_ratio_limit_holds_and_gives_the_known_optimum() {
+    let mut tight = limits(10e-6);
+    tight.min_contact_ratio = 1.5;
+    let optimum = robust::optimize(
         &synthetic,
-        &over,
+        &ReliefDesign::none(ReliefShape::Linear),
         &synthetic_range(),
-        &limits(1.5e-6),
+        &tight,
         &Settings::default(),
-        &|_| {}
+        &|_| {},
     )
-    .is_err());
+    .unwrap();
+    let d = optimum.best.design;
+    assert!(
+        robust::feasible(&optimum.best, &tight),
+        "{:?}",
+        optimum.best
+    );
+    assert!((d.tip[0] * 1e6 - 1.5).abs() < 0.01, "{d:?}");
+    assert!((d.tip[1] * 1e6 - 0.5).abs() < 0.01, "{d:?}");
+    let expected = 0.5 * (0.575 + 1.5 * 0.575);
+    assert!((optimum.best.response.objective_um - expected).abs() < 0.01);
 }
 
 /// On the paper pair's LTCA (case mesh, 32 positions, three torques 50–150 %): every accepted
-/// design keeps the limits and is a relief the geometry accepts; the objective falls
-/// monotonically over accepted steps; every QP is KKT-clean; the optimum's STE peak-to-peak at
+/// design keeps the limits and is a relief the geometry accepts; f falls monotonically over
+/// accepted steps; every QP is KKT-clean; the optimum's STE peak-to-peak at
 /// the design torque is below the unmodified pair's. Also with tight limits (3 µm at most,
 /// loaded contact ratio ≥ 1.55) the result keeps them.
 #[test]
@@ -183,8 +217,9 @@ fn ltca_optimum_is_feasible_and_beats_the_unmodified_pair() {
             assert!(r.kkt_residual < 1e-6, "{r:?}");
         }
         let accepted = accepted.into_inner().unwrap();
+        // Every accepted step lowers f = objective + regularization.
         for pair in accepted.windows(2) {
-            assert!(pair[1].objective_um < pair[0].objective_um);
+            assert!(pair[1].merit_um < pair[0].merit_um);
         }
         assert!(optimum.best.response.objective_um < unmodified.objective_um);
         // The design torque is the middle one of the range.

@@ -28,6 +28,14 @@ pub enum ReliefShape {
 }
 
 impl ReliefShape {
+    /// The case file's name of the shape.
+    pub fn name(self) -> &'static str {
+        match self {
+            ReliefShape::Linear => "linear",
+            ReliefShape::Parabolic => "parabolic",
+        }
+    }
+
     fn exponent(self) -> i32 {
         match self {
             ReliefShape::Linear => 1,

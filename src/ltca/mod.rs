@@ -70,6 +70,8 @@ pub struct LtcaModel {
     /// Tooth pairs (gear-1 tooth, gear-2 tooth) that can engage.
     pub tooth_pairs: Vec<(usize, usize)>,
     modifications: [FlankModification; 2],
+    /// Stride of the coarse pass of the first-touch search (1: exhaustive).
+    first_touch_stride: usize,
 }
 
 /// The teeth of each gear that engage while the driver turns one base pitch from the pitch-point
@@ -120,6 +122,7 @@ impl LtcaModel {
             profile,
             tooth_pairs,
             modifications: *modifications,
+            first_touch_stride: FIRST_TOUCH_STRIDE,
         })
     }
 
@@ -134,6 +137,7 @@ impl LtcaModel {
             profile: loaded_profile(&self.pair, &modifications[1]),
             tooth_pairs: self.tooth_pairs.clone(),
             modifications: *modifications,
+            first_touch_stride: self.first_touch_stride,
         }
     }
 
@@ -269,7 +273,7 @@ impl LtcaModel {
             // g/a is smooth along the flank, so this finds the grid's minimum with 1/6 of the
             // probes (the search is most of a position's cost).
             let samples = 800;
-            let stride = 8;
+            let stride = self.first_touch_stride;
             let closing_at = |i: usize| {
                 let xi = xi_first + (xi_last - xi_first) * i as f64 / samples as f64;
                 probe(xi).map(|p| (xi, p.gap / p.arm))
@@ -440,6 +444,9 @@ fn loaded_profile(
         .map(|p| (p.position, p.segment, p.roll_angle))
         .collect()
 }
+
+/// Stride of the first-touch search's coarse pass over its 800 flank samples.
+const FIRST_TOUCH_STRIDE: usize = 8;
 
 /// Half the number of lattice points per tooth pair: the lattice spans ±8 node spacings around
 /// the geometric contact point, several times the Hertzian contact width at any sensible mesh.
@@ -681,100 +688,146 @@ pub struct PositionResult {
     pub iterations: usize,
 }
 
-/// The loaded contact ratio ε_load of one base pitch: the mean number of tooth pairs carrying
-/// load, ε = (1/N) Σ_p L_p, where L_p is the length (in position spacings, window [0, N)) over
-/// which pair p carries load. A loaded run of samples starts and ends between samples: the
-/// crossing is extrapolated linearly from the run's first (last) two forces and clamped to the
-/// half-open spacing before (after) it, so ε changes continuously with the relief rather than in
-/// steps of 1/N — what a linearized constraint needs. A run touching the window's edge continues
-/// beyond it and is counted to the window's edge (sample j stands for [j − ½, j + ½), so the
-/// window is [−½, N − ½) and with every extension ½ this is the plain count of loaded samples). Unmodified gears load a little beyond the geometric
-/// path (ε_load ≳ ε_α); relief that exceeds the deflection shortens it.
-pub fn loaded_contact_ratio(results: &[PositionResult]) -> f64 {
-    let n = results.len();
-    let pairs = results.first().map_or(0, |r| r.pair_forces.len());
+/// The loaded length of one tooth pair's engagement [samples]: the span over which `forces`
+/// (one pair's normal force at uniform positions) is positive, each loaded run starting and
+/// ending between samples — the crossing extrapolated linearly from the run's two boundary
+/// forces f (outermost) and g (next inside), f/(g − f) spacings beyond f when the force rises
+/// inward (g > f), clamped to one spacing, and a whole spacing when it does not (the limit of the
+/// same rule, so the length changes continuously with the forces — what a linearized constraint
+/// needs); a run of one sample counts one spacing. Sample j stands for [j − ½, j + ½), so a run
+/// at either end of `forces` counts to that end, and with every extension ½ the length is the
+/// plain count of loaded samples.
+pub fn engagement_loaded_length(forces: &[f64]) -> f64 {
+    let n = forces.len();
+    let extension = |f: f64, g: f64| if g > f { (f / (g - f)).min(1.0) } else { 1.0 };
     let mut loaded = 0.0;
-    for p in 0..pairs {
-        let force = |j: usize| results[j].pair_forces[p];
-        let mut j = 0;
-        while j < n {
-            if force(j) <= 0.0 {
-                j += 1;
-                continue;
-            }
-            let first = j;
-            while j < n && force(j) > 0.0 {
-                j += 1;
-            }
-            let last = j - 1;
-            // Extension beyond a boundary sample with force f, next inside sample g: the linear
-            // zero of the two, within one spacing.
-            let extension = |f: f64, g: Option<f64>| match g {
-                Some(g) if g > f => (f / (g - f)).min(1.0),
-                _ => 0.5,
-            };
-            let start = if first == 0 {
-                -0.5
-            } else {
-                let inside = (first < last).then(|| force(first + 1));
-                first as f64 - extension(force(first), inside)
-            };
-            let end = if last == n - 1 {
-                n as f64 - 0.5
-            } else {
-                let inside = (first < last).then(|| force(last - 1));
-                last as f64 + extension(force(last), inside)
-            };
-            loaded += end - start;
+    let mut j = 0;
+    while j < n {
+        if forces[j] <= 0.0 {
+            j += 1;
+            continue;
         }
+        let first = j;
+        while j < n && forces[j] > 0.0 {
+            j += 1;
+        }
+        let last = j - 1;
+        let (start, end) = if first == last {
+            (first as f64 - 0.5, last as f64 + 0.5)
+        } else {
+            (
+                first as f64 - extension(forces[first], forces[first + 1]),
+                last as f64 + extension(forces[last], forces[last - 1]),
+            )
+        };
+        loaded += end.min(n as f64 - 0.5) - start.max(-0.5);
     }
-    loaded / n as f64
+    loaded
+}
+
+impl LtcaModel {
+    /// The loaded contact ratio ε_load: the mean number of tooth pairs carrying load over the
+    /// cycle, which is one pair's loaded length over the base pitch. A driver tooth k at
+    /// position N (one pitch on) is where tooth k + 1 was at position 0, so the forces of the
+    /// consecutive driver teeth (k₀, k₀ + 1, …) of `results` laid end to end are one tooth
+    /// pair's whole engagement over as many pitches:
+    /// ```text
+    /// ε_load = L(F_k₀ ‖ F_k₀₊₁ ‖ …) / N          (L: engagement_loaded_length)
+    /// ```
+    /// Unmodified gears load a little beyond the geometric path under load (ε_load ≳ ε_α);
+    /// relief that exceeds the deflection shortens it. NaN when the model's tooth pairs are not
+    /// consecutive driver teeth in order (the engaging teeth always are).
+    pub fn loaded_contact_ratio(&self, results: &[PositionResult]) -> f64 {
+        let z1 = self.pair.gears[0].teeth() as usize;
+        let consecutive = self
+            .tooth_pairs
+            .windows(2)
+            .all(|w| w[1].0 == (w[0].0 + 1) % z1);
+        if !consecutive || results.is_empty() {
+            return f64::NAN;
+        }
+        let engagement: Vec<f64> = (0..self.tooth_pairs.len())
+            .flat_map(|p| results.iter().map(move |r| r.pair_forces[p]))
+            .collect();
+        engagement_loaded_length(&engagement) / results.len() as f64
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::{FlankReliefSpec, ReliefShape, ReliefSpec, ReliefStart};
 
-    fn position(pair_forces: Vec<f64>) -> PositionResult {
-        PositionResult {
-            driver_rotation: 0.0,
-            roll_angle: 0.0,
-            ste: 0.0,
-            unloaded_te: 0.0,
-            total_force: pair_forces.iter().sum(),
-            pair_positions: vec![None; pair_forces.len()],
-            pair_forces,
-            mesh_stiffness: 0.0,
-            tangent_stiffness: 0.0,
-            kkt_residual: 0.0,
-            active_points: 0,
-            candidate_points: 0,
-            iterations: 0,
+    /// The coarse-to-fine first-touch search finds the exhaustive search's grid minimum: the
+    /// same STE and forces to round-off at every position, on the unmodified pair, the paper's
+    /// 20/10 µm relief, and a strong short parabolic tip relief whose corner and flank compete
+    /// (1 mm mesh, 32 positions, three torques).
+    #[test]
+    fn coarse_to_fine_first_touch_equals_the_exhaustive_search() {
+        let case = crate::samples::paper36_case();
+        let pair = &case.pair;
+        let none = [FlankModification::none(); 2];
+        let model = crate::study::ltca::model_with_sizes(&case, &none, 1e-3, 3e-3).unwrap();
+        let short = |g| {
+            pair.flank_modification(
+                g,
+                &FlankReliefSpec {
+                    tip: Some(ReliefSpec {
+                        amount: 30e-6,
+                        shape: ReliefShape::Parabolic,
+                        start: ReliefStart::Short,
+                    }),
+                    root: None,
+                },
+            )
+            .unwrap()
+        };
+        let reliefs = [
+            none,
+            case.relief_variant("tip20-root10").unwrap().modifications,
+            [short(1), short(2)],
+        ];
+        for modifications in &reliefs {
+            let fast = model.with_relief(modifications);
+            let mut exhaustive = model.with_relief(modifications);
+            exhaustive.first_touch_stride = 1;
+            let torques = [50.0, 143.6, 300.0];
+            let (a, b) = (
+                fast.run_torques(32, &torques).unwrap(),
+                exhaustive.run_torques(32, &torques).unwrap(),
+            );
+            for (ra, rb) in a.iter().flatten().zip(b.iter().flatten()) {
+                assert!(
+                    (ra.ste - rb.ste).abs() <= 1e-12 * rb.ste.abs(),
+                    "{ra:?} {rb:?}"
+                );
+                assert_eq!(ra.active_points, rb.active_points);
+            }
         }
     }
 
-    /// Linear load ramps with known zero crossings give the exact loaded contact ratio: a
-    /// leaving pair unloading at 10.3 spacings, an entering pair loading from 5.6, one pair
-    /// loaded throughout (N = 20, window [−½, 19½)).
+    /// Linear ramps with known zero crossings give the exact loaded length: a pair loading from
+    /// 5.6 and unloading at 30.3 spacings; a plateau that ends abruptly counts a whole spacing
+    /// beyond its last sample (the continuous limit of the ramp rule); one loaded sample counts
+    /// one spacing; a run at an end of the record counts to that end.
     #[test]
-    fn loaded_contact_ratio_finds_the_crossings_of_linear_ramps() {
-        let n = 20;
-        let results: Vec<_> = (0..n)
+    fn engagement_loaded_length_finds_the_crossings_of_linear_ramps() {
+        let ramp: Vec<f64> = (0..40)
             .map(|j| {
                 let j = j as f64;
-                position(vec![
-                    (10.3 - j).max(0.0) * 100.0,
-                    (j - 5.6).max(0.0) * 70.0,
-                    1000.0,
-                ])
+                ((j - 5.6) * 70.0).min((30.3 - j) * 100.0).max(0.0)
             })
             .collect();
-        let expected = ((10.3 + 0.5) + (19.5 - 5.6) + 20.0) / 20.0;
-        assert!((loaded_contact_ratio(&results) - expected).abs() < 1e-12);
-        // A pair loaded at one sample only counts one spacing; a pair never loaded counts 0.
-        let single: Vec<_> = (0..n)
-            .map(|j| position(vec![if j == 7 { 5.0 } else { 0.0 }, 0.0, 1.0]))
-            .collect();
-        assert!((loaded_contact_ratio(&single) - 21.0 / 20.0).abs() < 1e-12);
+        assert!((engagement_loaded_length(&ramp) - (30.3 - 5.6)).abs() < 1e-12);
+        let plateau = [0.0, 0.0, 50.0, 50.0, 50.0, 0.0];
+        assert!((engagement_loaded_length(&plateau) - 4.0).abs() < 1e-12);
+        // Continuity: a plateau sloping by a hair towards its ends tends to the same length.
+        let almost = [0.0, 0.0, 49.999, 50.0, 49.999, 0.0];
+        assert!((engagement_loaded_length(&almost) - 4.0).abs() < 1e-9);
+        let single = [0.0, 0.0, 5.0, 0.0];
+        assert!((engagement_loaded_length(&single) - 1.0).abs() < 1e-12);
+        let at_ends = [3.0, 2.0, 1.0, 0.0, 0.0, 1.0];
+        // [−½, 3) from the start to the ramp's zero at 3, then [4½, 5½) for the last sample.
+        assert!((engagement_loaded_length(&at_ends) - (3.5 + 1.0)).abs() < 1e-12);
     }
 }

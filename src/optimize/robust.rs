@@ -13,16 +13,18 @@
 //! penalty, which moves a design only where the objective is flatter than ρ r_k µm per µm. It
 //! decides what the STE cannot: with one λ for all zones, gear 1's tip zone and
 //! gear 2's root zone cover the same stretch of the path of contact with the same shape, so the
-//! STE sees only the sums C_a1 + C_f2 (end of recess) and C_a2 + C_f1 (start of approach). The
+//! STE sees only the sums C_a1 + C_f2 (end of recess) and C_a2 + C_f1 (start of approach) on the
+//! path of contact (beyond its ends a root zone keeps growing where a tip zone has ended). The
 //! split goes to the tips (the L1 penalty picks the corner, where a quadratic one would split
 //! 4 : 1), as root relief near the fillet is the costlier to grind; root relief appears only
 //! where a tip amount reaches its bound.
 //!
 //! Subject to bounds v_lo ≤ v ≤ v_hi; no loss of contact at the design torque — the combined
 //! relief at each end of the path (C_a1 + C_f2 at the end of recess, C_a2 + C_f1 at the start of
-//! approach) at most the single-pair deflection δ_s of the unmodified pair there, beyond which
-//! the relieved end is not reached under the design load (Smith, *Gear Noise and Vibration*,
-//! §3.3); and the loaded contact ratio ε_j ([`loaded_contact_ratio`]) ≥ ε_min at every torque.
+//! approach) at most the single-pair deflection δ_s of the unmodified pair (its largest approach
+//! over the cycle at the design torque, rim to rim: the one load the other pair carries alone
+//! as the relieved end comes into or out of contact), beyond which the relieved end is not
+//! reached under the design load (Smith, *Gear Noise and Vibration*, §3.3); and the loaded contact ratio ε_j ([`LtcaModel::loaded_contact_ratio`]) ≥ ε_min at every torque.
 //!
 //! # Method
 //! Each iteration linearizes s_ij and ε_j about v₀ by forward differences (one LTCA per
@@ -46,7 +48,7 @@ use serde::Serialize;
 use super::qp::{self, QpError, QuadraticProgram};
 use super::relief::{ReliefDesign, VARIABLES};
 use crate::geometry::{FlankModification, GeometryError, ReliefShape};
-use crate::ltca::{loaded_contact_ratio, LtcaError, LtcaModel};
+use crate::ltca::{LtcaError, LtcaModel};
 
 #[derive(Debug, thiserror::Error)]
 pub enum OptimizeError {
@@ -58,6 +60,9 @@ pub enum OptimizeError {
     Ltca(#[from] LtcaError),
     #[error(transparent)]
     Qp(#[from] QpError),
+    /// The start design breaks a limit: the loop does not repair a start silently.
+    #[error("{0}")]
+    InfeasibleStart(String),
 }
 
 /// Scale of the variables: amounts in µm, λ in tenths.
@@ -108,8 +113,9 @@ pub struct Limits {
     pub min_length: f64,
     /// Smallest loaded contact ratio at any torque of the range.
     pub min_contact_ratio: f64,
-    /// Single-pair deflection δ_s of the unmodified pair at the design torque [m]: the combined
-    /// relief at each end of the path may not exceed it (no loss of contact at the design torque).
+    /// Single-pair deflection δ_s of the unmodified pair at the design torque, rim to rim [m]:
+    /// the combined relief at each end of the path may not exceed it (no loss of contact at the
+    /// design torque).
     pub contact_deflection: f64,
 }
 
@@ -171,14 +177,20 @@ pub fn load_response(
         .iter()
         .map(|run| run.iter().map(|r| r.ste * rb2 * 1e6).collect())
         .collect();
-    let ste_pp_um: Vec<f64> = ste_um.iter().map(|s| peak_to_peak(s)).collect();
+    let ste_pp_um: Vec<f64> = ste_um
+        .iter()
+        .map(|s| crate::signal::peak_to_peak(s))
+        .collect();
     let objective_um = ste_pp_um
         .iter()
         .zip(&range.weights)
         .map(|(pp, w)| pp * w)
         .sum();
     Ok(LoadResponse {
-        contact_ratio: runs.iter().map(|run| loaded_contact_ratio(run)).collect(),
+        contact_ratio: runs
+            .iter()
+            .map(|run| model.loaded_contact_ratio(run))
+            .collect(),
         mesh_stiffness_mean: runs
             .iter()
             .map(|run| run.iter().map(|r| r.mesh_stiffness).sum::<f64>() / run.len() as f64)
@@ -216,11 +228,6 @@ pub fn evaluate(
     })
 }
 
-fn peak_to_peak(v: &[f64]) -> f64 {
-    v.iter().copied().fold(f64::NEG_INFINITY, f64::max)
-        - v.iter().copied().fold(f64::INFINITY, f64::min)
-}
-
 /// Why the loop stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
@@ -246,6 +253,9 @@ pub struct IterationRecord {
     pub iteration: usize,
     /// Robust objective at the iterate before the step [µm].
     pub objective_um: f64,
+    /// f = objective + regularization at the iterate before the step [µm]: what every accepted
+    /// step lowers.
+    pub merit_um: f64,
     /// Reduction of f the linear model predicts [µm].
     pub predicted_reduction_um: f64,
     /// Reduction of f the LTCA gives for the step [µm] (NaN: the step was not evaluable).
@@ -372,7 +382,7 @@ pub fn optimize(
     };
     let first = evaluate(start)?;
     if !feasible(&first, limits) {
-        return Err(OptimizeError::Input(format!(
+        return Err(OptimizeError::InfeasibleStart(format!(
             "the start design {:?} breaks the limits (contact ratio {:?}, minimum {})",
             start, first.response.contact_ratio, limits.min_contact_ratio
         )));
@@ -414,6 +424,7 @@ pub fn optimize(
         let mut record = IterationRecord {
             iteration,
             objective_um: current.response.objective_um,
+            merit_um: f0,
             predicted_reduction_um: predicted,
             actual_reduction_um: f64::NAN,
             trust_radius: radius,
@@ -518,6 +529,10 @@ fn linearize(
             })?,
             Err(e) => return Err(e),
         };
+        // A variable pinned by its bounds (λ with a minimum length of 1) has no direction.
+        if h == 0.0 {
+            continue;
+        }
         for (j, (after, before)) in shifted
             .response
             .ste_um

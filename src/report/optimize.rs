@@ -6,7 +6,7 @@ use std::path::Path;
 use super::plot::LinePlot;
 use super::{OutputDir, ReportError};
 use crate::case::Case;
-use crate::study::optimize::{shape_name, CandidateKind, FeCheck, FeCheckRun, OptimizeStudy};
+use crate::study::optimize::{CandidateKind, FeCheck, FeCheckRun, OptimizeStudy};
 
 /// The console lines.
 pub fn console(study: &OptimizeStudy) -> String {
@@ -23,7 +23,7 @@ pub fn console(study: &OptimizeStudy) -> String {
     for start in &s.starts {
         out += &format!(
             "  {} from {}: objective {:.4} -> {:.4} um in {} iterations ({} LTCA runs, {:.2} s){}\n",
-            shape_name(start.shape),
+            start.shape.name(),
             start.start,
             start.objective_start_um,
             start.objective_um,
@@ -39,7 +39,7 @@ pub fn console(study: &OptimizeStudy) -> String {
     }
     out += &format!(
         "optimum ({} relief, length {:.3} of the double-contact zone): tip {:.2} / {:.2} um, root {:.2} / {:.2} um (gear 1 / gear 2)\n",
-        shape_name(s.shape),
+        s.shape.name(),
         s.relief_length_fraction,
         s.tip_relief_um[0],
         s.tip_relief_um[1],
@@ -120,6 +120,12 @@ pub fn write(dir: OutputDir, case: &Case, study: &OptimizeStudy) -> Result<(), R
         &[
             "candidate",
             "kind",
+            "tip_relief_gear1_um",
+            "root_relief_gear1_um",
+            "tip_relief_gear2_um",
+            "root_relief_gear2_um",
+            "relief_length_fraction",
+            "shape",
             "objective_um",
             "ste_pp_design_um",
             "contact_ratio_design",
@@ -129,20 +135,31 @@ pub fn write(dir: OutputDir, case: &Case, study: &OptimizeStudy) -> Result<(), R
             "max_dynamic_factor",
             "max_dynamic_factor_rpm",
         ],
-        candidates.iter().map(|c| {
-            vec![
-                c.name.clone(),
-                format!("{:?}", c.kind).to_lowercase(),
-                f(c.response.objective_um),
-                f(c.ste_pp_design_um),
-                f(c.contact_ratio_design),
-                f(c.end_relief_um[0]),
-                f(c.end_relief_um[1]),
-                c.feasible.to_string(),
-                f(c.sweep.max_dynamic_factor),
-                f(c.sweep.max_dynamic_factor_rpm),
-            ]
-        }),
+        study
+            .summary
+            .candidates
+            .iter()
+            .zip(candidates)
+            .map(|(line, c)| {
+                vec![
+                    c.name.clone(),
+                    format!("{:?}", c.kind).to_lowercase(),
+                    f(line.tip_relief_um[0]),
+                    f(line.root_relief_um[0]),
+                    f(line.tip_relief_um[1]),
+                    f(line.root_relief_um[1]),
+                    line.relief_length_fraction.map_or(String::new(), f),
+                    line.shape.map_or(String::new(), |s| s.name().to_string()),
+                    f(c.response.objective_um),
+                    f(c.ste_pp_design_um),
+                    f(c.contact_ratio_design),
+                    f(c.end_relief_um[0]),
+                    f(c.end_relief_um[1]),
+                    c.feasible.to_string(),
+                    f(c.sweep.max_dynamic_factor),
+                    f(c.sweep.max_dynamic_factor_rpm),
+                ]
+            }),
     )?;
     let names: Vec<&str> = candidates.iter().map(|c| c.name.as_str()).collect();
     let header = |first: &str, suffix: &str| {
@@ -297,6 +314,7 @@ pub fn write_fe_check(dir: OutputDir, check: &FeCheck) -> Result<String, ReportE
             "candidate",
             "kind",
             "ltca_ste_pp_um",
+            "ltca_ste_h1_um",
             "ltca_same_mesh_ste_pp_um",
             "fe_low_dte_lowpass_pp_um",
             "fe_low_dte_pp_um",
@@ -313,6 +331,7 @@ pub fn write_fe_check(dir: OutputDir, check: &FeCheck) -> Result<String, ReportE
                 l.candidate.clone(),
                 format!("{:?}", l.kind).to_lowercase(),
                 f(Some(l.ltca_ste_pp_um)),
+                f(Some(l.ltca_ste_h1_um)),
                 f(l.ltca_same_mesh_ste_pp_um),
                 f(l.fe_low_dte_lowpass_pp_um),
                 f(l.fe_low_dte_pp_um),
@@ -321,35 +340,38 @@ pub fn write_fe_check(dir: OutputDir, check: &FeCheck) -> Result<String, ReportE
                 f(harmonic(l, 1)),
                 f(harmonic(l, 2)),
                 f(l.fe_high_impact_d1_max_n),
-                f(Some(l.lumped_dynamic_factor_high)),
+                f(l.lumped_dynamic_factor_high),
                 l.fe_errors.join("; "),
             ]
         }),
     )?;
     let g = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.3}"));
     let mut md = String::from(
-        "| candidate | LTCA STE p-p (case mesh) [um] | LTCA same mesh [um] | FE low speed DTE p-p, low-passed [um] | FE high speed DTE p-p [um] | FE high speed 1st / 2nd / 3rd harmonic [um] | impact d1 max [N] | lumped K_v at that speed |\n|---|---|---|---|---|---|---|---|\n",
+        "| candidate | LTCA STE p-p (case mesh) [um] | LTCA same mesh [um] | FE low speed DTE p-p, low-passed [um] | LTCA STE 1st harmonic [um] | FE high speed DTE p-p [um] | FE high speed 1st / 2nd / 3rd harmonic [um] | impact d1 max [N] | lumped K_v at that speed |\n|---|---|---|---|---|---|---|---|---|\n",
     );
     for l in &check.lines {
         md += &format!(
-            "| {} | {:.3} | {} | {} | {} | {} | {} | {:.3} |\n",
+            "| {} | {:.3} | {} | {} | {:.3} | {} | {} | {} | {} |\n",
             l.candidate,
             l.ltca_ste_pp_um,
             g(l.ltca_same_mesh_ste_pp_um),
             g(l.fe_low_dte_lowpass_pp_um),
+            l.ltca_ste_h1_um,
             g(l.fe_high_dte_pp_um),
             l.fe_high_harmonics_um.map_or("–".into(), |h| format!(
                 "{:.3} / {:.3} / {:.3}",
                 h[0], h[1], h[2]
             )),
             g(l.fe_high_impact_d1_max_n),
-            l.lumped_dynamic_factor_high
+            g(l.lumped_dynamic_factor_high)
         );
     }
     md += &format!(
-        "\nRanking, best first. LTCA: {}. FE low speed: {}. FE high speed (1st harmonic): {}.\nKendall tau against the LTCA: low speed {}, high speed {}; the best optimum ahead of every baseline: low speed {:?}, high speed {:?}. FE time {:.0} s.\n",
+        "\nRanking, best first. LTCA STE peak-to-peak: {}. FE low speed ({}): {}. LTCA STE 1st harmonic: {}. FE high speed DTE 1st harmonic: {}.\nKendall tau, FE against LTCA: low speed {}, high speed {}; the best optimum ahead of every baseline: low speed {:?}, high speed {:?}. FE time {:.0} s.\n",
         check.ltca_ranking.join(", "),
+        check.fe_low_measure,
         check.fe_low_ranking.join(", "),
+        check.ltca_h1_ranking.join(", "),
         check.fe_high_ranking.join(", "),
         g(check.kendall_tau_low),
         g(check.kendall_tau_high),

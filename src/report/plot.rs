@@ -447,13 +447,16 @@ impl Drawing for MeshDrawing {
 }
 
 /// Series colours of the charts, in order.
-const PALETTE: [RGBColor; 6] = [
+const PALETTE: [RGBColor; 9] = [
     RGBColor(31, 90, 180),
     RGBColor(200, 50, 40),
     RGBColor(20, 140, 60),
     RGBColor(150, 80, 170),
     RGBColor(230, 140, 20),
     RGBColor(60, 60, 60),
+    RGBColor(0, 170, 190),
+    RGBColor(170, 120, 60),
+    RGBColor(230, 90, 160),
 ];
 
 /// A line chart of one or more named series.

@@ -63,6 +63,16 @@ pub struct FeDte {
     pub wall_s: f64,
 }
 
+impl FeDte {
+    /// Sample indices where the ramp ends and where the statistics start (never before the
+    /// ramp's end).
+    pub fn window_starts(&self) -> (usize, usize) {
+        let index = |t: f64| ((t / self.dt).round().max(0.0) as usize).min(self.dte.len());
+        let ramp = index(self.ramp_end_s);
+        (ramp, index(self.statistics_start_s).max(ramp))
+    }
+}
+
 /// What the study needs beyond the case: FE runs and the FE's k(θ).
 pub struct CompareInput {
     pub fe_runs: Vec<FeDte>,
@@ -281,11 +291,10 @@ pub fn primary_run(case: &Case, runs: &[FeDte]) -> Option<usize> {
         .find(|s| s.name == SPEED_SCENE)
         .map(|s| s.driver_speed * 60.0 / std::f64::consts::TAU);
     match target {
-        Some(rpm) => (0..runs.len()).min_by(|&a, &b| {
-            (runs[a].speed_rpm - rpm)
-                .abs()
-                .total_cmp(&(runs[b].speed_rpm - rpm).abs())
-        }),
+        Some(rpm) => {
+            let speeds: Vec<f64> = runs.iter().map(|r| r.speed_rpm).collect();
+            crate::signal::nearest_index(&speeds, rpm)
+        }
         None => (!runs.is_empty()).then_some(0),
     }
 }
@@ -513,9 +522,8 @@ fn compare_speed(
     (mesh_mode_hz, body_hz): (f64, Option<f64>),
 ) -> SpeedComparison {
     let mesh_hz = run.speed_rpm / 60.0 * teeth;
-    let index = |t: f64| ((t / run.dt).round().max(0.0) as usize).min(run.dte.len());
-    let ramp = index(run.ramp_end_s);
-    let (stats, end) = (index(run.statistics_start_s).max(ramp), run.dte.len());
+    let (ramp, stats) = run.window_starts();
+    let end = run.dte.len();
     let late = &run.dte[stats..end];
     // Early: the ringing after the ramp, or the first half after it when that is too short.
     let min_len = (3.0 / (mesh_hz * run.dt)).ceil() as usize;

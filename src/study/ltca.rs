@@ -251,18 +251,14 @@ pub fn variant_summary(
         .iter()
         .map(|r| r.unloaded_te * base_radius_driven * 1e6)
         .collect();
-    let spread = |v: &[f64]| {
-        v.iter().copied().fold(f64::NEG_INFINITY, f64::max)
-            - v.iter().copied().fold(f64::INFINITY, f64::min)
-    };
     VariantSummary {
         relief_variant: name.into(),
         mesh_stiffness_mean_n_per_m: k.iter().sum::<f64>() / k.len() as f64,
         mesh_stiffness_min_n_per_m: k.iter().copied().fold(f64::INFINITY, f64::min),
         mesh_stiffness_max_n_per_m: k.iter().copied().fold(f64::NEG_INFINITY, f64::max),
         ste_mean_um: ste.iter().sum::<f64>() / ste.len() as f64,
-        ste_peak_to_peak_um: spread(&ste),
-        unloaded_te_peak_to_peak_um: spread(&te0),
+        ste_peak_to_peak_um: crate::signal::peak_to_peak(&ste),
+        unloaded_te_peak_to_peak_um: crate::signal::peak_to_peak(&te0),
         max_kkt_residual: results.iter().map(|r| r.kkt_residual).fold(0.0, f64::max),
         elements,
         free_dofs,

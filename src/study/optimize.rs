@@ -7,8 +7,13 @@
 //!
 //! The classic rule (Harris 1958; Smith, *Gear Noise and Vibration*, §3.3): tip relief on both
 //! gears equal to the single-pair deflection δ_s at the design torque, linear, long (from the
-//! HPSTC) or short (half the double-contact zone); δ_s is the largest approach r_b2(φ − φ₀) of
-//! the unmodified pair over the cycle — the approach where one pair carries the whole load.
+//! HPSTC) or short (half the double-contact zone). δ_s is the largest approach r_b2(φ − φ₀) of
+//! the unmodified pair over the cycle — where one pair carries the whole load — less the gear
+//! bodies' twist between bore and root circle W (c_b1 + c_b2) ([`super::compare::body_twist`]):
+//! that twist turns the unloaded teeth with the loaded ones and closes no flank gap, so the
+//! teeth, not the hubs, set the relief (rim to rim). What the bodies share beyond the annulus
+//! (the rim's bending under the loaded tooth next to the unloaded one) stays in δ_s: the rule is
+//! a rule, and the LTCA judges it.
 
 use serde::Serialize;
 
@@ -157,6 +162,9 @@ pub struct Candidate {
     pub ste_design_um: Vec<f64>,
     /// STE peak-to-peak at the design torque [µm].
     pub ste_pp_design_um: f64,
+    /// Amplitudes of the STE's first three mesh harmonics at the design torque [µm]: the
+    /// excitation a speed sweep sees.
+    pub ste_harmonics_design_um: [f64; 3],
     /// Loaded contact ratio at the design torque.
     pub contact_ratio_design: f64,
     /// Combined relief at the end of recess and the start of approach [µm].
@@ -197,8 +205,12 @@ pub struct OptimizeSummary {
     pub torque_range_nm: Vec<f64>,
     pub positions: usize,
     pub limits: robust::Limits,
-    /// Single-pair deflection δ_s of the unmodified pair at the design torque [µm].
+    /// Single-pair deflection δ_s of the unmodified pair at the design torque, rim to rim (the
+    /// LTCA's largest approach less the bodies' twist between bore and root circle) [µm]: the
+    /// classic rule's amount and the no-loss-of-contact limit.
     pub single_pair_deflection_um: f64,
+    /// The same, hub to hub (the LTCA's largest approach r_b2 (φ − φ₀)) [µm].
+    pub single_pair_deflection_hub_um: f64,
     pub shape: ReliefShape,
     pub tip_relief_um: [f64; 2],
     pub root_relief_um: [f64; 2],
@@ -228,6 +240,8 @@ pub struct OptimizeSummary {
     /// The study without the FE cross-check [s] (timing).
     pub wall_s: f64,
     pub starts: Vec<StartSummary>,
+    /// Starts that broke a limit and were left out, with the reason.
+    pub skipped_starts: Vec<String>,
     /// The optimum on fixed bodies against its own re-meshed LTCA.
     pub remeshed: RemeshedCheck,
     pub candidates: Vec<CandidateLine>,
@@ -245,9 +259,12 @@ pub struct RemeshedCheck {
     pub mesh_stiffness_rel: f64,
     pub ste_pp_fixed_um: f64,
     pub ste_pp_remeshed_um: f64,
-    /// Largest |STE difference| over the positions [µm], and over the mean STE.
+    /// Fixed over re-meshed STE peak-to-peak, less 1.
+    pub ste_pp_rel: f64,
+    /// Largest |STE difference| over the positions [µm], and over the re-meshed peak-to-peak
+    /// (mostly a uniform offset: the two meshes' nodes differ by the relief).
     pub ste_max_difference_um: f64,
-    pub ste_max_difference_rel: f64,
+    pub ste_max_difference_over_pp: f64,
 }
 
 /// [`RemeshedCheck`] of `optimum-1`.
@@ -272,15 +289,16 @@ fn remeshed_check(
         .zip(&optimum.ste_design_um)
         .map(|(a, b)| (a - b).abs())
         .fold(0.0, f64::max);
-    let mean = ste.iter().sum::<f64>() / ste.len() as f64;
+    let remeshed_pp = crate::signal::peak_to_peak(&ste);
     Ok(RemeshedCheck {
         mesh_stiffness_mean_fixed_n_per_m: fixed_k,
         mesh_stiffness_mean_remeshed_n_per_m: k,
         mesh_stiffness_rel: fixed_k / k - 1.0,
         ste_pp_fixed_um: optimum.ste_pp_design_um,
-        ste_pp_remeshed_um: peak_to_peak(&ste),
+        ste_pp_remeshed_um: remeshed_pp,
+        ste_pp_rel: optimum.ste_pp_design_um / remeshed_pp - 1.0,
         ste_max_difference_um: difference,
-        ste_max_difference_rel: difference / mean,
+        ste_max_difference_over_pp: difference / remeshed_pp,
     })
 }
 
@@ -289,6 +307,12 @@ fn remeshed_check(
 pub struct CandidateLine {
     pub name: String,
     pub kind: CandidateKind,
+    /// Relief amounts [gear 1, gear 2] [µm]; the length fraction λ and shape of the
+    /// optimizer's family (None for a case variant's own zones).
+    pub tip_relief_um: [f64; 2],
+    pub root_relief_um: [f64; 2],
+    pub relief_length_fraction: Option<f64>,
+    pub shape: Option<ReliefShape>,
     pub objective_um: f64,
     pub ste_pp_design_um: f64,
     pub contact_ratio_min: f64,
@@ -348,10 +372,14 @@ pub fn run(
     let pair = &case.pair;
     let rb2 = pair.gears[1].base_radius;
     let unmodified = model.run(options.positions, torque, &|_| {})?;
-    let deflection = unmodified
+    let hub_deflection = unmodified
         .iter()
         .map(|r| rb2 * (r.ste - r.unloaded_te))
         .fold(0.0, f64::max);
+    // The bodies' twist between bore and root circle is in series with the teeth: it turns the
+    // unloaded teeth with the loaded ones and closes no flank gap, so relief need not take it up.
+    let twist = super::compare::body_twist(case);
+    let deflection = hub_deflection - torque / rb2 * (twist[0] + twist[1]);
     let limits = robust::Limits {
         max_amount: options.max_relief_um * 1e-6,
         min_length: options.min_length,
@@ -379,18 +407,31 @@ pub fn run(
     ];
     let mut optima = Vec::new();
     let mut start_lines = Vec::new();
+    let mut skipped = Vec::new();
     for (s, (shape, start_name)) in starts.iter().enumerate() {
-        let stage = format!(
-            "optimizing ({} relief from {start_name})",
-            shape_name(*shape)
-        );
+        let stage = format!("optimizing ({} relief from {start_name})", shape.name());
         progress(&stage, s, starts.len());
         let start = match *start_name {
             "none" => ReliefDesign::none(*shape),
             _ => classic(1.0, *shape),
         };
         let t = std::time::Instant::now();
-        let optimum = robust::optimize(&respond, &start, &range, &limits, &settings, &|_| {})?;
+        let report = |r: &robust::IterationRecord| {
+            let line = format!(
+                "{stage}: iteration {}, objective {:.4} um, trust radius {:.3}",
+                r.iteration, r.objective_um, r.trust_radius
+            );
+            progress(&line, s, starts.len());
+        };
+        let optimum = match robust::optimize(&respond, &start, &range, &limits, &settings, &report)
+        {
+            Ok(optimum) => optimum,
+            Err(OptimizeError::InfeasibleStart(reason)) => {
+                skipped.push(format!("{} from {start_name}: {reason}", shape.name()));
+                continue;
+            }
+            Err(e) => return Err(e.into()),
+        };
         start_lines.push(StartSummary {
             shape: *shape,
             start: start_name.to_string(),
@@ -402,10 +443,17 @@ pub fn run(
             qp_solve_s: optimum.qp_solve_s,
             wall_s: t.elapsed().as_secs_f64(),
         });
-        optima.push((format!("{}-from-{start_name}", shape_name(*shape)), optimum));
+        optima.push((format!("{}-from-{start_name}", shape.name()), optimum));
     }
     progress("optimizing", starts.len(), starts.len());
     let qp_loop_s = loop_started.elapsed().as_secs_f64();
+    if optima.is_empty() {
+        return Err(StudyError::Input(format!(
+            "no start keeps the limits, so there is nothing to optimize from: {}. Loosen \
+             --min-contact-ratio or --max-relief-um",
+            skipped.join("; ")
+        )));
+    }
 
     // Candidates: the baselines, then the distinct optima best first.
     let mut order: Vec<usize> = (0..optima.len()).collect();
@@ -436,6 +484,19 @@ pub fn run(
         Option<ReliefDesign>,
         [FlankModification; 2],
     )> = Vec::new();
+    if !case
+        .relief_variants
+        .iter()
+        .any(|v| v.modifications.iter().all(|m| m.is_none()))
+    {
+        let none = ReliefDesign::none(ReliefShape::Linear);
+        plan.push((
+            "none".into(),
+            CandidateKind::Baseline,
+            Some(none),
+            [FlankModification::none(); 2],
+        ));
+    }
     for variant in &case.relief_variants {
         plan.push((
             variant.name.clone(),
@@ -486,10 +547,10 @@ pub fn run(
     let remeshed = remeshed_check(case, &candidates, torque, options.positions)?;
     let summary = summarize(
         case,
-        (&model, torque, deflection),
+        (&model, torque, deflection, hub_deflection),
         (&range, &limits, &optima, &chosen),
         &candidates,
-        start_lines,
+        (start_lines, skipped),
         remeshed,
         (model_s, qp_loop_s, started.elapsed().as_secs_f64()),
     )?;
@@ -502,13 +563,6 @@ pub fn run(
         candidates,
         summary,
     })
-}
-
-pub fn shape_name(shape: ReliefShape) -> &'static str {
-    match shape {
-        ReliefShape::Linear => "linear",
-        ReliefShape::Parabolic => "parabolic",
-    }
 }
 
 /// One candidate through the load range, the Harris map, the design torque and the lumped sweep.
@@ -551,13 +605,17 @@ fn judge(
         kind,
         design,
         modifications,
-        ste_pp_design_um: peak_to_peak(&ste),
+        ste_pp_design_um: crate::signal::peak_to_peak(&ste),
+        ste_harmonics_design_um: {
+            let a = crate::signal::harmonic_amplitudes(&ste, 1.0 / ste.len() as f64, 1.0, 3);
+            [a[0], a[1], a[2]]
+        },
         roll_deg: at_design
             .iter()
             .map(|r| r.roll_angle.to_degrees())
             .collect(),
         ste_design_um: ste,
-        contact_ratio_design: crate::ltca::loaded_contact_ratio(&at_design),
+        contact_ratio_design: model.loaded_contact_ratio(&at_design),
         end_relief_um: ends.map(|e| e * 1e6),
         feasible,
         response,
@@ -594,18 +652,13 @@ fn candidate_sweep(up: &[SweepPoint], rpms: &[f64]) -> CandidateSweep {
     }
 }
 
-fn peak_to_peak(v: &[f64]) -> f64 {
-    v.iter().copied().fold(f64::NEG_INFINITY, f64::max)
-        - v.iter().copied().fold(f64::INFINITY, f64::min)
-}
-
 #[allow(clippy::type_complexity)]
 fn summarize(
     case: &Case,
-    (model, torque, deflection): (&LtcaModel, f64, f64),
+    (model, torque, deflection, hub_deflection): (&LtcaModel, f64, f64, f64),
     (range, limits, optima, chosen): (&LoadRange, &robust::Limits, &[(String, Optimum)], &[usize]),
     candidates: &[Candidate],
-    starts: Vec<StartSummary>,
+    (starts, skipped_starts): (Vec<StartSummary>, Vec<String>),
     remeshed: RemeshedCheck,
     (model_s, qp_loop_s, wall_s): (f64, f64, f64),
 ) -> Result<OptimizeSummary, StudyError> {
@@ -621,23 +674,12 @@ fn summarize(
         .iter()
         .find(|v| !v.modifications.iter().all(|m| m.is_none()));
     let objective = |name: &str| find(name).map(|c| c.response.objective_um);
-    let none_name = case
-        .relief_variants
+    // The study always judges an unmodified baseline (the case's, or its own "none").
+    let unmodified = candidates
         .iter()
-        .find(|v| v.modifications.iter().all(|m| m.is_none()))
-        .map(|v| v.name.clone());
-    let before = none_name
-        .as_deref()
-        .and_then(find)
-        .map(|c| (c.ste_pp_design_um, c.response.objective_um));
+        .find(|c| c.modifications.iter().all(|m| m.is_none()))
+        .expect("an unmodified baseline is always judged");
     let optimum = find("optimum-1").expect("the best optimum is a candidate");
-    let (before_pp, before_objective) = match before {
-        Some(b) => b,
-        None => {
-            let r = load_response(model, &[FlankModification::none(); 2], range, 64)?;
-            (f64::NAN, r.objective_um)
-        }
-    };
     Ok(OptimizeSummary {
         case: case.name().to_string(),
         design_torque_nm: torque,
@@ -645,6 +687,7 @@ fn summarize(
         positions: optimum.response.ste_um[0].len(),
         limits: *limits,
         single_pair_deflection_um: deflection * 1e6,
+        single_pair_deflection_hub_um: hub_deflection * 1e6,
         shape: design.shape,
         tip_relief_um: design.tip.map(|a| a * 1e6),
         root_relief_um: design.root.map(|a| a * 1e6),
@@ -653,9 +696,9 @@ fn summarize(
             tip: [deg(modifications[0].tip), deg(modifications[1].tip)],
             root: [deg(modifications[0].root), deg(modifications[1].root)],
         },
-        ste_pp_before_um: before_pp,
+        ste_pp_before_um: unmodified.ste_pp_design_um,
         ste_pp_after_um: optimum.ste_pp_design_um,
-        objective_none: before_objective,
+        objective_none: unmodified.response.objective_um,
         objective_optimum: optimum.response.objective_um,
         paper_variant: first_relief.map(|v| v.name.clone()),
         objective_paper: first_relief.and_then(|v| objective(&v.name)),
@@ -670,12 +713,17 @@ fn summarize(
         model_s,
         wall_s,
         starts,
+        skipped_starts,
         remeshed,
         candidates: candidates
             .iter()
             .map(|c| CandidateLine {
                 name: c.name.clone(),
                 kind: c.kind,
+                tip_relief_um: amounts_of(&c.modifications).tip.map(|a| a * 1e6),
+                root_relief_um: amounts_of(&c.modifications).root.map(|a| a * 1e6),
+                relief_length_fraction: c.design.map(|d| d.length),
+                shape: c.design.map(|d| d.shape),
                 objective_um: c.response.objective_um,
                 ste_pp_design_um: c.ste_pp_design_um,
                 contact_ratio_min: c
@@ -719,7 +767,7 @@ pub fn fe_check_overrides(case: &Case, candidate: &Candidate) -> Result<Vec<Over
                 if let Some(zone) = zone {
                     let mut spec = toml::Table::new();
                     spec.insert("amount_um".into(), (zone.amount * 1e6).into());
-                    spec.insert("shape".into(), shape_name(design.shape).into());
+                    spec.insert("shape".into(), design.shape.name().into());
                     spec.insert(
                         "start_roll_deg".into(),
                         zone.start_roll_angle.to_degrees().into(),
@@ -763,8 +811,10 @@ pub struct FeCheckRun {
 pub struct FeCheckLine {
     pub candidate: String,
     pub kind: CandidateKind,
-    /// LTCA at the design torque, case mesh and the explicit run's mesh [µm].
+    /// LTCA at the design torque, case mesh and the explicit run's mesh [µm]; the case mesh's
+    /// first mesh harmonic [µm].
     pub ltca_ste_pp_um: f64,
+    pub ltca_ste_h1_um: f64,
     pub ltca_same_mesh_ste_pp_um: Option<f64>,
     /// Low speed: the quasi-static DTE peak-to-peak (low-passed) and raw [µm].
     pub fe_low_dte_lowpass_pp_um: Option<f64>,
@@ -775,7 +825,7 @@ pub struct FeCheckLine {
     pub fe_high_harmonics_um: Option<[f64; 3]>,
     pub fe_high_impact_d1_max_n: Option<f64>,
     /// The lumped sweep's dynamic factor at the speed nearest the high-speed scene's.
-    pub lumped_dynamic_factor_high: f64,
+    pub lumped_dynamic_factor_high: Option<f64>,
     /// Why a run is missing (diverged, failed).
     pub fe_errors: Vec<String>,
 }
@@ -786,11 +836,14 @@ pub struct FeCheck {
     pub lines: Vec<FeCheckLine>,
     /// Candidates by the LTCA's STE peak-to-peak at the design torque, best first.
     pub ltca_ranking: Vec<String>,
-    /// By the FE's low-speed quasi-static DTE peak-to-peak, best first (runs that finished).
+    /// By the FE's low-speed quasi-static DTE peak-to-peak, best first (runs that finished):
+    /// low-passed when every run has it, else raw for all.
     pub fe_low_ranking: Vec<String>,
-    /// By the FE's high-speed first mesh-harmonic amplitude, best first.
+    pub fe_low_measure: &'static str,
+    /// Candidates by the LTCA STE's first mesh harmonic, and by the FE's high-speed DTE's.
+    pub ltca_h1_ranking: Vec<String>,
     pub fe_high_ranking: Vec<String>,
-    /// Kendall's τ between the LTCA ranking and each FE ranking (1: the same order).
+    /// Kendall's τ between each LTCA ranking and its FE ranking (1: the same order).
     pub kendall_tau_low: Option<f64>,
     pub kendall_tau_high: Option<f64>,
     /// The FE puts the best optimum ahead of every baseline at low speed.
@@ -819,38 +872,34 @@ pub fn fe_check(
         }
         let low = low.as_ref().ok();
         let high = high.as_ref().ok();
-        let harmonics = high.map(|h| {
-            let start =
-                ((h.dte.statistics_start_s / h.dte.dt).ceil() as usize).min(h.dte.dte.len());
+        // Harmonics need at least one whole mesh period in the statistics window.
+        let whole_period = |h: &&FeCheckRun| {
+            let (_, stats) = h.dte.window_starts();
+            (h.dte.dte.len() - stats) as f64 * h.dte.dt * h.mesh_frequency_hz >= 1.0
+        };
+        let harmonics = high.filter(whole_period).map(|h| {
+            let (_, stats) = h.dte.window_starts();
             let a = crate::signal::harmonic_amplitudes(
-                &h.dte.dte[start..],
+                &h.dte.dte[stats..],
                 h.dte.dt,
                 h.mesh_frequency_hz,
                 3,
             );
             [um(a[0]), um(a[1]), um(a[2])]
         });
-        let high_rpm = high.map(|h| h.dte.speed_rpm);
-        let nearest = high_rpm.map_or(0, |rpm| {
-            (0..study.rpms.len())
-                .min_by(|&a, &b| {
-                    (study.rpms[a] - rpm)
-                        .abs()
-                        .total_cmp(&(study.rpms[b] - rpm).abs())
-                })
-                .unwrap_or(0)
-        });
+        let nearest = high.and_then(|h| crate::signal::nearest_index(&study.rpms, h.dte.speed_rpm));
         lines.push(FeCheckLine {
             candidate: candidate.name.clone(),
             kind: candidate.kind,
             ltca_ste_pp_um: candidate.ste_pp_design_um,
+            ltca_ste_h1_um: candidate.ste_harmonics_design_um[0],
             ltca_same_mesh_ste_pp_um: low.and_then(|l| l.ltca_same_mesh_peak_to_peak_rad.map(um)),
             fe_low_dte_lowpass_pp_um: low.and_then(|l| l.dte_lowpass_peak_to_peak_rad.map(um)),
             fe_low_dte_pp_um: low.map(|l| um(l.dte_peak_to_peak_rad)),
             fe_high_dte_pp_um: high.map(|h| um(h.dte_peak_to_peak_rad)),
             fe_high_harmonics_um: harmonics,
             fe_high_impact_d1_max_n: high.and_then(|h| h.impact_d1_max_n),
-            lumped_dynamic_factor_high: candidate.sweep.dynamic_factor[nearest],
+            lumped_dynamic_factor_high: nearest.map(|i| candidate.sweep.dynamic_factor[i]),
             fe_errors: errors,
         });
     }
@@ -866,7 +915,18 @@ pub fn fe_check(
             .collect::<Vec<_>>()
     };
     let ltca_ranking = ranking(&|l| Some(l.ltca_ste_pp_um));
-    let fe_low_ranking = ranking(&|l| l.fe_low_dte_lowpass_pp_um.or(l.fe_low_dte_pp_um));
+    let lowpass_everywhere = lines
+        .iter()
+        .all(|l| l.fe_low_dte_pp_um.is_none() || l.fe_low_dte_lowpass_pp_um.is_some());
+    let (fe_low_ranking, fe_low_measure) = if lowpass_everywhere {
+        (
+            ranking(&|l| l.fe_low_dte_lowpass_pp_um),
+            "low-passed DTE peak-to-peak",
+        )
+    } else {
+        (ranking(&|l| l.fe_low_dte_pp_um), "raw DTE peak-to-peak")
+    };
+    let ltca_h1_ranking = ranking(&|l| Some(l.ltca_ste_h1_um));
     let fe_high_ranking = ranking(&|l| l.fe_high_harmonics_um.map(|h| h[0]));
     let first = |fe: &[String]| {
         let best = study
@@ -885,12 +945,14 @@ pub fn fe_check(
     };
     FeCheck {
         kendall_tau_low: kendall_tau(&ltca_ranking, &fe_low_ranking),
-        kendall_tau_high: kendall_tau(&ltca_ranking, &fe_high_ranking),
+        kendall_tau_high: kendall_tau(&ltca_h1_ranking, &fe_high_ranking),
         optimum_first_low: first(&fe_low_ranking),
         optimum_first_high: first(&fe_high_ranking),
         lines,
         ltca_ranking,
         fe_low_ranking,
+        fe_low_measure,
+        ltca_h1_ranking,
         fe_high_ranking,
         fe_wall_s: wall,
     }

@@ -15,7 +15,7 @@ use geardyn::report::{self, OutputDir};
 use geardyn::study::{self, fe::FeShorthands, lumped::LumpedShorthands, RpmRange};
 
 use args::{Cli, Command, CommonArgs, OptimizeArgs, ValidationStudy};
-use progress::{fe_run, progress_bar, stage, staged_bar};
+use progress::{fe_check_run, fe_run, progress_bar, stage, staged_bar};
 
 fn main() -> ExitCode {
     let result = match Cli::parse().command {
@@ -173,8 +173,9 @@ fn optimize(args: &CommonArgs, options: &OptimizeArgs) -> Result<()> {
     print!("{}", report::optimize::console(&result));
     report::optimize::write(OutputDir(&dir), &case, &result)?;
     if options.fe_check {
-        // Each candidate's scenes run into DIR/fe-check/<candidate>-<scene>; a run that fails
-        // is a row with its reason, not the end of the check.
+        // Each candidate's scenes run into DIR/fe-check/<candidate>-<scene> (a finished run of
+        // the same effective case there is reused); a run that fails is a row with its reason,
+        // not the end of the check.
         let mut runs = Vec::new();
         for candidate in &result.candidates {
             let mut overrides: Vec<Override> = study::torque_override(options.torque_nm)
@@ -186,11 +187,7 @@ fn optimize(args: &CommonArgs, options: &OptimizeArgs) -> Result<()> {
                 let out = dir
                     .join("fe-check")
                     .join(format!("{}-{name}", candidate.name));
-                study::fe::scene(&with_relief, name)
-                    .map_err(anyhow::Error::from)
-                    .and_then(|scene| fe_run(&with_relief, scene, &out))
-                    .map_err(|e| format!("{e:#}"))
-                    .and_then(|_| report::optimize::read_fe_check_run(&out))
+                fe_check_run(&with_relief, name, &out)
             }));
         }
         let rb2 = case.pair.gears[1].base_radius;

@@ -46,6 +46,28 @@ pub fn fe_run(case: &Case, scene: &Scene, dir: &Path) -> Result<study::fe::FeStu
     Ok(result)
 }
 
+/// One scene of the relief cross-check into `dir`, read back: a finished run there of the same
+/// effective case (its case.toml) is reused, so an interrupted check resumes where it stopped.
+pub fn fe_check_run(
+    case: &Case,
+    scene: &str,
+    dir: &Path,
+) -> std::result::Result<study::optimize::FeCheckRun, String> {
+    let same_case =
+        std::fs::read_to_string(dir.join("case.toml")).is_ok_and(|text| text == case.text);
+    if same_case {
+        if let Ok(run) = report::optimize::read_fe_check_run(dir) {
+            eprintln!("reusing the finished run in {}", dir.display());
+            return Ok(run);
+        }
+    }
+    study::fe::scene(case, scene)
+        .map_err(anyhow::Error::from)
+        .and_then(|scene| fe_run(case, scene, dir))
+        .map_err(|e| format!("{e:#}"))
+        .and_then(|_| report::optimize::read_fe_check_run(dir))
+}
+
 pub fn progress_bar(template: &str) -> ProgressBar {
     let bar = ProgressBar::new(0);
     bar.set_style(ProgressStyle::with_template(template).expect("valid template"));

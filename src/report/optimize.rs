@@ -6,7 +6,7 @@ use std::path::Path;
 use super::plot::LinePlot;
 use super::{OutputDir, ReportError};
 use crate::case::Case;
-use crate::study::optimize::{CandidateKind, FeCheck, FeCheckRun, OptimizeStudy};
+use crate::study::optimize::{FeCheck, FeCheckRun, OptimizeStudy};
 
 /// The console lines.
 pub fn console(study: &OptimizeStudy) -> String {
@@ -54,7 +54,7 @@ pub fn console(study: &OptimizeStudy) -> String {
             c.objective_um,
             c.ste_pp_design_um,
             c.contact_ratio_min,
-            if c.kind == CandidateKind::Optimum || c.feasible {
+            if c.feasible {
                 " "
             } else {
                 "*"

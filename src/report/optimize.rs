@@ -54,11 +54,7 @@ pub fn console(study: &OptimizeStudy) -> String {
             c.objective_um,
             c.ste_pp_design_um,
             c.contact_ratio_min,
-            if c.feasible {
-                " "
-            } else {
-                "*"
-            },
+            if c.feasible { " " } else { "*" },
             c.max_dynamic_factor,
             c.max_dynamic_factor_rpm
         );

@@ -748,6 +748,70 @@ fn summarize(
 pub const FE_CHECK_SCENES: [&str; 2] =
     [super::compare::STIFFNESS_SCENE, super::compare::SPEED_SCENE];
 
+/// The case changes that give the cross-check scenes the unmodified pair (the case's own
+/// unmodified variant, else a variant `none`): the same changes [`fe_check_overrides`] makes for
+/// the unmodified baseline, so its runs are one effective case.
+pub fn unmodified_fe_overrides(case: &Case) -> Vec<Override> {
+    let own = case
+        .relief_variants
+        .iter()
+        .find(|v| v.modifications.iter().all(|m| m.is_none()));
+    let mut overrides = Vec::new();
+    let name = match own {
+        Some(v) => v.name.clone(),
+        None => {
+            overrides.push(variant_override(
+                "none",
+                &[FlankModification::none(); 2],
+                ReliefShape::Linear,
+            ));
+            "none".into()
+        }
+    };
+    overrides.extend(scene_relief_overrides(&name));
+    overrides
+}
+
+/// A relief variant `name` of `modifications` (zones with their amount, `shape` and start).
+fn variant_override(
+    name: &str,
+    modifications: &[FlankModification; 2],
+    shape: ReliefShape,
+) -> Override {
+    let mut table = toml::Table::new();
+    table.insert("name".into(), name.into());
+    for (g, modification) in modifications.iter().enumerate() {
+        let mut gear = toml::Table::new();
+        for (end, zone) in [("tip", modification.tip), ("root", modification.root)] {
+            if let Some(zone) = zone {
+                let mut spec = toml::Table::new();
+                spec.insert("amount_um".into(), (zone.amount * 1e6).into());
+                spec.insert("shape".into(), shape.name().into());
+                spec.insert(
+                    "start_roll_deg".into(),
+                    zone.start_roll_angle.to_degrees().into(),
+                );
+                gear.insert(end.into(), spec.into());
+            }
+        }
+        if !gear.is_empty() {
+            table.insert(format!("gear{}", g + 1), gear.into());
+        }
+    }
+    Override::Append {
+        array: "relief_variant".into(),
+        table,
+    }
+}
+
+/// The cross-check scenes set to relief variant `name`.
+fn scene_relief_overrides(name: &str) -> Vec<Override> {
+    FE_CHECK_SCENES
+        .iter()
+        .map(|scene| Override::set(format!("scene[{scene}].relief"), name))
+        .collect()
+}
+
 /// The case changes that give the cross-check scenes `candidate`'s relief: a relief variant of
 /// the candidate's name (a case variant is used as it is) set as the scenes' relief.
 pub fn fe_check_overrides(case: &Case, candidate: &Candidate) -> Result<Vec<Override>, StudyError> {
@@ -759,37 +823,13 @@ pub fn fe_check_overrides(case: &Case, candidate: &Candidate) -> Result<Vec<Over
                 candidate.name
             )));
         }
-        let mut table = toml::Table::new();
-        table.insert("name".into(), candidate.name.clone().into());
-        for (g, modification) in candidate.modifications.iter().enumerate() {
-            let mut gear = toml::Table::new();
-            for (end, zone) in [("tip", modification.tip), ("root", modification.root)] {
-                if let Some(zone) = zone {
-                    let mut spec = toml::Table::new();
-                    spec.insert("amount_um".into(), (zone.amount * 1e6).into());
-                    spec.insert("shape".into(), design.shape.name().into());
-                    spec.insert(
-                        "start_roll_deg".into(),
-                        zone.start_roll_angle.to_degrees().into(),
-                    );
-                    gear.insert(end.into(), spec.into());
-                }
-            }
-            if !gear.is_empty() {
-                table.insert(format!("gear{}", g + 1), gear.into());
-            }
-        }
-        overrides.push(Override::Append {
-            array: "relief_variant".into(),
-            table,
-        });
-    }
-    for scene in FE_CHECK_SCENES {
-        overrides.push(Override::set(
-            format!("scene[{scene}].relief"),
-            candidate.name.as_str(),
+        overrides.push(variant_override(
+            &candidate.name,
+            &candidate.modifications,
+            design.shape,
         ));
     }
+    overrides.extend(scene_relief_overrides(&candidate.name));
     Ok(overrides)
 }
 
@@ -852,26 +892,60 @@ pub struct FeCheck {
     pub fe_wall_s: f64,
 }
 
-/// Tabulates the FE runs of the candidates (`runs[i]` belongs to `study.candidates[i]`, one
-/// result per [`FE_CHECK_SCENES`]).
-pub fn fe_check(
-    study: &OptimizeStudy,
-    runs: &[[Result<FeCheckRun, String>; 2]],
-    rb2: f64,
-) -> FeCheck {
+/// Which candidates and scenes the FE cross-check runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FeCheckPlan {
+    /// Only the unmodified baseline and the best optimum; else every candidate.
+    pub baseline_and_best_only: bool,
+    /// Which of [`FE_CHECK_SCENES`] (low, high).
+    pub scenes: [bool; 2],
+}
+
+impl FeCheckPlan {
+    /// Every candidate at both speeds.
+    pub fn full() -> Self {
+        FeCheckPlan {
+            baseline_and_best_only: false,
+            scenes: [true, true],
+        }
+    }
+
+    /// The unmodified baseline and the best optimum at low speed: the check the main job runs.
+    pub fn baseline_and_best() -> Self {
+        FeCheckPlan {
+            baseline_and_best_only: true,
+            scenes: [true, false],
+        }
+    }
+
+    pub fn includes(&self, candidate: &Candidate) -> bool {
+        !self.baseline_and_best_only
+            || candidate.name == "optimum-1"
+            || candidate.modifications.iter().all(|m| m.is_none())
+    }
+}
+
+/// One checked candidate's runs, one per [`FE_CHECK_SCENES`] (None: not asked for).
+pub type CandidateRuns = [Option<Result<FeCheckRun, String>>; 2];
+
+/// Tabulates the FE runs of the candidates (`runs[i]` belongs to `study.candidates[i]`; None:
+/// the candidate was not checked).
+pub fn fe_check(study: &OptimizeStudy, runs: &[Option<CandidateRuns>], rb2: f64) -> FeCheck {
     let um = |rad: f64| rad * rb2 * 1e6;
     let mut lines = Vec::new();
     let mut wall = 0.0;
-    for (candidate, [low, high]) in study.candidates.iter().zip(runs) {
+    for (candidate, runs) in study.candidates.iter().zip(runs) {
+        let Some([low, high]) = runs else { continue };
         let mut errors = Vec::new();
         for (scene, run) in FE_CHECK_SCENES.iter().zip([low, high]) {
             match run {
-                Ok(r) => wall += r.dte.wall_s,
-                Err(e) => errors.push(format!("{scene}: {e}")),
+                Some(Ok(r)) => wall += r.dte.wall_s,
+                Some(Err(e)) => errors.push(format!("{scene}: {e}")),
+                None => {}
             }
         }
-        let low = low.as_ref().ok();
-        let high = high.as_ref().ok();
+        let low = low.as_ref().and_then(|r| r.as_ref().ok());
+        let high = high.as_ref().and_then(|r| r.as_ref().ok());
         // Harmonics need at least one whole mesh period in the statistics window.
         let whole_period = |h: &&FeCheckRun| {
             let (_, stats) = h.dte.window_starts();

@@ -2,6 +2,7 @@
 //! the case, calls one study of `geardyn::study` and hands its result to `geardyn::report`.
 
 mod args;
+mod chain;
 mod progress;
 
 use std::path::{Path, PathBuf};
@@ -12,14 +13,16 @@ use clap::Parser;
 
 use geardyn::case::{Case, Override, StiffnessSource};
 use geardyn::report::{self, OutputDir};
-use geardyn::study::{self, fe::FeShorthands, lumped::LumpedShorthands, RpmRange};
+use geardyn::study::{
+    self, fe::FeShorthands, lumped::LumpedShorthands, optimize::FeCheckPlan, RpmRange,
+};
 
 use args::{Cli, Command, CommonArgs, OptimizeArgs, ValidationStudy};
 use progress::{fe_check_run, fe_run, progress_bar, stage, staged_bar};
 
 fn main() -> ExitCode {
     let result = match Cli::parse().command {
-        Command::Run(args) => run(&args),
+        Command::Run { common, full } => chain::run(&common, full),
         Command::Geometry(args) => geometry(&args),
         Command::Mesh { common, relief } => mesh(&common, relief.as_deref()),
         Command::Ltca {
@@ -98,26 +101,6 @@ fn output_dir(args: &CommonArgs, command: &str, case: &Case) -> Result<PathBuf> 
     }
 }
 
-fn run(args: &CommonArgs) -> Result<()> {
-    let case = load(args, Vec::new())?;
-    let dir = output_dir(args, "run", &case)?;
-    let stage = |name: &str| CommonArgs {
-        out: Some(dir.join(name)),
-        ..args.clone()
-    };
-    println!("== geometry");
-    geometry(&stage("geometry"))?;
-    println!("\n== mesh");
-    mesh(&stage("mesh"), None)?;
-    println!("\n== ltca");
-    ltca(&stage("ltca"), None, 64, None)?;
-    println!("\n== sweep");
-    let rpm = "100:12000:600".parse().map_err(anyhow::Error::msg)?;
-    sweep(&stage("sweep"), rpm, &LumpedShorthands::default(), None)?;
-    println!("\nall outputs in {}", dir.display());
-    Ok(())
-}
-
 fn geometry(args: &CommonArgs) -> Result<()> {
     let case = load(args, Vec::new())?;
     let dir = output_dir(args, "geometry", &case)?;
@@ -167,40 +150,59 @@ fn optimize(args: &CommonArgs, options: &OptimizeArgs) -> Result<()> {
             .collect(),
     )?;
     let dir = output_dir(args, "optimize", &case)?;
+    let fe_check = options
+        .fe_check
+        .then(|| (dir.join("fe-check"), FeCheckPlan::full()));
+    optimize_into(args, options, &dir, fe_check)?;
+    println!("wrote {}", dir.display());
+    Ok(())
+}
+
+/// The relief optimization into `dir`, with the FE cross-check `fe_check` (its runs in
+/// FE_ROOT/<candidate>-<scene>; a finished run of the same effective case there is reused; a
+/// run that fails is a row with its reason, not the end of the check).
+fn optimize_into(
+    args: &CommonArgs,
+    options: &OptimizeArgs,
+    dir: &Path,
+    fe_check: Option<(PathBuf, FeCheckPlan)>,
+) -> Result<study::optimize::OptimizeStudy> {
+    let torque = || study::torque_override(options.torque_nm).into_iter();
+    let case = load(args, torque().collect())?;
     let bar = staged_bar();
     let mut result = study::optimize::run(&case, &options.options(), &stage(&bar))?;
     bar.finish_and_clear();
     print!("{}", report::optimize::console(&result));
-    report::optimize::write(OutputDir(&dir), &case, &result)?;
-    if options.fe_check {
-        // Each candidate's scenes run into DIR/fe-check/<candidate>-<scene> (a finished run of
-        // the same effective case there is reused); a run that fails is a row with its reason,
-        // not the end of the check.
+    report::optimize::write(OutputDir(dir), &case, &result)?;
+    if let Some((root, plan)) = fe_check {
         let mut runs = Vec::new();
         for candidate in &result.candidates {
-            let mut overrides: Vec<Override> = study::torque_override(options.torque_nm)
-                .into_iter()
-                .collect();
+            if !plan.includes(candidate) {
+                runs.push(None);
+                continue;
+            }
+            let mut overrides: Vec<Override> = torque().collect();
             overrides.extend(study::optimize::fe_check_overrides(&case, candidate)?);
             let with_relief = load(args, overrides)?;
-            runs.push(study::optimize::FE_CHECK_SCENES.map(|name| {
-                let out = dir
-                    .join("fe-check")
-                    .join(format!("{}-{name}", candidate.name));
-                fe_check_run(&with_relief, name, &out)
-            }));
+            let mut scene_runs = [None, None];
+            for (s, name) in study::optimize::FE_CHECK_SCENES.iter().enumerate() {
+                if plan.scenes[s] {
+                    let out = root.join(format!("{}-{name}", candidate.name));
+                    scene_runs[s] = Some(fe_check_run(&with_relief, name, &out));
+                }
+            }
+            runs.push(Some(scene_runs));
         }
         let rb2 = case.pair.gears[1].base_radius;
         let check = study::optimize::fe_check(&result, &runs, rb2);
         print!(
             "{}",
-            report::optimize::write_fe_check(OutputDir(&dir), &check)?
+            report::optimize::write_fe_check(OutputDir(dir), &check)?
         );
         result.summary.fe_check = Some(check);
-        OutputDir(&dir).json("summary.json", &result.summary)?;
+        OutputDir(dir).json("summary.json", &result.summary)?;
     }
-    println!("wrote {}", dir.display());
-    Ok(())
+    Ok(result)
 }
 
 /// The case with the lumped flags applied.

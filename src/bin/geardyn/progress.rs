@@ -47,14 +47,16 @@ pub fn fe_run(case: &Case, scene: &Scene, dir: &Path) -> Result<study::fe::FeStu
 }
 
 /// One scene of the relief cross-check into `dir`, read back: a finished run there of the same
-/// effective case (its case.toml) is reused, so an interrupted check resumes where it stopped.
+/// effective case (its case.toml, compared as TOML values: comments and `--set` headers aside)
+/// is reused, so an interrupted check resumes where it stopped.
 pub fn fe_check_run(
     case: &Case,
     scene: &str,
     dir: &Path,
 ) -> std::result::Result<study::optimize::FeCheckRun, String> {
-    let same_case =
-        std::fs::read_to_string(dir.join("case.toml")).is_ok_and(|text| text == case.text);
+    let table = |text: &str| text.parse::<toml::Table>().ok();
+    let same_case = std::fs::read_to_string(dir.join("case.toml"))
+        .is_ok_and(|text| table(&text).is_some_and(|t| Some(t) == table(&case.text)));
     if same_case {
         if let Ok(run) = report::optimize::read_fe_check_run(dir) {
             eprintln!("reusing the finished run in {}", dir.display());

@@ -1,0 +1,617 @@
+//! The report of `geardyn run`: `index.html` (self-contained: plots embedded, no network),
+//! `report.md` (the same content, images by relative path), `summary.json` (the headline
+//! numbers) and `tables/*.csv` (every table of the report). It reads what the stages wrote, so
+//! it is a view of the output folder and never recomputes a number.
+
+use std::path::Path;
+
+use base64::Engine;
+use serde::Serialize;
+use serde_json::Value;
+
+use super::{OutputDir, ReportError};
+
+/// A table of the report.
+struct Table {
+    /// File stem under tables/.
+    name: &'static str,
+    caption: String,
+    header: Vec<String>,
+    rows: Vec<Vec<String>>,
+}
+
+/// One section: text, tables, plots (paths relative to the output folder).
+struct Section {
+    title: String,
+    text: Vec<String>,
+    tables: Vec<Table>,
+    plots: Vec<(String, String)>,
+}
+
+/// The headline numbers of the whole chain (`summary.json`); null where a stage did not run.
+#[derive(Debug, Clone, Serialize)]
+pub struct RunSummary {
+    pub case: Option<String>,
+    pub torque_nm: Option<f64>,
+    pub mesh_stiffness_ltca_n_per_m: Option<f64>,
+    pub mesh_stiffness_fe_n_per_m: Option<f64>,
+    pub mesh_stiffness_iso_n_per_m: Option<f64>,
+    pub mesh_stiffness_potential_energy_n_per_m: Option<f64>,
+    pub fe_stiffness_vs_ltca_same_mesh_rel: Option<f64>,
+    pub ste_pp_unmodified_um: Option<f64>,
+    pub primary_resonance_rpm_ltca: Option<f64>,
+    pub max_dynamic_factor_ltca: Option<f64>,
+    pub primary_resonance_rpm_fe: Option<f64>,
+    pub max_dynamic_factor_fe: Option<f64>,
+    pub max_floquet_multiplier: Option<f64>,
+    pub tip_relief_um: Option<Value>,
+    pub root_relief_um: Option<Value>,
+    pub relief_length_fraction: Option<f64>,
+    pub relief_shape: Option<Value>,
+    pub robust_ste_pp_optimum_um: Option<f64>,
+    pub robust_ste_pp_unmodified_um: Option<f64>,
+    pub robust_ste_pp_classic_um: Option<f64>,
+    pub robust_ste_pp_paper_um: Option<f64>,
+    pub fe_low_speed_dte_pp_unmodified_um: Option<f64>,
+    pub fe_low_speed_dte_pp_optimum_um: Option<f64>,
+    pub mesh_mode_fe_modal_free_hz: Option<f64>,
+    pub mesh_mode_lumped_fe_k_free_hz: Option<f64>,
+    pub mesh_mode_fe_modal_driver_held_hz: Option<f64>,
+    pub mesh_mode_lumped_fe_k_driver_held_hz: Option<f64>,
+}
+
+fn read(dir: &Path, stage: &str) -> Option<Value> {
+    let text = std::fs::read_to_string(dir.join(stage).join("summary.json")).ok()?;
+    serde_json::from_str(&text).ok()
+}
+
+fn number(v: &Option<Value>, path: &[&str]) -> Option<f64> {
+    path.iter()
+        .try_fold(v.as_ref()?, |v, key| v.get(key))?
+        .as_f64()
+}
+
+fn field(v: &Option<Value>, path: &[&str]) -> Option<Value> {
+    path.iter()
+        .try_fold(v.as_ref()?, |v, key| v.get(key))
+        .cloned()
+}
+
+fn show(value: Option<f64>, digits: usize) -> String {
+    value.map_or("–".into(), |v| format!("{v:.digits$}"))
+}
+
+fn show_e(value: Option<f64>) -> String {
+    value.map_or("–".into(), |v| format!("{v:.4e}"))
+}
+
+/// The candidate row of an optimize fe_check by name.
+fn fe_check_line<'a>(optimize: &'a Option<Value>, name: &str) -> Option<&'a Value> {
+    optimize
+        .as_ref()?
+        .get("fe_check")?
+        .get("lines")?
+        .as_array()?
+        .iter()
+        .find(|l| l.get("candidate").and_then(|c| c.as_str()) == Some(name))
+}
+
+/// Reads the stages' outputs in `dir` and writes the report; returns the headline numbers.
+pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
+    let geometry = read(dir, "geometry");
+    let ltca = read(dir, "ltca");
+    let sweep_ltca = read(dir, "sweep-ltca");
+    let sweep_fe = read(dir, "sweep-fe");
+    let stability = read(dir, "stability");
+    let optimize = read(dir, "optimize");
+    let compare = read(dir, "compare");
+    let fe_low = |name: &str| {
+        fe_check_line(&optimize, name)
+            .and_then(|l| {
+                l.get("fe_low_dte_lowpass_pp_um")
+                    .or(l.get("fe_low_dte_pp_um"))
+            })
+            .and_then(|v| v.as_f64())
+    };
+    let unmodified_name = field(&optimize, &["candidates"])
+        .and_then(|c| c.as_array().cloned())
+        .and_then(|c| {
+            c.into_iter()
+                .find(|c| {
+                    c.get("tip_relief_um") == Some(&serde_json::json!([0.0, 0.0]))
+                        && c.get("root_relief_um") == Some(&serde_json::json!([0.0, 0.0]))
+                })
+                .and_then(|c| c.get("name").and_then(|n| n.as_str()).map(String::from))
+        })
+        .unwrap_or_else(|| "none".into());
+    let unmodified_variant = field(&ltca, &["variants"])
+        .and_then(|v| v.as_array().cloned())
+        .and_then(|variants| {
+            variants.into_iter().find(|v| {
+                v.get("relief_variant").and_then(|x| x.as_str()) == Some(unmodified_name.as_str())
+            })
+        });
+    // The unmodified pair's low-speed run: the FE stiffness stage (fe/<relief>-stiffness).
+    let fe_run = format!("fe/{unmodified_name}-stiffness");
+    let fe = read(dir, &fe_run);
+    let summary = RunSummary {
+        case: field(&ltca, &["case"]).and_then(|c| c.as_str().map(String::from)),
+        torque_nm: number(&ltca, &["torque_nm"]),
+        mesh_stiffness_ltca_n_per_m: number(&ltca, &["mesh_stiffness_mean_n_per_m"]),
+        mesh_stiffness_fe_n_per_m: number(&fe, &["mesh_stiffness_mean_n_per_m"]),
+        mesh_stiffness_iso_n_per_m: number(&ltca, &["iso_c_gamma_n_per_m"]),
+        mesh_stiffness_potential_energy_n_per_m: number(&ltca, &["potential_energy_mean_n_per_m"]),
+        fe_stiffness_vs_ltca_same_mesh_rel: number(
+            &fe,
+            &["stiffness_vs_ltca_same_mesh", "mean_rel"],
+        ),
+        ste_pp_unmodified_um: unmodified_variant
+            .as_ref()
+            .and_then(|v| v.get("ste_peak_to_peak_um"))
+            .and_then(|v| v.as_f64()),
+        primary_resonance_rpm_ltca: number(&sweep_ltca, &["primary_resonance_rpm"]),
+        max_dynamic_factor_ltca: number(&sweep_ltca, &["max_dynamic_factor"]),
+        primary_resonance_rpm_fe: number(&sweep_fe, &["primary_resonance_rpm"]),
+        max_dynamic_factor_fe: number(&sweep_fe, &["max_dynamic_factor"]),
+        max_floquet_multiplier: number(&stability, &["max_multiplier"]),
+        tip_relief_um: field(&optimize, &["tip_relief_um"]),
+        root_relief_um: field(&optimize, &["root_relief_um"]),
+        relief_length_fraction: number(&optimize, &["relief_length_fraction"]),
+        relief_shape: field(&optimize, &["shape"]),
+        robust_ste_pp_optimum_um: number(&optimize, &["objective_optimum"]),
+        robust_ste_pp_unmodified_um: number(&optimize, &["objective_none"]),
+        robust_ste_pp_classic_um: number(&optimize, &["objective_classic"]),
+        robust_ste_pp_paper_um: number(&optimize, &["objective_paper"]),
+        fe_low_speed_dte_pp_unmodified_um: fe_low(&unmodified_name),
+        fe_low_speed_dte_pp_optimum_um: fe_low("optimum-1"),
+        mesh_mode_fe_modal_free_hz: number(&compare, &["f_natural_fe_modal_hz"]),
+        mesh_mode_lumped_fe_k_free_hz: number(&compare, &["f_natural_lumped_hz"]),
+        mesh_mode_fe_modal_driver_held_hz: number(&compare, &["f_natural_fe_modal_driver_held_hz"]),
+        mesh_mode_lumped_fe_k_driver_held_hz: number(
+            &compare,
+            &["f_natural_lumped_driver_held_hz"],
+        ),
+    };
+    let sections = sections(
+        &summary,
+        &fe_run,
+        [
+            &geometry,
+            &ltca,
+            &fe,
+            &sweep_ltca,
+            &stability,
+            &optimize,
+            &compare,
+        ],
+    );
+    let out = OutputDir(dir);
+    std::fs::create_dir_all(dir.join("tables")).map_err(|source| ReportError::Io {
+        path: dir.join("tables").display().to_string(),
+        source,
+    })?;
+    for section in &sections {
+        for table in &section.tables {
+            let header: Vec<&str> = table.header.iter().map(|h| h.as_str()).collect();
+            out.csv(
+                &format!("tables/{}.csv", table.name),
+                &header,
+                table.rows.clone(),
+            )?;
+        }
+    }
+    out.bytes("report.md", markdown(&summary, &sections).as_bytes())?;
+    out.bytes("index.html", html(dir, &summary, &sections).as_bytes())?;
+    out.json("summary.json", &summary)?;
+    Ok(summary)
+}
+
+fn row(cells: &[String]) -> Vec<String> {
+    cells.to_vec()
+}
+
+fn sections(
+    s: &RunSummary,
+    fe_run: &str,
+    [geometry, ltca, fe, sweep_ltca, stability, optimize, compare]: [&Option<Value>; 7],
+) -> Vec<Section> {
+    let torque = show(s.torque_nm, 1);
+    let amounts = |v: &Option<Value>| {
+        v.as_ref()
+            .and_then(|v| v.as_array().cloned())
+            .map_or("–".into(), |a| {
+                a.iter()
+                    .map(|x| show(x.as_f64(), 2))
+                    .collect::<Vec<_>>()
+                    .join(" / ")
+            })
+    };
+    let answers = Table {
+        name: "answers",
+        caption: format!("The answers, at {torque} N·m on the driven gear"),
+        header: vec!["question".into(), "answer".into(), "from".into()],
+        rows: vec![
+            row(&[
+                "mean mesh stiffness [N/m]".into(),
+                format!(
+                    "LTCA {} · FE (DTE) {} · ISO 6336 c_γα·b {} · potential energy {}",
+                    show_e(s.mesh_stiffness_ltca_n_per_m),
+                    show_e(s.mesh_stiffness_fe_n_per_m),
+                    show_e(s.mesh_stiffness_iso_n_per_m),
+                    show_e(s.mesh_stiffness_potential_energy_n_per_m)
+                ),
+                format!("ltca/, {fe_run}/"),
+            ]),
+            row(&[
+                "loaded STE peak-to-peak, unmodified [µm]".into(),
+                show(s.ste_pp_unmodified_um, 3),
+                "ltca/".into(),
+            ]),
+            row(&[
+                "primary resonance, max dynamic factor".into(),
+                format!(
+                    "{} rpm, {} (LTCA k) · {} rpm, {} (FE k)",
+                    show(s.primary_resonance_rpm_ltca, 0),
+                    show(s.max_dynamic_factor_ltca, 2),
+                    show(s.primary_resonance_rpm_fe, 0),
+                    show(s.max_dynamic_factor_fe, 2)
+                ),
+                "sweep-ltca/, sweep-fe/".into(),
+            ]),
+            row(&[
+                "parametric stability".into(),
+                format!(
+                    "largest Floquet multiplier {} ({})",
+                    show(s.max_floquet_multiplier, 3),
+                    if s.max_floquet_multiplier.is_some_and(|m| m < 1.0) {
+                        "stable over the range"
+                    } else {
+                        "unstable ranges: see stability/"
+                    }
+                ),
+                "stability/".into(),
+            ]),
+            row(&[
+                "recommended relief (tip, root per gear 1 / 2) [µm]".into(),
+                format!(
+                    "tip {}, root {}, {} over {} of the double-contact zone",
+                    amounts(&s.tip_relief_um),
+                    amounts(&s.root_relief_um),
+                    s.relief_shape
+                        .as_ref()
+                        .and_then(|v| v.as_str())
+                        .unwrap_or("–"),
+                    show(s.relief_length_fraction, 2)
+                ),
+                "optimize/".into(),
+            ]),
+            row(&[
+                "what it gains (STE peak-to-peak over the load range) [µm]".into(),
+                format!(
+                    "{} against {} unmodified, {} classic rule, {} the case's relief",
+                    show(s.robust_ste_pp_optimum_um, 3),
+                    show(s.robust_ste_pp_unmodified_um, 3),
+                    show(s.robust_ste_pp_classic_um, 3),
+                    show(s.robust_ste_pp_paper_um, 3)
+                ),
+                "optimize/harris.png".into(),
+            ]),
+            row(&[
+                "explicit FE at low speed, DTE peak-to-peak [µm]".into(),
+                format!(
+                    "{} unmodified, {} with the recommended relief",
+                    show(s.fe_low_speed_dte_pp_unmodified_um, 3),
+                    show(s.fe_low_speed_dte_pp_optimum_um, 3)
+                ),
+                "optimize/fe_check.md".into(),
+            ]),
+            row(&[
+                "mesh mode, FE modal against lumped (FE k) [Hz]".into(),
+                format!(
+                    "both free {} / {}, driver held {} / {}",
+                    show(s.mesh_mode_fe_modal_free_hz, 0),
+                    show(s.mesh_mode_lumped_fe_k_free_hz, 0),
+                    show(s.mesh_mode_fe_modal_driver_held_hz, 0),
+                    show(s.mesh_mode_lumped_fe_k_driver_held_hz, 0)
+                ),
+                "compare/".into(),
+            ]),
+        ],
+    };
+    let trust = vec![
+        "LTCA (2D FE bodies, exact contact, quasi-static, frictionless): k(θ), STE and load sharing; the reference for relief. Converged to 0.4 % in the mean stiffness at the case's 0.2 mm flank elements (validation/README.md).".to_string(),
+        format!(
+            "Explicit FE (1 mm flanks by default, penalty contact, friction, impacts): the dynamics the others leave out — tooth separation, impacts, friction. Its k(θ) from the DTE is {} against the LTCA on the same mesh: a coarser mesh and penalty contact, not a different physics.",
+            s.fe_stiffness_vs_ltca_same_mesh_rel.map_or("–".into(), |r| format!("{:+.1} %", 100.0 * r))
+        ),
+        "Lumped model (1 DOF along the line of action, rigid shafts): speed sweeps, resonances and stability in seconds. Its k is hub to hub, so its mesh mode sits below the FE modal's by the gear bodies' twist (compare/: rigid rims take it out).".into(),
+        "ISO 6336 and potential energy: first estimates; they do not see the bodies' compliance the FE sees.".into(),
+    ];
+    let mut out = vec![Section {
+        title: "Answers".into(),
+        text: Vec::new(),
+        tables: vec![answers],
+        plots: Vec::new(),
+    }];
+    out.push(Section {
+        title: "Where each model is trusted".into(),
+        text: trust,
+        tables: Vec::new(),
+        plots: Vec::new(),
+    });
+    out.push(Section {
+        title: "Geometry and meshes".into(),
+        text: vec![format!(
+            "Contact ratio {}, center distance {} mm.",
+            show(number(geometry, &["contact_ratio"]), 4),
+            show(number(geometry, &["center_distance_mm"]), 3)
+        )],
+        tables: Vec::new(),
+        plots: vec![
+            (
+                "The meshing pair, line of action and contact points".into(),
+                "geometry/pair.png".into(),
+            ),
+            ("FE mesh of gear 1".into(), "mesh/mesh_gear1.png".into()),
+        ],
+    });
+    let variants = field(ltca, &["variants"])
+        .and_then(|v| v.as_array().cloned())
+        .unwrap_or_default();
+    out.push(Section {
+        title: "Loaded tooth contact (LTCA)".into(),
+        text: vec![format!(
+            "{} relief variants at {torque} N·m, 64 positions per base pitch.",
+            variants.len()
+        )],
+        tables: vec![Table {
+            name: "ltca_variants",
+            caption: "Per relief variant".into(),
+            header: [
+                "variant",
+                "mean k [N/m]",
+                "min k",
+                "max k",
+                "STE mean [µm]",
+                "STE p-p [µm]",
+            ]
+            .map(String::from)
+            .to_vec(),
+            rows: variants
+                .iter()
+                .map(|v| {
+                    let n = |k: &str| v.get(k).and_then(|x| x.as_f64());
+                    vec![
+                        v.get("relief_variant")
+                            .and_then(|x| x.as_str())
+                            .unwrap_or("")
+                            .to_string(),
+                        show_e(n("mesh_stiffness_mean_n_per_m")),
+                        show_e(n("mesh_stiffness_min_n_per_m")),
+                        show_e(n("mesh_stiffness_max_n_per_m")),
+                        show(n("ste_mean_um"), 3),
+                        show(n("ste_peak_to_peak_um"), 3),
+                    ]
+                })
+                .collect(),
+        }],
+        plots: vec![
+            ("Static transmission error".into(), "ltca/ste.png".into()),
+            (
+                "Mesh stiffness: LTCA, potential energy, ISO 6336".into(),
+                "ltca/stiffness.png".into(),
+            ),
+        ],
+    });
+    out.push(Section {
+        title: "Explicit FE: k(θ) from the low-speed DTE".into(),
+        text: vec![format!(
+            "Mean {} N/m; against the LTCA on the same mesh {} in the mean, {} at the worst bin; on the case's mesh {}.",
+            show_e(number(fe, &["mesh_stiffness_mean_n_per_m"])),
+            number(fe, &["stiffness_vs_ltca_same_mesh", "mean_rel"]).map_or("–".into(), |r| format!("{:+.1} %", 100.0 * r)),
+            number(fe, &["stiffness_vs_ltca_same_mesh", "max_abs_rel"]).map_or("–".into(), |r| format!("{:.1} %", 100.0 * r)),
+            number(fe, &["stiffness_vs_ltca_case_mesh", "mean_rel"]).map_or("–".into(), |r| format!("{:+.1} %", 100.0 * r)),
+        )],
+        tables: Vec::new(),
+        plots: vec![
+            ("DTE".into(), format!("{fe_run}/dte.png")),
+            ("k(θ) from the DTE against the LTCA".into(), format!("{fe_run}/stiffness.png")),
+        ],
+    });
+    out.push(Section {
+        title: "Speed sweeps and stability".into(),
+        text: vec![format!(
+            "Lumped model on the LTCA's k(θ): primary resonance {} rpm, max dynamic factor {}; on the FE's: {} rpm, {}. Largest Floquet multiplier {} (ζ = {}).",
+            show(number(sweep_ltca, &["primary_resonance_rpm"]), 0),
+            show(number(sweep_ltca, &["max_dynamic_factor"]), 2),
+            show(s.primary_resonance_rpm_fe, 0),
+            show(s.max_dynamic_factor_fe, 2),
+            show(number(stability, &["max_multiplier"]), 3),
+            show(number(stability, &["damping_ratio"]), 3),
+        )],
+        tables: Vec::new(),
+        plots: vec![
+            ("Dynamic factor, LTCA k".into(), "sweep-ltca/dynamic_factor.png".into()),
+            ("Dynamic factor, FE k".into(), "sweep-fe/dynamic_factor.png".into()),
+            ("Waterfall, LTCA k".into(), "sweep-ltca/waterfall.png".into()),
+            ("Stability map".into(), "stability/stability.png".into()),
+        ],
+    });
+    let candidates = field(optimize, &["candidates"])
+        .and_then(|v| v.as_array().cloned())
+        .unwrap_or_default();
+    out.push(Section {
+        title: "Relief optimization".into(),
+        text: vec![format!(
+            "Robust objective: loaded STE peak-to-peak averaged over {} N·m. QP loop {} s.",
+            field(optimize, &["torque_range_nm"]).map_or("–".into(), |t| t.to_string()),
+            show(number(optimize, &["qp_loop_s"]), 1)
+        )],
+        tables: vec![Table {
+            name: "relief_candidates",
+            caption: "Candidates".into(),
+            header: [
+                "candidate",
+                "tip g1 / g2 [µm]",
+                "root g1 / g2 [µm]",
+                "robust STE p-p [µm]",
+                "at the design torque [µm]",
+                "max dynamic factor",
+            ]
+            .map(String::from)
+            .to_vec(),
+            rows: candidates
+                .iter()
+                .map(|c| {
+                    let v = Some(c.clone());
+                    vec![
+                        c.get("name")
+                            .and_then(|x| x.as_str())
+                            .unwrap_or("")
+                            .to_string(),
+                        amounts(&field(&v, &["tip_relief_um"])),
+                        amounts(&field(&v, &["root_relief_um"])),
+                        show(number(&v, &["objective_um"]), 3),
+                        show(number(&v, &["ste_pp_design_um"]), 3),
+                        show(number(&v, &["max_dynamic_factor"]), 2),
+                    ]
+                })
+                .collect(),
+        }],
+        plots: vec![
+            ("Harris map".into(), "optimize/harris.png".into()),
+            (
+                "STE at the design torque".into(),
+                "optimize/ste_design.png".into(),
+            ),
+            (
+                "Lumped dynamic factor per candidate".into(),
+                "optimize/sweep.png".into(),
+            ),
+        ],
+    });
+    out.push(Section {
+        title: "FE against lumped frequencies".into(),
+        text: vec![format!(
+            "Mesh mode, both gears free: FE modal {} Hz, lumped on the FE k with rigid rims {} Hz; driver held: {} / {} Hz. The lumped model's k is hub to hub; compare/table.md lists every method.",
+            show(s.mesh_mode_fe_modal_free_hz, 0),
+            show(s.mesh_mode_lumped_fe_k_free_hz, 0),
+            show(s.mesh_mode_fe_modal_driver_held_hz, 0),
+            show(s.mesh_mode_lumped_fe_k_driver_held_hz, 0),
+        )],
+        tables: vec![Table {
+            name: "mesh_mode",
+            caption: "Mesh-mode frequency by method [Hz]".into(),
+            header: ["method", "both gears free", "driver held"].map(String::from).to_vec(),
+            rows: [
+                ("lumped √(k/m), k LTCA", "lumped_ltca_secant_hz"),
+                ("lumped, k LTCA, rigid rims", "lumped_ltca_rim_hz"),
+                ("lumped, k FE DTE", "lumped_fe_hz"),
+                ("lumped, k FE DTE, rigid rims", "lumped_fe_rim_hz"),
+                ("FE modal (mean over positions)", "fe_modal_mean_hz"),
+            ]
+            .iter()
+            .map(|(method, key)| {
+                vec![
+                    method.to_string(),
+                    show(number(compare, &["both_free", key]), 0),
+                    show(number(compare, &["driver_held", key]), 0),
+                ]
+            })
+            .collect(),
+        }],
+        plots: Vec::new(),
+    });
+    out
+}
+
+fn escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+fn markdown(s: &RunSummary, sections: &[Section]) -> String {
+    let mut md = format!(
+        "# geardyn report: {}\n",
+        s.case.as_deref().unwrap_or("case")
+    );
+    for section in sections {
+        md += &format!("\n## {}\n\n", section.title);
+        for p in &section.text {
+            md += &format!("{p}\n\n");
+        }
+        for t in &section.tables {
+            md += &format!(
+                "{} (tables/{}.csv)\n\n| {} |\n|{}|\n",
+                t.caption,
+                t.name,
+                t.header.join(" | "),
+                t.header.iter().map(|_| "---").collect::<Vec<_>>().join("|")
+            );
+            for r in &t.rows {
+                md += &format!("| {} |\n", r.join(" | "));
+            }
+            md += "\n";
+        }
+        for (caption, path) in &section.plots {
+            md += &format!("![{caption}]({path})\n\n");
+        }
+    }
+    md
+}
+
+fn html(dir: &Path, s: &RunSummary, sections: &[Section]) -> String {
+    let mut body = String::new();
+    for section in sections {
+        body += &format!("<section><h2>{}</h2>\n", escape(&section.title));
+        for p in &section.text {
+            body += &format!("<p>{}</p>\n", escape(p));
+        }
+        for t in &section.tables {
+            body += &format!(
+                "<table><caption>{} <a href=\"tables/{}.csv\">CSV</a></caption><tr>{}</tr>\n",
+                escape(&t.caption),
+                t.name,
+                t.header
+                    .iter()
+                    .map(|h| format!("<th>{}</th>", escape(h)))
+                    .collect::<String>()
+            );
+            for r in &t.rows {
+                body += &format!(
+                    "<tr>{}</tr>\n",
+                    r.iter()
+                        .map(|c| format!("<td>{}</td>", escape(c)))
+                        .collect::<String>()
+                );
+            }
+            body += "</table>\n";
+        }
+        for (caption, path) in &section.plots {
+            match std::fs::read(dir.join(path)) {
+                Ok(png) => {
+                    body += &format!(
+                        "<figure><img alt=\"{0}\" src=\"data:image/png;base64,{1}\"><figcaption>{0} ({2})</figcaption></figure>\n",
+                        escape(caption),
+                        base64::engine::general_purpose::STANDARD.encode(png),
+                        escape(path)
+                    );
+                }
+                Err(_) => {
+                    body += &format!(
+                        "<p class=\"missing\">{} — not produced ({})</p>\n",
+                        escape(caption),
+                        escape(path)
+                    )
+                }
+            }
+        }
+        body += "</section>\n";
+    }
+    format!(
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>geardyn report: {0}</title>\n<style>\nbody{{font-family:sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;color:#222}}\ntable{{border-collapse:collapse;margin:1em 0}}td,th{{border:1px solid #bbb;padding:4px 8px;text-align:left;vertical-align:top}}\nth{{background:#eef}}caption{{text-align:left;font-weight:bold;padding:4px 0}}\nfigure{{margin:1em 0}}img{{max-width:100%;max-height:640px}}figcaption{{color:#555;font-size:90%}}.missing{{color:#a00}}\n</style></head><body>\n<h1>geardyn report: {0}</h1>\n{1}</body></html>\n",
+        escape(s.case.as_deref().unwrap_or("case")),
+        body
+    )
+}

@@ -290,22 +290,69 @@ fn ltca_writes_csv_plots_and_summary() {
     assert!(String::from_utf8_lossy(&bad.stderr).contains("torque"));
 }
 
+/// `geardyn run` on a coarse case (0.6 mm LTCA flanks, the FE stiffness scene cut to 4 ms):
+/// every stage's folder, one FE run of the unmodified pair shared by the stiffness stage and the
+/// cross-check, and a report that stands alone — index.html with its plots embedded and nothing
+/// from the network, report.md, summary.json with every stage's headline, tables as CSV.
 #[test]
-fn run_writes_every_stage() {
+fn run_closes_the_chain_and_writes_the_report() {
     let dir = tempfile::tempdir().unwrap();
     let case = write_case(
         dir.path(),
         &DEFAULT.replace("fine_element_mm = 0.2", "fine_element_mm = 0.6"),
     );
     let out = dir.path().join("run");
-    run_ok(geardyn().arg("run").arg(&case).arg("--out").arg(&out));
+    let output = run_ok(
+        geardyn()
+            .arg("run")
+            .arg(&case)
+            .args([
+                "--set",
+                "scene[stiffness].duration_s=0.004",
+                "--set",
+                "scene[stiffness].ramp_s=0.002",
+                "--out",
+            ])
+            .arg(&out),
+    );
     for file in [
         "geometry/summary.json",
         "mesh/mesh_gear1.vtk",
         "ltca/summary.json",
         "ltca/ltca_tip20-root10.csv",
+        "fe/none-stiffness/stiffness.csv",
+        "fe/optimum-1-stiffness/summary.json",
+        "sweep-ltca/sweep.csv",
+        "sweep-fe/sweep.csv",
+        "stability/stability.csv",
+        "optimize/fe_check.csv",
+        "compare/frequencies.csv",
+        "report.md",
+        "tables/answers.csv",
     ] {
         assert!(out.join(file).exists(), "{file}");
+    }
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("reusing the finished run"), "{stderr}");
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(html.contains("Answers") && html.contains("data:image/png;base64,"));
+    assert!(!html.contains("src=\"http") && !html.contains("not produced"));
+    let s = read_summary(&out);
+    for key in [
+        "mesh_stiffness_ltca_n_per_m",
+        "mesh_stiffness_fe_n_per_m",
+        "ste_pp_unmodified_um",
+        "max_dynamic_factor_ltca",
+        "max_dynamic_factor_fe",
+        "max_floquet_multiplier",
+        "tip_relief_um",
+        "robust_ste_pp_optimum_um",
+        "fe_low_speed_dte_pp_unmodified_um",
+        "fe_low_speed_dte_pp_optimum_um",
+        "mesh_mode_fe_modal_free_hz",
+        "mesh_mode_lumped_fe_k_free_hz",
+    ] {
+        assert!(!s[key].is_null(), "summary.json: {key} is null");
     }
 }
 
@@ -1037,4 +1084,36 @@ fn optimize_writes_its_summary_and_the_optimum_beats_the_baselines() {
         let stderr = String::from_utf8_lossy(&output.stderr);
         assert!(stderr.contains(named), "{stderr}");
     }
+}
+
+/// `geardyn validate quick` fails, with the files written and the broken check named, when a
+/// tolerance breaks: a shorter addendum moves the contact ratio off the paper's 1.69. (The
+/// passing run on the paper case is CI's, after the tests.)
+#[test]
+fn validate_quick_fails_when_a_tolerance_breaks() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("vq");
+    let output = geardyn()
+        .args([
+            "validate",
+            "quick",
+            "--set",
+            "gear1.addendum_coeff=0.95",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!output.status.success());
+    assert!(String::from_utf8_lossy(&output.stderr).contains("broke their tolerance"));
+    let s = read_summary(&out);
+    let contact_ratio = s["checks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["quantity"] == "transverse contact ratio")
+        .unwrap();
+    assert_eq!(contact_ratio["passed"], false);
+    assert!(s["failed"].as_u64().unwrap() >= 1);
+    assert!(out.join("checks.md").exists());
 }

@@ -11,6 +11,7 @@ pub mod lumped;
 pub mod mesh;
 pub mod optimize;
 pub mod plot;
+pub mod quick_validation;
 pub mod run;
 pub mod stiffness_csv;
 pub mod vtk;

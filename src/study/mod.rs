@@ -14,6 +14,7 @@ pub mod ltca;
 pub mod lumped;
 pub mod mesh;
 pub mod optimize;
+pub mod quick_validation;
 pub mod stability;
 pub mod sweep;
 pub mod validate;

@@ -189,6 +189,10 @@ pub enum Command {
 
 #[derive(Clone, Copy, ValueEnum)]
 pub enum ValidationStudy {
+    /// The quick set (about a minute): contact ratio against the paper, LTCA mesh convergence
+    /// and equilibrium, the relief optimum against every baseline and against its re-meshed
+    /// LTCA; exits non-zero when a stated tolerance is broken (CI runs it).
+    Quick,
     /// Where each fixed-step scheme of the lumped model fails: stability and 1 %
     /// frequency-accuracy limits in ωh, predicted vs observed, and the order of convergence
     /// with and without tooth separation.

@@ -40,6 +40,11 @@ fn main() -> ExitCode {
         Command::Stability { common, rpm, model } => stability(&common, &rpm, &model),
         Command::Fe { common, options } => fe(&common, &options),
         Command::Validate {
+            study: ValidationStudy::Quick,
+            common,
+            ..
+        } => validate_quick(&common),
+        Command::Validate {
             study: ValidationStudy::Integrators,
             common,
             model,
@@ -238,6 +243,28 @@ fn stability(args: &CommonArgs, rpm: &RpmRange, options: &LumpedShorthands) -> R
     report::lumped::write_stability(OutputDir(&dir), &case, &result)?;
     print!("{}", report::lumped::stability_console(&result));
     println!("wrote {}", dir.display());
+    Ok(())
+}
+
+fn validate_quick(args: &CommonArgs) -> Result<()> {
+    let case = load(args, Vec::new())?;
+    let dir = output_dir(args, "validate-quick", &case)?;
+    let bar = staged_bar();
+    let result = study::quick_validation::run(&case, &stage(&bar))?;
+    bar.finish_and_clear();
+    print!(
+        "{}",
+        report::quick_validation::write(OutputDir(&dir), &result)?
+    );
+    println!("wrote {}", dir.display());
+    if result.failed > 0 {
+        anyhow::bail!(
+            "{} of {} validation checks broke their tolerance (checks.md in {})",
+            result.failed,
+            result.checks.len(),
+            dir.display()
+        );
+    }
     Ok(())
 }
 

@@ -173,6 +173,7 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
         ),
     };
     let sections = sections(
+        dir,
         &summary,
         &fe_run,
         [
@@ -191,7 +192,7 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
         source,
     })?;
     for section in &sections {
-        for table in &section.tables {
+        for table in section.tables.iter().filter(|t| !t.rows.is_empty()) {
             let header: Vec<&str> = table.header.iter().map(|h| h.as_str()).collect();
             out.csv(
                 &format!("tables/{}.csv", table.name),
@@ -211,6 +212,7 @@ fn row(cells: &[String]) -> Vec<String> {
 }
 
 fn sections(
+    dir: &Path,
     s: &RunSummary,
     fe_run: &str,
     [geometry, ltca, fe, sweep_ltca, stability, optimize, compare]: [&Option<Value>; 7],
@@ -437,6 +439,42 @@ fn sections(
             ("Stability map".into(), "stability/stability.png".into()),
         ],
     });
+    let fe_lines = field(optimize, &["fe_check", "lines"])
+        .and_then(|v| v.as_array().cloned())
+        .unwrap_or_default();
+    let fe_check_table = Table {
+        name: "relief_fe_check",
+        caption: "The LTCA's prediction against the explicit FE (optimize/fe_check.md)".into(),
+        header: [
+            "candidate",
+            "LTCA STE p-p [µm]",
+            "FE low speed DTE p-p, low-passed [µm]",
+            "LTCA STE 1st harmonic [µm]",
+            "FE high speed DTE 1st harmonic [µm]",
+        ]
+        .map(String::from)
+        .to_vec(),
+        rows: fe_lines
+            .iter()
+            .map(|l| {
+                let v = Some(l.clone());
+                vec![
+                    l.get("candidate")
+                        .and_then(|x| x.as_str())
+                        .unwrap_or("")
+                        .to_string(),
+                    show(number(&v, &["ltca_ste_pp_um"]), 3),
+                    show(number(&v, &["fe_low_dte_lowpass_pp_um"]), 3),
+                    show(number(&v, &["ltca_ste_h1_um"]), 3),
+                    show(
+                        field(&v, &["fe_high_harmonics_um"])
+                            .and_then(|h| h.get(0).and_then(|x| x.as_f64())),
+                        3,
+                    ),
+                ]
+            })
+            .collect(),
+    };
     let candidates = field(optimize, &["candidates"])
         .and_then(|v| v.as_array().cloned())
         .unwrap_or_default();
@@ -447,39 +485,46 @@ fn sections(
             field(optimize, &["torque_range_nm"]).map_or("–".into(), |t| t.to_string()),
             show(number(optimize, &["qp_loop_s"]), 1)
         )],
-        tables: vec![Table {
-            name: "relief_candidates",
-            caption: "Candidates".into(),
-            header: [
-                "candidate",
-                "tip g1 / g2 [µm]",
-                "root g1 / g2 [µm]",
-                "robust STE p-p [µm]",
-                "at the design torque [µm]",
-                "max dynamic factor",
-            ]
-            .map(String::from)
-            .to_vec(),
-            rows: candidates
-                .iter()
-                .map(|c| {
-                    let v = Some(c.clone());
-                    vec![
-                        c.get("name")
-                            .and_then(|x| x.as_str())
-                            .unwrap_or("")
-                            .to_string(),
-                        amounts(&field(&v, &["tip_relief_um"])),
-                        amounts(&field(&v, &["root_relief_um"])),
-                        show(number(&v, &["objective_um"]), 3),
-                        show(number(&v, &["ste_pp_design_um"]), 3),
-                        show(number(&v, &["max_dynamic_factor"]), 2),
-                    ]
-                })
-                .collect(),
-        }],
+        tables: vec![
+            Table {
+                name: "relief_candidates",
+                caption: "Candidates".into(),
+                header: [
+                    "candidate",
+                    "tip g1 / g2 [µm]",
+                    "root g1 / g2 [µm]",
+                    "robust STE p-p [µm]",
+                    "at the design torque [µm]",
+                    "max dynamic factor",
+                ]
+                .map(String::from)
+                .to_vec(),
+                rows: candidates
+                    .iter()
+                    .map(|c| {
+                        let v = Some(c.clone());
+                        vec![
+                            c.get("name")
+                                .and_then(|x| x.as_str())
+                                .unwrap_or("")
+                                .to_string(),
+                            amounts(&field(&v, &["tip_relief_um"])),
+                            amounts(&field(&v, &["root_relief_um"])),
+                            show(number(&v, &["objective_um"]), 3),
+                            show(number(&v, &["ste_pp_design_um"]), 3),
+                            show(number(&v, &["max_dynamic_factor"]), 2),
+                        ]
+                    })
+                    .collect(),
+            },
+            fe_check_table,
+        ],
         plots: vec![
             ("Harris map".into(), "optimize/harris.png".into()),
+            (
+                "Trust-region iterations".into(),
+                "optimize/convergence.png".into(),
+            ),
             (
                 "STE at the design torque".into(),
                 "optimize/ste_design.png".into(),
@@ -520,9 +565,34 @@ fn sections(
             })
             .collect(),
         }],
-        plots: Vec::new(),
+        plots: spectra(dir),
     });
     out
+}
+
+/// The FE-against-lumped spectra `compare` drew (one per FE speed), if any.
+fn spectra(dir: &Path) -> Vec<(String, String)> {
+    let mut names: Vec<String> = std::fs::read_dir(dir.join("compare"))
+        .map(|entries| {
+            entries
+                .filter_map(|e| e.ok()?.file_name().into_string().ok())
+                .filter(|n| n.starts_with("spectra_") && n.ends_with("rpm.png"))
+                .collect()
+        })
+        .unwrap_or_default();
+    names.sort();
+    names
+        .into_iter()
+        .map(|n| {
+            (
+                format!(
+                    "DTE spectra, FE against lumped, {}",
+                    n.trim_start_matches("spectra_").trim_end_matches(".png")
+                ),
+                format!("compare/{n}"),
+            )
+        })
+        .collect()
 }
 
 fn escape(text: &str) -> String {
@@ -541,7 +611,7 @@ fn markdown(s: &RunSummary, sections: &[Section]) -> String {
         for p in &section.text {
             md += &format!("{p}\n\n");
         }
-        for t in &section.tables {
+        for t in section.tables.iter().filter(|t| !t.rows.is_empty()) {
             md += &format!(
                 "{} (tables/{}.csv)\n\n| {} |\n|{}|\n",
                 t.caption,
@@ -568,7 +638,7 @@ fn html(dir: &Path, s: &RunSummary, sections: &[Section]) -> String {
         for p in &section.text {
             body += &format!("<p>{}</p>\n", escape(p));
         }
-        for t in &section.tables {
+        for t in section.tables.iter().filter(|t| !t.rows.is_empty()) {
             body += &format!(
                 "<table><caption>{} <a href=\"tables/{}.csv\">CSV</a></caption><tr>{}</tr>\n",
                 escape(&t.caption),

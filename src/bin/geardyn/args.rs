@@ -151,6 +151,13 @@ pub enum Command {
         #[arg(long = "chart-fe-run", value_name = "DIR")]
         chart_fe_runs: Vec<PathBuf>,
     },
+    /// Re-writes the report of a `geardyn run` folder (index.html, report.md, summary.json,
+    /// tables/) from what its stages wrote, e.g. after a stage was re-run.
+    Report {
+        /// The output folder of `geardyn run`.
+        #[arg(value_name = "DIR")]
+        dir: PathBuf,
+    },
     /// Tip/root relief optimization: the relief (amount per gear and end, relief length, linear
     /// or parabolic) that minimizes the loaded STE peak-to-peak averaged over a torque range,
     /// by LTCA sensitivities and a Clarabel QP in a trust region, against no relief, the

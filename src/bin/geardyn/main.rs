@@ -73,6 +73,9 @@ fn main() -> ExitCode {
             chart.then_some(&chart_fe_runs[..]),
         ),
         Command::Optimize { common, options } => optimize(&common, &options),
+        Command::Report { dir } => geardyn::report::run::write(&dir)
+            .map(|_| println!("wrote {}", dir.join("index.html").display()))
+            .map_err(Into::into),
         Command::Case { case, set } => Case::load_with(case.as_deref(), &set)
             .map(|c| print!("{}", c.text))
             .map_err(Into::into),

@@ -338,6 +338,29 @@ fn run_closes_the_chain_and_writes_the_report() {
     assert!(html.contains("Answers") && html.contains("data:image/png;base64,"));
     assert!(!html.contains("src=\"http") && !html.contains("not produced"));
     let s = read_summary(&out);
+    // The report's numbers are the stages' own: the FE stiffness run's and the unmodified
+    // variant's, not another variant's or another run's.
+    let fe = read_summary(&out.join("fe/none-stiffness"));
+    assert_eq!(
+        s["mesh_stiffness_fe_n_per_m"],
+        fe["mesh_stiffness_mean_n_per_m"]
+    );
+    let ltca = read_summary(&out.join("ltca"));
+    let none = ltca["variants"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|v| v["relief_variant"] == "none")
+        .unwrap();
+    assert_eq!(
+        s["mesh_stiffness_ltca_n_per_m"],
+        none["mesh_stiffness_mean_n_per_m"]
+    );
+    assert_eq!(s["ste_pp_unmodified_um"], none["ste_peak_to_peak_um"]);
+    // `geardyn report DIR` re-writes the same report from the stages' files.
+    let before = std::fs::read(out.join("summary.json")).unwrap();
+    run_ok(geardyn().arg("report").arg(&out));
+    assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), before);
     for key in [
         "mesh_stiffness_ltca_n_per_m",
         "mesh_stiffness_fe_n_per_m",

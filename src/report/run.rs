@@ -11,6 +11,16 @@ use serde_json::Value;
 
 use super::{OutputDir, ReportError};
 
+/// What `geardyn run` ran (`run.json`): where the report finds the stages.
+#[derive(Debug, Clone, Serialize, serde::Deserialize)]
+pub struct RunManifest {
+    /// The unmodified pair's relief variant.
+    pub unmodified_relief: String,
+    /// The unmodified pair's FE stiffness run, relative to the run folder.
+    pub fe_stiffness_run: String,
+    pub full: bool,
+}
+
 /// A table of the report.
 struct Table {
     /// File stem under tables/.
@@ -54,6 +64,8 @@ pub struct RunSummary {
     pub robust_ste_pp_paper_um: Option<f64>,
     pub fe_low_speed_dte_pp_unmodified_um: Option<f64>,
     pub fe_low_speed_dte_pp_optimum_um: Option<f64>,
+    /// Low-passed or raw DTE peak-to-peak (as the cross-check ranked).
+    pub fe_low_speed_measure: Option<String>,
     pub mesh_mode_fe_modal_free_hz: Option<f64>,
     pub mesh_mode_lumped_fe_k_free_hz: Option<f64>,
     pub mesh_mode_fe_modal_driver_held_hz: Option<f64>,
@@ -105,25 +117,25 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
     let stability = read(dir, "stability");
     let optimize = read(dir, "optimize");
     let compare = read(dir, "compare");
+    let manifest: Option<RunManifest> = std::fs::read_to_string(dir.join("run.json"))
+        .ok()
+        .and_then(|text| serde_json::from_str(&text).ok());
+    // The FE low-speed measure the cross-check ranked by, for every candidate alike.
+    let lowpass = field(&optimize, &["fe_check", "fe_low_measure"])
+        .is_some_and(|m| m.as_str().is_some_and(|m| m.starts_with("low-passed")));
+    let fe_low_key = if lowpass {
+        "fe_low_dte_lowpass_pp_um"
+    } else {
+        "fe_low_dte_pp_um"
+    };
     let fe_low = |name: &str| {
         fe_check_line(&optimize, name)
-            .and_then(|l| {
-                l.get("fe_low_dte_lowpass_pp_um")
-                    .or(l.get("fe_low_dte_pp_um"))
-            })
+            .and_then(|l| l.get(fe_low_key))
             .and_then(|v| v.as_f64())
     };
-    let unmodified_name = field(&optimize, &["candidates"])
-        .and_then(|c| c.as_array().cloned())
-        .and_then(|c| {
-            c.into_iter()
-                .find(|c| {
-                    c.get("tip_relief_um") == Some(&serde_json::json!([0.0, 0.0]))
-                        && c.get("root_relief_um") == Some(&serde_json::json!([0.0, 0.0]))
-                })
-                .and_then(|c| c.get("name").and_then(|n| n.as_str()).map(String::from))
-        })
-        .unwrap_or_else(|| "none".into());
+    let unmodified_name = manifest
+        .as_ref()
+        .map_or_else(|| "none".to_string(), |m| m.unmodified_relief.clone());
     let unmodified_variant = field(&ltca, &["variants"])
         .and_then(|v| v.as_array().cloned())
         .and_then(|variants| {
@@ -131,13 +143,23 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
                 v.get("relief_variant").and_then(|x| x.as_str()) == Some(unmodified_name.as_str())
             })
         });
-    // The unmodified pair's low-speed run: the FE stiffness stage (fe/<relief>-stiffness).
-    let fe_run = format!("fe/{unmodified_name}-stiffness");
-    let fe = read(dir, &fe_run);
+    let unmodified_number = |key: &str| {
+        unmodified_variant
+            .as_ref()
+            .and_then(|v| v.get(key))
+            .and_then(|v| v.as_f64())
+    };
+    // The unmodified pair's low-speed run (the FE stiffness stage); a diverged run counts as
+    // missing.
+    let fe_run = manifest.as_ref().map_or_else(
+        || format!("fe/{unmodified_name}-stiffness"),
+        |m| m.fe_stiffness_run.clone(),
+    );
+    let fe = read(dir, &fe_run).filter(|s| s.get("diverged").is_none_or(|d| d.is_null()));
     let summary = RunSummary {
         case: field(&ltca, &["case"]).and_then(|c| c.as_str().map(String::from)),
         torque_nm: number(&ltca, &["torque_nm"]),
-        mesh_stiffness_ltca_n_per_m: number(&ltca, &["mesh_stiffness_mean_n_per_m"]),
+        mesh_stiffness_ltca_n_per_m: unmodified_number("mesh_stiffness_mean_n_per_m"),
         mesh_stiffness_fe_n_per_m: number(&fe, &["mesh_stiffness_mean_n_per_m"]),
         mesh_stiffness_iso_n_per_m: number(&ltca, &["iso_c_gamma_n_per_m"]),
         mesh_stiffness_potential_energy_n_per_m: number(&ltca, &["potential_energy_mean_n_per_m"]),
@@ -145,10 +167,7 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
             &fe,
             &["stiffness_vs_ltca_same_mesh", "mean_rel"],
         ),
-        ste_pp_unmodified_um: unmodified_variant
-            .as_ref()
-            .and_then(|v| v.get("ste_peak_to_peak_um"))
-            .and_then(|v| v.as_f64()),
+        ste_pp_unmodified_um: unmodified_number("ste_peak_to_peak_um"),
         primary_resonance_rpm_ltca: number(&sweep_ltca, &["primary_resonance_rpm"]),
         max_dynamic_factor_ltca: number(&sweep_ltca, &["max_dynamic_factor"]),
         primary_resonance_rpm_fe: number(&sweep_fe, &["primary_resonance_rpm"]),
@@ -163,7 +182,9 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
         robust_ste_pp_classic_um: number(&optimize, &["objective_classic"]),
         robust_ste_pp_paper_um: number(&optimize, &["objective_paper"]),
         fe_low_speed_dte_pp_unmodified_um: fe_low(&unmodified_name),
-        fe_low_speed_dte_pp_optimum_um: fe_low("optimum-1"),
+        fe_low_speed_dte_pp_optimum_um: fe_low(crate::study::optimize::BEST),
+        fe_low_speed_measure: field(&optimize, &["fe_check", "fe_low_measure"])
+            .and_then(|m| m.as_str().map(String::from)),
         mesh_mode_fe_modal_free_hz: number(&compare, &["f_natural_fe_modal_hz"]),
         mesh_mode_lumped_fe_k_free_hz: number(&compare, &["f_natural_lumped_hz"]),
         mesh_mode_fe_modal_driver_held_hz: number(&compare, &["f_natural_fe_modal_driver_held_hz"]),
@@ -218,6 +239,18 @@ fn sections(
     [geometry, ltca, fe, sweep_ltca, stability, optimize, compare]: [&Option<Value>; 7],
 ) -> Vec<Section> {
     let torque = show(s.torque_nm, 1);
+    let unstable: Vec<String> = field(stability, &["unstable_rpm_ranges"])
+        .and_then(|r| r.as_array().cloned())
+        .unwrap_or_default()
+        .iter()
+        .filter_map(|r| {
+            Some(format!(
+                "{:.0}–{:.0}",
+                r.get(0)?.as_f64()?,
+                r.get(1)?.as_f64()?
+            ))
+        })
+        .collect();
     let amounts = |v: &Option<Value>| {
         v.as_ref()
             .and_then(|v| v.as_array().cloned())
@@ -263,12 +296,12 @@ fn sections(
             row(&[
                 "parametric stability".into(),
                 format!(
-                    "largest Floquet multiplier {} ({})",
+                    "largest Floquet multiplier {}: {}",
                     show(s.max_floquet_multiplier, 3),
-                    if s.max_floquet_multiplier.is_some_and(|m| m < 1.0) {
-                        "stable over the range"
-                    } else {
-                        "unstable ranges: see stability/"
+                    match (s.max_floquet_multiplier, &unstable) {
+                        (None, _) => "–".to_string(),
+                        (Some(_), ranges) if ranges.is_empty() => "stable over the range".into(),
+                        (Some(_), ranges) => format!("unstable at {} rpm", ranges.join(", ")),
                     }
                 ),
                 "stability/".into(),
@@ -299,7 +332,12 @@ fn sections(
                 "optimize/harris.png".into(),
             ]),
             row(&[
-                "explicit FE at low speed, DTE peak-to-peak [µm]".into(),
+                format!(
+                    "explicit FE at low speed, {} [µm]",
+                    s.fe_low_speed_measure
+                        .as_deref()
+                        .unwrap_or("DTE peak-to-peak")
+                ),
                 format!(
                     "{} unmodified, {} with the recommended relief",
                     show(s.fe_low_speed_dte_pp_unmodified_um, 3),
@@ -321,12 +359,20 @@ fn sections(
         ],
     };
     let trust = vec![
-        "LTCA (2D FE bodies, exact contact, quasi-static, frictionless): k(θ), STE and load sharing; the reference for relief. Converged to 0.4 % in the mean stiffness at the case's 0.2 mm flank elements (validation/README.md).".to_string(),
         format!(
-            "Explicit FE (1 mm flanks by default, penalty contact, friction, impacts): the dynamics the others leave out — tooth separation, impacts, friction. Its k(θ) from the DTE is {} against the LTCA on the same mesh: a coarser mesh and penalty contact, not a different physics.",
+            "LTCA (2D FE bodies, exact contact, quasi-static, frictionless; {} mm flank elements here): k(θ), STE and load sharing; the reference for relief. Its mesh convergence is in validation/README.md and `geardyn validate quick`.",
+            show(number(ltca, &["fine_element_mm"]), 2)
+        ),
+        format!(
+            "Explicit FE ({} mm flank elements here, penalty contact, friction, impacts): the dynamics the others leave out — tooth separation, impacts, friction. Its k(θ) from the DTE is {} against the LTCA on its own mesh: the penalty contact's share, not a different physics.",
+            show(number(fe, &["fine_element_mm"]), 2),
             s.fe_stiffness_vs_ltca_same_mesh_rel.map_or("–".into(), |r| format!("{:+.1} %", 100.0 * r))
         ),
-        "Lumped model (1 DOF along the line of action, rigid shafts): speed sweeps, resonances and stability in seconds. Its k is hub to hub, so its mesh mode sits below the FE modal's by the gear bodies' twist (compare/: rigid rims take it out).".into(),
+        format!(
+            "Lumped model ({}): speed sweeps, resonances and stability in seconds. Its k is hub to hub: on the FE's k its mesh mode is {} against the FE modal analysis with both gears free (compare/ lists every method, rigid rims among them).",
+            field(sweep_ltca, &["model"]).and_then(|m| m.as_str().map(String::from)).unwrap_or_else(|| "–".into()),
+            number(compare, &["both_free", "lumped_fe_over_modal_rel"]).map_or("–".into(), |r| format!("{:+.1} %", 100.0 * r))
+        ),
         "ISO 6336 and potential energy: first estimates; they do not see the bodies' compliance the FE sees.".into(),
     ];
     let mut out = vec![Section {
@@ -363,8 +409,9 @@ fn sections(
     out.push(Section {
         title: "Loaded tooth contact (LTCA)".into(),
         text: vec![format!(
-            "{} relief variants at {torque} N·m, 64 positions per base pitch.",
-            variants.len()
+            "{} relief variants at {torque} N·m, {} positions per base pitch.",
+            variants.len(),
+            show(number(ltca, &["positions"]), 0)
         )],
         tables: vec![Table {
             name: "ltca_variants",

@@ -63,6 +63,20 @@ pub fn relief_variant<'a>(
     }
 }
 
+/// Whether `modifications` are no relief at all.
+pub fn is_unmodified(modifications: &[crate::geometry::FlankModification; 2]) -> bool {
+    modifications.iter().all(|m| m.is_none())
+}
+
+/// The name of the unmodified pair in studies and FE runs: the case's own unmodified relief
+/// variant, else `none` (the variant the optimizer's baseline and its FE runs add).
+pub fn unmodified_name(case: &Case) -> String {
+    case.relief_variants
+        .iter()
+        .find(|v| is_unmodified(&v.modifications))
+        .map_or_else(|| "none".to_string(), |v| v.name.clone())
+}
+
 /// The load torque on the driven gear: the case's first operating point (the commands'
 /// `--torque-nm` sets it).
 pub fn load_torque(case: &Case) -> Result<f64, StudyError> {

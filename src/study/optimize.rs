@@ -276,7 +276,7 @@ fn remeshed_check(
 ) -> Result<RemeshedCheck, StudyError> {
     let optimum = candidates
         .iter()
-        .find(|c| c.name == "optimum-1")
+        .find(|c| c.name == BEST)
         .ok_or_else(|| StudyError::Input("no optimum was found".into()))?;
     let remeshed =
         super::ltca::model(case, &optimum.modifications)?.run(positions, torque, &|_| {})?;
@@ -331,6 +331,14 @@ pub struct OptimizeStudy {
     /// Baselines first, then the optima best first.
     pub candidates: Vec<Candidate>,
     pub summary: OptimizeSummary,
+}
+
+/// The best optimum's candidate name.
+pub const BEST: &str = "optimum-1";
+
+/// The folder of one explicit run of the cross-check: relief variant and scene.
+pub fn fe_run_folder(relief: &str, scene: &str) -> String {
+    format!("{relief}-{scene}")
 }
 
 /// Number of optima carried forward as candidates.
@@ -487,7 +495,7 @@ pub fn run(
     if !case
         .relief_variants
         .iter()
-        .any(|v| v.modifications.iter().all(|m| m.is_none()))
+        .any(|v| super::is_unmodified(&v.modifications))
     {
         let none = ReliefDesign::none(ReliefShape::Linear);
         plan.push((
@@ -677,9 +685,9 @@ fn summarize(
     // The study always judges an unmodified baseline (the case's, or its own "none").
     let unmodified = candidates
         .iter()
-        .find(|c| c.modifications.iter().all(|m| m.is_none()))
+        .find(|c| super::is_unmodified(&c.modifications))
         .expect("an unmodified baseline is always judged");
-    let optimum = find("optimum-1").expect("the best optimum is a candidate");
+    let optimum = find(BEST).expect("the best optimum is a candidate");
     Ok(OptimizeSummary {
         case: case.name().to_string(),
         design_torque_nm: torque,
@@ -755,7 +763,7 @@ pub fn unmodified_fe_overrides(case: &Case) -> Vec<Override> {
     let own = case
         .relief_variants
         .iter()
-        .find(|v| v.modifications.iter().all(|m| m.is_none()));
+        .find(|v| super::is_unmodified(&v.modifications));
     let mut overrides = Vec::new();
     let name = match own {
         Some(v) => v.name.clone(),
@@ -920,8 +928,8 @@ impl FeCheckPlan {
 
     pub fn includes(&self, candidate: &Candidate) -> bool {
         !self.baseline_and_best_only
-            || candidate.name == "optimum-1"
-            || candidate.modifications.iter().all(|m| m.is_none())
+            || candidate.name == BEST
+            || super::is_unmodified(&candidate.modifications)
     }
 }
 

@@ -196,7 +196,7 @@ pub enum Command {
 
 #[derive(Clone, Copy, ValueEnum)]
 pub enum ValidationStudy {
-    /// The quick set (about a minute): contact ratio against the paper, LTCA mesh convergence
+    /// The quick set (about 20 s): contact ratio against the paper, LTCA mesh convergence
     /// and equilibrium, the relief optimum against every baseline and against its re-meshed
     /// LTCA; exits non-zero when a stated tolerance is broken (CI runs it).
     Quick,

@@ -12,7 +12,10 @@ use std::path::Path;
 use anyhow::Result;
 
 use geardyn::case::StiffnessSource;
-use geardyn::study::{self, lumped::LumpedShorthands, optimize::FeCheckPlan, RpmRange};
+use geardyn::report::run::RunManifest;
+use geardyn::report::OutputDir;
+use geardyn::study::optimize::{fe_run_folder, FeCheckPlan};
+use geardyn::study::{self, lumped::LumpedShorthands, RpmRange};
 
 use super::args::{CommonArgs, OptimizeArgs};
 use super::progress::fe_check_run;
@@ -30,6 +33,38 @@ pub fn run(args: &CommonArgs, full: bool) -> Result<()> {
     let case = load(args, Vec::new())?;
     let dir = output_dir(args, "run", &case)?;
     let started = std::time::Instant::now();
+    let unmodified = study::unmodified_name(&case);
+    // The report finds the stages through this manifest (and is written even when a stage
+    // fails, with what the stages before it left).
+    let manifest = RunManifest {
+        unmodified_relief: unmodified.clone(),
+        fe_stiffness_run: format!(
+            "fe/{}",
+            fe_run_folder(&unmodified, study::compare::STIFFNESS_SCENE)
+        ),
+        full,
+    };
+    OutputDir(&dir).json("run.json", &manifest)?;
+    let result = stages(args, &case, &dir, &manifest, started);
+    geardyn::report::run::write(&dir)?;
+    println!("report: {}", dir.join("index.html").display());
+    result?;
+    println!(
+        "\nall outputs in {} ({:.0} s)",
+        dir.display(),
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+fn stages(
+    args: &CommonArgs,
+    case: &geardyn::case::Case,
+    dir: &Path,
+    manifest: &RunManifest,
+    started: std::time::Instant,
+) -> Result<()> {
+    let full = manifest.full;
     let sub = |name: &str| CommonArgs {
         out: Some(dir.join(name)),
         ..args.clone()
@@ -61,18 +96,15 @@ pub fn run(args: &CommonArgs, full: bool) -> Result<()> {
 
     announce();
     // The unmodified pair's runs are the cross-check's baseline runs: one effective case.
-    let unmodified_case = load(args, study::optimize::unmodified_fe_overrides(&case))?;
-    let unmodified = unmodified_case
-        .relief_variants
-        .iter()
-        .find(|v| v.modifications.iter().all(|m| m.is_none()))
-        .map(|v| v.name.clone())
-        .unwrap_or_else(|| "none".into());
+    let unmodified_case = load(args, study::optimize::unmodified_fe_overrides(case))?;
     let fe_root = dir.join("fe");
-    let stiffness_scene = study::compare::STIFFNESS_SCENE;
-    let stiffness_run = fe_root.join(format!("{unmodified}-{stiffness_scene}"));
-    let stiffness_case = unmodified_case;
-    fe_check_run(&stiffness_case, stiffness_scene, &stiffness_run).map_err(anyhow::Error::msg)?;
+    let stiffness_run = dir.join(&manifest.fe_stiffness_run);
+    fe_check_run(
+        &unmodified_case,
+        study::compare::STIFFNESS_SCENE,
+        &stiffness_run,
+    )
+    .map_err(anyhow::Error::msg)?;
     let stiffness_csv = stiffness_run.join("stiffness.csv");
 
     announce();
@@ -101,18 +133,20 @@ pub fn run(args: &CommonArgs, full: bool) -> Result<()> {
     } else {
         FeCheckPlan::baseline_and_best()
     };
-    let optimize_args = OptimizeArgs::default_for_run();
     let optimize_dir = dir.join("optimize");
     std::fs::create_dir_all(&optimize_dir)?;
     optimize_into(
         &sub("optimize"),
-        &optimize_args,
+        &OptimizeArgs::default_for_run(),
         &optimize_dir,
         Some((fe_root.clone(), plan)),
     )?;
 
     announce();
-    let high_run = fe_root.join(format!("{unmodified}-{}", study::compare::SPEED_SCENE));
+    let high_run = fe_root.join(fe_run_folder(
+        &manifest.unmodified_relief,
+        study::compare::SPEED_SCENE,
+    ));
     let (speeds, runs): (&[f64], Vec<std::path::PathBuf>) = if full {
         (&FULL_COMPARE_RPM, vec![high_run])
     } else {
@@ -124,17 +158,5 @@ pub fn run(args: &CommonArgs, full: bool) -> Result<()> {
         &runs,
         (Some(stiffness_csv.as_path()), 16, full),
         None,
-    )?;
-    finish(&dir, started)
-}
-
-fn finish(dir: &Path, started: std::time::Instant) -> Result<()> {
-    geardyn::report::run::write(dir)?;
-    println!("report: {}", dir.join("index.html").display());
-    println!(
-        "\nall outputs in {} ({:.0} s)",
-        dir.display(),
-        started.elapsed().as_secs_f64()
-    );
-    Ok(())
+    )
 }

@@ -18,7 +18,7 @@ use geardyn::study::{
 };
 
 use args::{Cli, Command, CommonArgs, OptimizeArgs, ValidationStudy};
-use progress::{fe_check_run, fe_run, progress_bar, stage, staged_bar};
+use progress::{fe_check_run, fe_run, fe_run_reusing, progress_bar, stage, staged_bar};
 
 fn main() -> ExitCode {
     let result = match Cli::parse().command {
@@ -328,11 +328,7 @@ fn compare(
     for rpm in cmp::speeds_to_run(speeds, &runs) {
         let at_speed = load(args, cmp::speed_overrides(rpm))?;
         let out = dir.join(format!("fe-{rpm:.0}"));
-        fe_run(
-            &at_speed,
-            study::fe::scene(&at_speed, cmp::SPEED_SCENE)?,
-            &out,
-        )?;
+        fe_run_reusing(&at_speed, cmp::SPEED_SCENE, &out)?;
         runs.push(read(&out)?);
     }
     let stiffness_file = match fe_stiffness {

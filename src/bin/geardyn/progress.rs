@@ -46,26 +46,35 @@ pub fn fe_run(case: &Case, scene: &Scene, dir: &Path) -> Result<study::fe::FeStu
     Ok(result)
 }
 
-/// One scene of the relief cross-check into `dir`, read back: a finished run there of the same
-/// effective case (its case.toml, compared as TOML values: comments and `--set` headers aside)
-/// is reused, so an interrupted check resumes where it stopped.
+/// Runs scene `scene` of `case` into `dir`, unless `dir` holds a finished run of the same
+/// effective case (its case.toml, compared as TOML values: comments and `--set` headers aside),
+/// so an interrupted chain resumes. summary.json is written last, so a run is finished when it
+/// is there; it is removed before a new run, so a stale one is never taken for the new case's.
+pub fn fe_run_reusing(case: &Case, scene: &str, dir: &Path) -> Result<()> {
+    let table = |text: &str| text.parse::<toml::Table>().ok();
+    let same_case = std::fs::read_to_string(dir.join("case.toml"))
+        .is_ok_and(|text| table(&text).is_some_and(|t| Some(t) == table(&case.text)));
+    let finished = report::compare::read_fe_run(dir).is_ok();
+    if same_case && finished {
+        eprintln!("reusing the finished run in {}", dir.display());
+        return Ok(());
+    }
+    match std::fs::remove_file(dir.join("summary.json")) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            return Err(e).with_context(|| format!("cannot clear {}", dir.display()))
+        }
+        _ => {}
+    }
+    fe_run(case, study::fe::scene(case, scene)?, dir).map(|_| ())
+}
+
+/// One scene of the relief cross-check into `dir` ([`fe_run_reusing`]), read back.
 pub fn fe_check_run(
     case: &Case,
     scene: &str,
     dir: &Path,
 ) -> std::result::Result<study::optimize::FeCheckRun, String> {
-    let table = |text: &str| text.parse::<toml::Table>().ok();
-    let same_case = std::fs::read_to_string(dir.join("case.toml"))
-        .is_ok_and(|text| table(&text).is_some_and(|t| Some(t) == table(&case.text)));
-    if same_case {
-        if let Ok(run) = report::optimize::read_fe_check_run(dir) {
-            eprintln!("reusing the finished run in {}", dir.display());
-            return Ok(run);
-        }
-    }
-    study::fe::scene(case, scene)
-        .map_err(anyhow::Error::from)
-        .and_then(|scene| fe_run(case, scene, dir))
+    fe_run_reusing(case, scene, dir)
         .map_err(|e| format!("{e:#}"))
         .and_then(|_| report::optimize::read_fe_check_run(dir))
 }

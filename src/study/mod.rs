@@ -15,6 +15,7 @@ pub mod lumped;
 pub mod mesh;
 pub mod optimize;
 pub mod quick_validation;
+pub mod run;
 pub mod stability;
 pub mod sweep;
 pub mod validate;

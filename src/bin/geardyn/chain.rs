@@ -14,20 +14,12 @@ use anyhow::Result;
 use geardyn::case::StiffnessSource;
 use geardyn::report::run::RunManifest;
 use geardyn::report::OutputDir;
-use geardyn::study::optimize::{fe_run_folder, FeCheckPlan};
-use geardyn::study::{self, lumped::LumpedShorthands, RpmRange};
+use geardyn::study::optimize::fe_run_folder;
+use geardyn::study::{self, lumped::LumpedShorthands};
 
 use super::args::{CommonArgs, OptimizeArgs};
 use super::progress::fe_check_run;
 use super::{compare, geometry, load, ltca, mesh, optimize_into, output_dir, stability, sweep};
-
-/// Speeds of the sweeps [rpm] and of the stability map.
-const SWEEP_RPM: &str = "100:12000:600";
-const STABILITY_RPM: &str = "100:20000:2000";
-
-/// Extra FE speeds of the frequency comparison with `--full` (3000 rpm comes from the
-/// cross-check's high-speed run).
-const FULL_COMPARE_RPM: [f64; 2] = [1200.0, 4800.0];
 
 pub fn run(args: &CommonArgs, full: bool) -> Result<()> {
     let case = load(args, Vec::new())?;
@@ -45,7 +37,8 @@ pub fn run(args: &CommonArgs, full: bool) -> Result<()> {
         full,
     };
     OutputDir(&dir).json("run.json", &manifest)?;
-    let result = stages(args, &case, &dir, &manifest, started);
+    let plan = study::run::RunPlan::new(full);
+    let result = stages(args, &case, &dir, (&manifest, &plan), started);
     geardyn::report::run::write(&dir)?;
     println!("report: {}", dir.join("index.html").display());
     result?;
@@ -61,22 +54,14 @@ fn stages(
     args: &CommonArgs,
     case: &geardyn::case::Case,
     dir: &Path,
-    manifest: &RunManifest,
+    (manifest, plan): (&RunManifest, &study::run::RunPlan),
     started: std::time::Instant,
 ) -> Result<()> {
-    let full = manifest.full;
     let sub = |name: &str| CommonArgs {
         out: Some(dir.join(name)),
         ..args.clone()
     };
-    let stages = [
-        "geometry and meshes",
-        "LTCA",
-        "FE stiffness from the low-speed DTE",
-        "rpm sweeps (LTCA and FE k) and stability",
-        "relief optimization and its FE cross-check",
-        "FE against lumped frequencies",
-    ];
+    let stages = study::run::STAGES;
     let mut stage_number = 0;
     let mut announce = || {
         stage_number += 1;
@@ -92,7 +77,7 @@ fn stages(
     geometry(&sub("geometry"))?;
     mesh(&sub("mesh"), None)?;
     announce();
-    ltca(&sub("ltca"), None, 64, None)?;
+    ltca(&sub("ltca"), None, plan.ltca_positions, None)?;
 
     announce();
     // The unmodified pair's runs are the cross-check's baseline runs: one effective case.
@@ -108,7 +93,7 @@ fn stages(
     let stiffness_csv = stiffness_run.join("stiffness.csv");
 
     announce();
-    let rpm: RpmRange = SWEEP_RPM.parse().map_err(anyhow::Error::msg)?;
+    let rpm = plan.sweep_rpm.clone();
     sweep(
         &sub("sweep-ltca"),
         rpm.clone(),
@@ -120,26 +105,20 @@ fn stages(
         ..LumpedShorthands::default()
     };
     sweep(&sub("sweep-fe"), rpm, &fe_k, None)?;
-    let stability_rpm: RpmRange = STABILITY_RPM.parse().map_err(anyhow::Error::msg)?;
     stability(
         &sub("stability"),
-        &stability_rpm,
+        &plan.stability_rpm,
         &LumpedShorthands::default(),
     )?;
 
     announce();
-    let plan = if full {
-        FeCheckPlan::full()
-    } else {
-        FeCheckPlan::baseline_and_best()
-    };
     let optimize_dir = dir.join("optimize");
     std::fs::create_dir_all(&optimize_dir)?;
     optimize_into(
         &sub("optimize"),
         &OptimizeArgs::default_for_run(),
         &optimize_dir,
-        Some((fe_root.clone(), plan)),
+        Some((fe_root.clone(), plan.fe_check.clone())),
     )?;
 
     announce();
@@ -147,16 +126,20 @@ fn stages(
         &manifest.unmodified_relief,
         study::compare::SPEED_SCENE,
     ));
-    let (speeds, runs): (&[f64], Vec<std::path::PathBuf>) = if full {
-        (&FULL_COMPARE_RPM, vec![high_run])
-    } else {
-        (&[], Vec::new())
-    };
+    let runs: Vec<std::path::PathBuf> = plan
+        .compare_high_speed_run
+        .then_some(high_run)
+        .into_iter()
+        .collect();
     compare(
         &sub("compare"),
-        speeds,
+        &plan.compare_speeds_rpm,
         &runs,
-        (Some(stiffness_csv.as_path()), 16, full),
+        (
+            Some(stiffness_csv.as_path()),
+            plan.modal_positions,
+            plan.paper_stiffness,
+        ),
         None,
     )
 }

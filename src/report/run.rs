@@ -64,6 +64,9 @@ pub struct RunSummary {
     pub robust_ste_pp_paper_um: Option<f64>,
     pub fe_low_speed_dte_pp_unmodified_um: Option<f64>,
     pub fe_low_speed_dte_pp_optimum_um: Option<f64>,
+    /// The torque span of the Harris map over which the recommended relief's STE peak-to-peak
+    /// is below the unmodified pair's [N·m] (its first and last such torque).
+    pub relief_beats_unmodified_nm: Option<(f64, f64)>,
     /// Low-passed or raw DTE peak-to-peak (as the cross-check ranked).
     pub fe_low_speed_measure: Option<String>,
     pub mesh_mode_fe_modal_free_hz: Option<f64>,
@@ -183,6 +186,7 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
         robust_ste_pp_paper_um: number(&optimize, &["objective_paper"]),
         fe_low_speed_dte_pp_unmodified_um: fe_low(&unmodified_name),
         fe_low_speed_dte_pp_optimum_um: fe_low(crate::study::optimize::BEST),
+        relief_beats_unmodified_nm: harris_span(dir, &unmodified_name),
         fe_low_speed_measure: field(&optimize, &["fe_check", "fe_low_measure"])
             .and_then(|m| m.as_str().map(String::from)),
         mesh_mode_fe_modal_free_hz: number(&compare, &["f_natural_fe_modal_hz"]),
@@ -330,6 +334,15 @@ fn sections(
                     show(s.robust_ste_pp_paper_um, 3)
                 ),
                 "optimize/harris.png".into(),
+            ]),
+            row(&[
+                "where it is quieter than no relief (Harris map)".into(),
+                s.relief_beats_unmodified_nm.map_or("–".into(), |(a, b)| {
+                    format!(
+                        "from {a:.0} to {b:.0} N·m (STE peak-to-peak below the unmodified pair's)"
+                    )
+                }),
+                "optimize/harris.csv".into(),
             ]),
             row(&[
                 format!(
@@ -615,6 +628,26 @@ fn sections(
         plots: spectra(dir),
     });
     out
+}
+
+/// From optimize/harris.csv: the first and last torque at which the best optimum's STE
+/// peak-to-peak is below the unmodified candidate's.
+fn harris_span(dir: &Path, unmodified: &str) -> Option<(f64, f64)> {
+    let mut reader = csv::Reader::from_path(dir.join("optimize/harris.csv")).ok()?;
+    let headers = reader.headers().ok()?.clone();
+    let column = |name: String| headers.iter().position(|h| h == name);
+    let best = column(format!("{}_ste_pp_um", crate::study::optimize::BEST))?;
+    let none = column(format!("{unmodified}_ste_pp_um"))?;
+    let mut span: Option<(f64, f64)> = None;
+    for record in reader.records() {
+        let record = record.ok()?;
+        let value = |i: usize| record.get(i)?.parse::<f64>().ok();
+        let (torque, a, b) = (value(0)?, value(best)?, value(none)?);
+        if a < b {
+            span = Some(span.map_or((torque, torque), |(from, _)| (from, torque)));
+        }
+    }
+    span
 }
 
 /// The FE-against-lumped spectra `compare` drew (one per FE speed), if any.

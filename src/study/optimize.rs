@@ -905,6 +905,8 @@ pub struct FeCheck {
 pub struct FeCheckPlan {
     /// Only the unmodified baseline and the best optimum; else every candidate.
     pub baseline_and_best_only: bool,
+    /// Only these candidates (by name), if given.
+    pub only: Option<Vec<String>>,
     /// Which of [`FE_CHECK_SCENES`] (low, high).
     pub scenes: [bool; 2],
 }
@@ -914,6 +916,7 @@ impl FeCheckPlan {
     pub fn full() -> Self {
         FeCheckPlan {
             baseline_and_best_only: false,
+            only: None,
             scenes: [true, true],
         }
     }
@@ -922,14 +925,20 @@ impl FeCheckPlan {
     pub fn baseline_and_best() -> Self {
         FeCheckPlan {
             baseline_and_best_only: true,
+            only: None,
             scenes: [true, false],
         }
     }
 
     pub fn includes(&self, candidate: &Candidate) -> bool {
-        !self.baseline_and_best_only
-            || candidate.name == BEST
-            || super::is_unmodified(&candidate.modifications)
+        let listed = self
+            .only
+            .as_ref()
+            .is_none_or(|names| names.contains(&candidate.name));
+        listed
+            && (!self.baseline_and_best_only
+                || candidate.name == BEST
+                || super::is_unmodified(&candidate.modifications))
     }
 }
 

@@ -222,6 +222,13 @@ pub struct CommonArgs {
     pub set: Vec<Override>,
 }
 
+/// A scene of the relief cross-check.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum FeCheckScene {
+    Low,
+    High,
+}
+
 /// The flags of `geardyn optimize`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct OptimizeArgs {
@@ -248,12 +255,43 @@ pub struct OptimizeArgs {
     #[arg(long, default_value = "100:12000:300", value_name = "FROM:TO:N")]
     pub rpm: RpmRange,
     /// Also run the explicit FE cross-check of the candidates at the case's low and high speed
-    /// (long: about 15 minutes per candidate on 2 cores).
+    /// (long: about 14 minutes per candidate on 2 cores).
     #[arg(long)]
     pub fe_check: bool,
+    /// With --fe-check: only these candidates (names as in candidates.csv, comma-separated).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        value_name = "NAMES",
+        requires = "fe_check"
+    )]
+    pub fe_check_only: Option<Vec<String>>,
+    /// With --fe-check: the scenes, `low` (the stiffness scene), `high` (the high-speed scene)
+    /// or both.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        value_name = "low,high",
+        default_value = "low,high",
+        requires = "fe_check"
+    )]
+    pub fe_check_scenes: Vec<FeCheckScene>,
 }
 
 impl OptimizeArgs {
+    /// The cross-check the flags ask for.
+    pub fn fe_check_plan(&self) -> Option<geardyn::study::optimize::FeCheckPlan> {
+        self.fe_check
+            .then(|| geardyn::study::optimize::FeCheckPlan {
+                baseline_and_best_only: false,
+                only: self.fe_check_only.clone(),
+                scenes: [
+                    self.fe_check_scenes.contains(&FeCheckScene::Low),
+                    self.fe_check_scenes.contains(&FeCheckScene::High),
+                ],
+            })
+    }
+
     /// The command's defaults, as `geardyn optimize` parses them.
     pub fn default_for_run() -> Self {
         #[derive(Parser)]

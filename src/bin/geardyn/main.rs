@@ -159,8 +159,8 @@ fn optimize(args: &CommonArgs, options: &OptimizeArgs) -> Result<()> {
     )?;
     let dir = output_dir(args, "optimize", &case)?;
     let fe_check = options
-        .fe_check
-        .then(|| (dir.join("fe-check"), FeCheckPlan::full()));
+        .fe_check_plan()
+        .map(|plan| (dir.join("fe-check"), plan));
     optimize_into(args, options, &dir, fe_check)?;
     println!("wrote {}", dir.display());
     Ok(())
@@ -183,6 +183,17 @@ fn optimize_into(
     print!("{}", report::optimize::console(&result));
     report::optimize::write(OutputDir(dir), &case, &result)?;
     if let Some((root, plan)) = fe_check {
+        let names: Vec<&str> = result.candidates.iter().map(|c| c.name.as_str()).collect();
+        if let Some(unknown) = plan
+            .only
+            .iter()
+            .flatten()
+            .find(|n| !names.contains(&n.as_str()))
+        {
+            anyhow::bail!(
+                "--fe-check-only {unknown:?} is not a candidate; the candidates are {names:?}"
+            );
+        }
         let mut runs = Vec::new();
         for candidate in &result.candidates {
             if !plan.includes(candidate) {

@@ -378,21 +378,10 @@ impl LtcaModel {
         torque: f64,
         progress: &(dyn Fn(usize) + Sync),
     ) -> Result<Vec<PositionResult>, LtcaError> {
-        if !(torque > 0.0 && torque.is_finite()) {
-            return Err(LtcaError::Torque { torque });
-        }
-        if positions < 4 {
-            return Err(LtcaError::Positions { positions });
-        }
-        let done = AtomicUsize::new(0);
-        (0..positions)
-            .into_par_iter()
-            .map(|j| {
-                let result = self.solve_position(j, positions, torque);
-                progress(done.fetch_add(1, Ordering::Relaxed) + 1);
-                result
-            })
-            .collect()
+        Ok(self
+            .cycles(positions, &[torque], progress)?
+            .pop()
+            .expect("one torque, one cycle"))
     }
 
     /// One base pitch at each of `torques`: `[torque][position]`. The geometric contact search of
@@ -403,25 +392,46 @@ impl LtcaModel {
         positions: usize,
         torques: &[f64],
     ) -> Result<Vec<Vec<PositionResult>>, LtcaError> {
+        self.cycles(positions, torques, &|_| {})
+    }
+
+    /// The cycles of [`LtcaModel::run`] and [`LtcaModel::run_torques`]: rayon over positions,
+    /// each position's contact search solved for every torque; `progress` sees positions done.
+    fn cycles(
+        &self,
+        positions: usize,
+        torques: &[f64],
+        progress: &(dyn Fn(usize) + Sync),
+    ) -> Result<Vec<Vec<PositionResult>>, LtcaError> {
         if let Some(&torque) = torques.iter().find(|t| !(**t > 0.0 && t.is_finite())) {
             return Err(LtcaError::Torque { torque });
         }
         if positions < 4 {
             return Err(LtcaError::Positions { positions });
         }
+        let done = AtomicUsize::new(0);
         let by_position: Vec<Vec<PositionResult>> = (0..positions)
             .into_par_iter()
             .map(|j| {
                 let geometry = self.position_geometry(j, positions)?;
-                torques
+                let results = torques
                     .iter()
                     .map(|&torque| Ok(geometry.solve(self, torque)?.0))
-                    .collect()
+                    .collect();
+                progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+                results
             })
             .collect::<Result<_, LtcaError>>()?;
-        Ok((0..torques.len())
-            .map(|t| by_position.iter().map(|p| p[t].clone()).collect())
-            .collect())
+        let mut cycles: Vec<Vec<PositionResult>> = torques
+            .iter()
+            .map(|_| Vec::with_capacity(positions))
+            .collect();
+        for results in by_position {
+            for (cycle, result) in cycles.iter_mut().zip(results) {
+                cycle.push(result);
+            }
+        }
+        Ok(cycles)
     }
 }
 

@@ -93,28 +93,26 @@ pub struct OptimizeOptions {
     pub harris_range: TorqueRange,
 }
 
+/// The defaults of [`OptimizeOptions`], shared with the command line's.
+pub const DEFAULT_TORQUE_RANGE: &str = "50:150:5";
+pub const DEFAULT_POSITIONS: usize = 64;
+pub const DEFAULT_MIN_CONTACT_RATIO: f64 = 1.2;
+pub const DEFAULT_MAX_RELIEF_UM: f64 = 40.0;
+pub const DEFAULT_MIN_LENGTH: f64 = 0.25;
+pub const DEFAULT_RPM: &str = "100:12000:300";
+const HARRIS_RANGE: &str = "10:200:20";
+
 impl Default for OptimizeOptions {
     fn default() -> Self {
+        let parse = |text: &str| text.parse::<TorqueRange>().expect("a valid default");
         OptimizeOptions {
-            torque_range: TorqueRange {
-                from_percent: 50.0,
-                to_percent: 150.0,
-                count: 5,
-            },
-            positions: 64,
-            min_contact_ratio: 1.2,
-            max_relief_um: 40.0,
-            min_length: 0.25,
-            rpm: RpmRange(
-                (0..300)
-                    .map(|i| 100.0 + (12000.0 - 100.0) * i as f64 / 299.0)
-                    .collect(),
-            ),
-            harris_range: TorqueRange {
-                from_percent: 10.0,
-                to_percent: 200.0,
-                count: 20,
-            },
+            torque_range: parse(DEFAULT_TORQUE_RANGE),
+            positions: DEFAULT_POSITIONS,
+            min_contact_ratio: DEFAULT_MIN_CONTACT_RATIO,
+            max_relief_um: DEFAULT_MAX_RELIEF_UM,
+            min_length: DEFAULT_MIN_LENGTH,
+            rpm: DEFAULT_RPM.parse().expect("a valid default"),
+            harris_range: parse(HARRIS_RANGE),
         }
     }
 }
@@ -282,7 +280,10 @@ fn remeshed_check(
         super::ltca::model(case, &optimum.modifications)?.run(positions, torque, &|_| {})?;
     let rb2 = case.pair.gears[1].base_radius;
     let ste: Vec<f64> = remeshed.iter().map(|r| r.ste * rb2 * 1e6).collect();
-    let k = remeshed.iter().map(|r| r.mesh_stiffness).sum::<f64>() / positions as f64;
+    // Both means through the one stiffness table the lumped model reads.
+    let k = stiffness::from_ltca(&case.pair, &remeshed, torque, "ltca (re-meshed optimum)")
+        .map_err(StudyError::Input)?
+        .mean();
     let fixed_k = optimum.mesh_stiffness.mean();
     let difference = ste
         .iter()
@@ -555,7 +556,7 @@ pub fn run(
     let remeshed = remeshed_check(case, &candidates, torque, options.positions)?;
     let summary = summarize(
         case,
-        (&model, torque, deflection, hub_deflection),
+        (torque, deflection, hub_deflection),
         (&range, &limits, &optima, &chosen),
         &candidates,
         (start_lines, skipped),
@@ -663,7 +664,7 @@ fn candidate_sweep(up: &[SweepPoint], rpms: &[f64]) -> CandidateSweep {
 #[allow(clippy::type_complexity)]
 fn summarize(
     case: &Case,
-    (model, torque, deflection, hub_deflection): (&LtcaModel, f64, f64, f64),
+    (torque, deflection, hub_deflection): (f64, f64, f64),
     (range, limits, optima, chosen): (&LoadRange, &robust::Limits, &[(String, Optimum)], &[usize]),
     candidates: &[Candidate],
     (starts, skipped_starts): (Vec<StartSummary>, Vec<String>),
@@ -673,14 +674,11 @@ fn summarize(
     let find = |name: &str| candidates.iter().find(|c| c.name == name);
     let best = &optima[chosen[0]].1;
     let design = best.best.design;
-    let modifications = design
-        .modifications(&model.pair)
-        .map_err(|e| StudyError::Input(e.to_string()))?;
     let deg = |z: Option<crate::geometry::ReliefZone>| z.map(|z| z.start_roll_angle.to_degrees());
     let first_relief = case
         .relief_variants
         .iter()
-        .find(|v| !v.modifications.iter().all(|m| m.is_none()));
+        .find(|v| !super::is_unmodified(&v.modifications));
     let objective = |name: &str| find(name).map(|c| c.response.objective_um);
     // The study always judges an unmodified baseline (the case's, or its own "none").
     let unmodified = candidates
@@ -688,6 +686,7 @@ fn summarize(
         .find(|c| super::is_unmodified(&c.modifications))
         .expect("an unmodified baseline is always judged");
     let optimum = find(BEST).expect("the best optimum is a candidate");
+    let modifications = &optimum.modifications;
     Ok(OptimizeSummary {
         case: case.name().to_string(),
         design_torque_nm: torque,

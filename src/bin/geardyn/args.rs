@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use geardyn::case::Override;
-use geardyn::study::{fe::FeShorthands, lumped::LumpedShorthands, RpmRange};
+use geardyn::study::{fe::FeShorthands, lumped::LumpedShorthands, optimize, RpmRange};
 
 /// Spur-gear mesh dynamics: exact geometry, loaded contact, explicit dynamics, lumped sweeps.
 ///
@@ -237,22 +237,22 @@ pub struct OptimizeArgs {
     #[arg(long, value_name = "T", allow_negative_numbers = true)]
     pub torque_nm: Option<f64>,
     /// Torques of the robust objective, FROM:TO:N in percent of the design torque.
-    #[arg(long, default_value = "50:150:5", value_name = "FROM:TO:N")]
-    pub torque_range: geardyn::study::optimize::TorqueRange,
+    #[arg(long, default_value = optimize::DEFAULT_TORQUE_RANGE, value_name = "FROM:TO:N")]
+    pub torque_range: optimize::TorqueRange,
     /// LTCA positions per base pitch.
-    #[arg(long, default_value_t = 64, value_name = "N")]
+    #[arg(long, default_value_t = optimize::DEFAULT_POSITIONS, value_name = "N")]
     pub positions: usize,
     /// Smallest loaded contact ratio allowed at any torque of the range.
-    #[arg(long, default_value_t = 1.2, value_name = "EPS")]
+    #[arg(long, default_value_t = optimize::DEFAULT_MIN_CONTACT_RATIO, value_name = "EPS")]
     pub min_contact_ratio: f64,
     /// Largest relief amount [µm].
-    #[arg(long, default_value_t = 40.0, value_name = "UM")]
+    #[arg(long, default_value_t = optimize::DEFAULT_MAX_RELIEF_UM, value_name = "UM")]
     pub max_relief_um: f64,
     /// Shortest relief, as a fraction of the double-contact zone (1 = long relief).
-    #[arg(long, default_value_t = 0.25, value_name = "FRACTION")]
+    #[arg(long, default_value_t = optimize::DEFAULT_MIN_LENGTH, value_name = "FRACTION")]
     pub min_relief_length: f64,
     /// Driver speeds of each candidate's lumped sweep, FROM:TO:N in rpm.
-    #[arg(long, default_value = "100:12000:300", value_name = "FROM:TO:N")]
+    #[arg(long, default_value = optimize::DEFAULT_RPM, value_name = "FROM:TO:N")]
     pub rpm: RpmRange,
     /// Also run the explicit FE cross-check of the candidates at the case's low and high speed
     /// (long: about 14 minutes per candidate on 2 cores).

@@ -678,7 +678,7 @@ fn fe_writes_histories_summary_and_keeps_a_diverged_run() {
         "energy_error_rel_transmitted",
         "dt_s",
         "dt_critical_s",
-        "ns_per_element_step",
+        "wall_ns_per_element_step",
         "wall_s",
         "impact_d1_max_n",
     ] {

@@ -32,6 +32,14 @@ pub enum ReportError {
     Plot(#[from] plot::PlotError),
 }
 
+/// Whether a summary key holds a measurement of the run's cost (wall time, time per
+/// element-step, threads used) rather than a result. These are the only values that change
+/// between two runs of the same case and command, on any number of threads; every key that
+/// holds one contains `wall` (`wall_s`, `stiffness_wall_s`, `wall_ns_per_element_step`, ...).
+pub fn is_timing_key(key: &str) -> bool {
+    key.contains("wall")
+}
+
 /// The folder one command writes into; every file is written atomically and a failure names it.
 #[derive(Debug, Clone, Copy)]
 pub struct OutputDir<'a>(pub &'a Path);

@@ -61,7 +61,7 @@ pub fn console(study: &OptimizeStudy) -> String {
     }
     out += &format!(
         "  (* breaks a limit of the optimizer)\nQP loop {:.2} s ({:.3} s in Clarabel), bodies {:.2} s, all {:.2} s\n",
-        s.qp_loop_s, s.qp_solve_s, s.model_s, s.wall_s
+        s.qp_loop_wall_s, s.qp_solve_wall_s, s.model_wall_s, s.wall_s
     );
     out
 }
@@ -88,7 +88,7 @@ pub fn write(dir: OutputDir, case: &Case, study: &OptimizeStudy) -> Result<(), R
             "trial_length_fraction",
             "qp_iterations",
             "kkt_residual",
-            "qp_solve_s",
+            "qp_solve_wall_s",
         ],
         study.optima.iter().flat_map(|(name, o)| {
             o.iterations.iter().map(move |r| {

@@ -543,7 +543,7 @@ fn sections(
         text: vec![format!(
             "Robust objective: loaded STE peak-to-peak averaged over {} N·m. QP loop {} s.",
             field(optimize, &["torque_range_nm"]).map_or("–".into(), |t| t.to_string()),
-            show(number(optimize, &["qp_loop_s"]), 1)
+            show(number(optimize, &["qp_loop_wall_s"]), 1)
         )],
         tables: vec![
             Table {

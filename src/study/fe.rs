@@ -365,10 +365,11 @@ pub struct FeSummary {
     pub energy_error_rel: f64,
     pub energy_error_rel_transmitted: f64,
     pub steps: usize,
-    pub ns_per_element_step: f64,
+    pub wall_ns_per_element_step: f64,
     pub wall_s: f64,
     pub total_wall_s: f64,
-    pub threads: usize,
+    /// Threads the wall times were measured with.
+    pub wall_threads: usize,
     pub diverged: Option<String>,
     pub dt_critical_coupled_s: Option<f64>,
     pub dt_critical_coupled_checks: Vec<CoupledStep>,
@@ -504,7 +505,7 @@ pub fn run(
     } else {
         0.0
     };
-    let ns_per_element_step =
+    let wall_ns_per_element_step =
         outcome.wall_s * 1e9 / (outcome.steps.max(1) as f64 * prepared.model.elements() as f64);
     let get = |f: &dyn Fn(&DteAnalysis) -> f64| analysis.as_ref().map(f);
     let summary = FeSummary {
@@ -542,10 +543,10 @@ pub fn run(
         energy_error_rel,
         energy_error_rel_transmitted,
         steps: outcome.steps,
-        ns_per_element_step,
+        wall_ns_per_element_step,
         wall_s: outcome.wall_s,
         total_wall_s: started.elapsed().as_secs_f64() + prepared.setup_wall_s,
-        threads: rayon::current_num_threads(),
+        wall_threads: rayon::current_num_threads(),
         diverged: outcome.diverged,
         dt_critical_coupled_s: outcome
             .coupled_steps

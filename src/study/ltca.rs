@@ -99,9 +99,9 @@ pub struct VariantSummary {
     pub max_kkt_residual: f64,
     pub elements: [usize; 2],
     pub free_dofs: [usize; 2],
-    pub factorization_s: f64,
-    pub condensation_s: f64,
-    pub cycle_s: f64,
+    pub factorization_wall_s: f64,
+    pub condensation_wall_s: f64,
+    pub cycle_wall_s: f64,
 }
 
 /// The study's headline numbers (`summary.json`): the first variant's, every variant's, and the
@@ -262,8 +262,8 @@ pub fn variant_summary(
         max_kkt_residual: results.iter().map(|r| r.kkt_residual).fold(0.0, f64::max),
         elements,
         free_dofs,
-        factorization_s: times.0,
-        condensation_s: times.1,
-        cycle_s: times.2,
+        factorization_wall_s: times.0,
+        condensation_wall_s: times.1,
+        cycle_wall_s: times.2,
     }
 }

@@ -184,7 +184,7 @@ pub struct StartSummary {
     pub iterations: usize,
     pub stop: robust::Stop,
     pub ltca_evaluations: usize,
-    pub qp_solve_s: f64,
+    pub qp_solve_wall_s: f64,
     pub wall_s: f64,
 }
 
@@ -230,11 +230,11 @@ pub struct OptimizeSummary {
     pub iterations_all_starts: usize,
     pub ltca_evaluations: usize,
     /// Time in Clarabel over all starts [s] (timing).
-    pub qp_solve_s: f64,
+    pub qp_solve_wall_s: f64,
     /// The whole trust-region loop over all starts, LTCA evaluations included [s] (timing).
-    pub qp_loop_s: f64,
+    pub qp_loop_wall_s: f64,
     /// Meshing and factorizing the bodies once [s] (timing).
-    pub model_s: f64,
+    pub model_wall_s: f64,
     /// The study without the FE cross-check [s] (timing).
     pub wall_s: f64,
     pub starts: Vec<StartSummary>,
@@ -449,7 +449,7 @@ pub fn run(
             iterations: optimum.iterations.len(),
             stop: optimum.stop,
             ltca_evaluations: optimum.ltca_evaluations,
-            qp_solve_s: optimum.qp_solve_s,
+            qp_solve_wall_s: optimum.qp_solve_s,
             wall_s: t.elapsed().as_secs_f64(),
         });
         optima.push((format!("{}-from-{start_name}", shape.name()), optimum));
@@ -715,9 +715,9 @@ fn summarize(
         iterations: best.iterations.len(),
         iterations_all_starts: optima.iter().map(|(_, o)| o.iterations.len()).sum(),
         ltca_evaluations: optima.iter().map(|(_, o)| o.ltca_evaluations).sum(),
-        qp_solve_s: optima.iter().map(|(_, o)| o.qp_solve_s).sum(),
-        qp_loop_s,
-        model_s,
+        qp_solve_wall_s: optima.iter().map(|(_, o)| o.qp_solve_s).sum(),
+        qp_loop_wall_s: qp_loop_s,
+        model_wall_s: model_s,
         wall_s,
         starts,
         skipped_starts,

@@ -1051,7 +1051,7 @@ fn optimize_writes_its_summary_and_the_optimum_beats_the_baselines() {
         "objective_paper",
         "objective_classic",
         "iterations",
-        "qp_solve_s",
+        "qp_solve_wall_s",
         "wall_s",
     ] {
         assert!(s.get(key).is_some(), "summary.json has no {key}");

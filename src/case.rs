@@ -1058,6 +1058,14 @@ impl Case {
         &self.file.name
     }
 
+    /// Whether a case file's `text` describes this effective case: compared as TOML values, so
+    /// comments, layout and the `--set` header aside. Decides when a finished or interrupted
+    /// run on disk may be reused or resumed.
+    pub fn is_same_case(&self, text: &str) -> bool {
+        let table = |text: &str| text.parse::<toml::Table>().ok();
+        table(text).is_some_and(|t| Some(t) == table(&self.text))
+    }
+
     /// Mesh spec of gear `index` (1 or 2) with the given teeth fine.
     pub fn mesh_spec(&self, fine_teeth: Vec<usize>) -> crate::mesh::MeshSpec {
         crate::mesh::MeshSpec {

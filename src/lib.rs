@@ -12,6 +12,7 @@
 //!   with a `Serialize` summary out; the models are built through its constructors.
 //! * [`report`] — atomic file output, JSON summaries, tables and drawings.
 //! * [`samples`] — canonical cases reused by tests, benches and docs.
+//! * [`interrupt`] — the stop request (SIGINT/SIGTERM) the long loops poll.
 
 // Input checks are written `!(x > limit)` on purpose: a NaN must fail them.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -23,6 +24,7 @@ pub mod contact;
 pub mod explicit;
 pub mod fe;
 pub mod geometry;
+pub mod interrupt;
 pub mod ltca;
 pub mod lumped;
 pub mod mesh;

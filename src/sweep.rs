@@ -35,7 +35,7 @@ pub const PEAKS: usize = 3;
 pub const WINDOW_PERIODS: usize = 16;
 
 /// The response at one driver speed.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SweepPoint {
     pub driver_speed_rpm: f64,
     pub mesh_frequency_hz: f64,
@@ -110,22 +110,82 @@ fn analyse(model: &MeshModel, rpm: f64, start: State) -> (SweepPoint, State) {
 /// Up-sweep and down-sweep over `rpms` (ascending), run in parallel with each other; each
 /// continues from the previous speed's steady state.
 pub fn sweep(model: &MeshModel, rpms: &[f64]) -> (Vec<SweepPoint>, Vec<SweepPoint>) {
-    let run = |order: Vec<f64>| {
-        let mut state = model.static_state();
-        let mut out = Vec::with_capacity(order.len());
-        for rpm in order {
+    let done = continue_sweep(model, rpms, SweepProgress::start(model), &|| false);
+    done.into_points()
+}
+
+/// A sweep part done: the points of each direction so far and the steady state the next speed
+/// continues from, so an interrupted sweep resumes exactly where it stopped.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SweepProgress {
+    /// Up-sweep points, ascending speed.
+    pub up: Vec<SweepPoint>,
+    pub up_state: State,
+    /// Down-sweep points in the order swept (descending speed).
+    pub down: Vec<SweepPoint>,
+    pub down_state: State,
+}
+
+impl SweepProgress {
+    /// Nothing done: both directions start from the static equilibrium.
+    pub fn start(model: &MeshModel) -> Self {
+        SweepProgress {
+            up: Vec::new(),
+            up_state: model.static_state(),
+            down: Vec::new(),
+            down_state: model.static_state(),
+        }
+    }
+
+    /// Whether both directions cover all `speeds`.
+    pub fn is_complete(&self, speeds: usize) -> bool {
+        self.up.len() == speeds && self.down.len() == speeds
+    }
+
+    /// The up- and down-sweep, both in ascending speed.
+    pub fn into_points(self) -> (Vec<SweepPoint>, Vec<SweepPoint>) {
+        let mut down = self.down;
+        down.reverse();
+        (self.up, down)
+    }
+}
+
+/// Continues `progress` over `rpms` (ascending) until both directions are done or `stop`
+/// returns true (asked before each speed); the two directions run in parallel. A sweep
+/// continued from its own progress gives the same points, bit for bit, as one run through.
+pub fn continue_sweep(
+    model: &MeshModel,
+    rpms: &[f64],
+    progress: SweepProgress,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> SweepProgress {
+    let run = |order: Vec<f64>, mut points: Vec<SweepPoint>, mut state: State| {
+        for rpm in order.into_iter().skip(points.len()) {
+            if stop() {
+                break;
+            }
             let (point, next) = analyse(model, rpm, state);
             state = next;
-            out.push(point);
+            points.push(point);
         }
-        out
+        (points, state)
     };
-    let (up, mut down) = rayon::join(
-        || run(rpms.to_vec()),
-        || run(rpms.iter().rev().copied().collect()),
+    let SweepProgress {
+        up,
+        up_state,
+        down,
+        down_state,
+    } = progress;
+    let ((up, up_state), (down, down_state)) = rayon::join(
+        || run(rpms.to_vec(), up, up_state),
+        || run(rpms.iter().rev().copied().collect(), down, down_state),
     );
-    down.reverse();
-    (up, down)
+    SweepProgress {
+        up,
+        up_state,
+        down,
+        down_state,
+    }
 }
 
 /// Driver speeds [rpm] of the local maxima of `values` (strict, interior points).

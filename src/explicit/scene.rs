@@ -453,6 +453,8 @@ pub struct RunOutcome {
     pub wall_s: f64,
     /// Why the run stopped early, if it did.
     pub diverged: Option<String>,
+    /// Where the run stopped on a stop request ([`crate::interrupt`]), if it did.
+    pub interrupted: Option<String>,
     pub final_energy: PairEnergy,
     /// The pair's stable step where the contact was, at [`COUPLED_CHECKS`] instants spread over
     /// the run (those with points in contact).
@@ -476,7 +478,8 @@ pub struct CoupledStep {
 }
 
 /// Integrates the scene for `duration` seconds; `progress` sees the fraction done (called about
-/// every 0.5 % of the run). On divergence the history up to the last good sample is kept.
+/// every 0.5 % of the run). On divergence, or on a stop request ([`crate::interrupt`]), the
+/// history up to the last recorded sample is kept.
 pub fn run(
     prepared: &PreparedScene,
     duration: f64,
@@ -499,6 +502,7 @@ pub fn run(
     let rb2 = model.pair.gears[1].base_radius;
     let started = Instant::now();
     let mut diverged = None;
+    let mut interrupted = None;
     // The signals at the integrator's current state: driver rotation, DTE, driven speed, its
     // kinematic value, radial, circumferential and total contact force, mesh force.
     let signals = |integrator: &PairIntegrator, state: &crate::explicit::pair::PairState| {
@@ -553,6 +557,15 @@ pub fn run(
     let check_every = (total_steps / COUPLED_CHECKS).max(1);
     let mut coupled_steps = Vec::new();
     for step in 1..=total_steps {
+        if crate::interrupt::stop_requested() {
+            interrupted = Some(format!(
+                "interrupted at t = {:.6e} s (step {} of {total_steps}); the results up to t = {:.6e} s are kept",
+                state.time,
+                step - 1,
+                history.time.last().copied().unwrap_or(0.0)
+            ));
+            break;
+        }
         let recording = step % every == 0 || step == total_steps;
         let result = integrator.step(&mut state).and_then(|()| {
             if recording {
@@ -601,6 +614,7 @@ pub fn run(
         steps: integrator.steps,
         wall_s: started.elapsed().as_secs_f64(),
         diverged,
+        interrupted,
         final_energy: integrator.energy,
         coupled_steps,
     }

@@ -113,7 +113,7 @@ pub struct MeshModel {
 
 /// State of the lumped model: positions q = (p, y₁, y₂) [m] and their velocities [m/s]. Without
 /// bearings y₁ = y₂ = 0 throughout.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct State {
     pub q: [f64; 3],
     pub v: [f64; 3],

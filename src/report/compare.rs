@@ -35,10 +35,12 @@ pub fn read_fe_run(dir: &Path) -> Result<FeDte, String> {
     let shown = dir.display();
     let summary = fe_summary(dir)?;
     let number = |path: &[&str]| summary_number(&summary, dir, path);
-    if summary.get("diverged").is_some_and(|d| !d.is_null()) {
-        return Err(format!(
-            "{shown}: the run diverged; compare needs a finished run"
-        ));
+    for (key, what) in [("diverged", "diverged"), ("interrupted", "was interrupted")] {
+        if summary.get(key).is_some_and(|d| !d.is_null()) {
+            return Err(format!(
+                "{shown}: the run {what}; compare needs a finished run"
+            ));
+        }
     }
     let speed = number(&["scene", "driver_speed"])?;
     let mut reader = csv::Reader::from_path(dir.join("history.csv"))

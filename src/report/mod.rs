@@ -79,6 +79,14 @@ impl OutputDir<'_> {
         Ok(plot::save_chart(self.0, stem, picture)?)
     }
 
+    /// Removes file `name` if it is there (a checkpoint a finished run no longer needs).
+    pub fn remove(&self, name: &str) -> Result<(), ReportError> {
+        match std::fs::remove_file(self.path(name)) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(self.named(name)(e)),
+            _ => Ok(()),
+        }
+    }
+
     /// The effective case (after overrides), so the run can be repeated from its folder.
     pub fn case(&self, case: &crate::case::Case) -> Result<(), ReportError> {
         self.bytes("case.toml", case.text.as_bytes())

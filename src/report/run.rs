@@ -19,6 +19,9 @@ pub struct RunManifest {
     /// The unmodified pair's FE stiffness run, relative to the run folder.
     pub fe_stiffness_run: String,
     pub full: bool,
+    /// Where a stop request ended the run, and how to continue it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interrupted: Option<String>,
 }
 
 /// A table of the report.
@@ -41,6 +44,9 @@ struct Section {
 /// The headline numbers of the whole chain (`summary.json`); null where a stage did not run.
 #[derive(Debug, Clone, Serialize)]
 pub struct RunSummary {
+    /// Where a stop request ended the run (absent for a run that finished).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub interrupted: Option<String>,
     pub case: Option<String>,
     pub torque_nm: Option<f64>,
     pub mesh_stiffness_ltca_n_per_m: Option<f64>,
@@ -152,14 +158,19 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
             .and_then(|v| v.get(key))
             .and_then(|v| v.as_f64())
     };
-    // The unmodified pair's low-speed run (the FE stiffness stage); a diverged run counts as
-    // missing.
+    // The unmodified pair's low-speed run (the FE stiffness stage); a diverged or interrupted
+    // run counts as missing.
     let fe_run = manifest.as_ref().map_or_else(
         || format!("fe/{unmodified_name}-stiffness"),
         |m| m.fe_stiffness_run.clone(),
     );
-    let fe = read(dir, &fe_run).filter(|s| s.get("diverged").is_none_or(|d| d.is_null()));
+    let fe = read(dir, &fe_run).filter(|s| {
+        ["diverged", "interrupted"]
+            .iter()
+            .all(|key| s.get(key).is_none_or(|d| d.is_null()))
+    });
     let summary = RunSummary {
+        interrupted: manifest.as_ref().and_then(|m| m.interrupted.clone()),
         case: field(&ltca, &["case"]).and_then(|c| c.as_str().map(String::from)),
         torque_nm: number(&ltca, &["torque_nm"]),
         mesh_stiffness_ltca_n_per_m: unmodified_number("mesh_stiffness_mean_n_per_m"),
@@ -197,7 +208,7 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
             &["f_natural_lumped_driver_held_hz"],
         ),
     };
-    let sections = sections(
+    let mut sections = sections(
         dir,
         &summary,
         &fe_run,
@@ -211,6 +222,19 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
             &compare,
         ],
     );
+    if let Some(message) = &summary.interrupted {
+        sections.insert(
+            0,
+            Section {
+                title: "The run stopped early".into(),
+                text: vec![format!(
+                    "{message}. The sections below show what the stages before the stop wrote; a number marked – was not reached."
+                )],
+                tables: Vec::new(),
+                plots: Vec::new(),
+            },
+        );
+    }
     let out = OutputDir(dir);
     std::fs::create_dir_all(dir.join("tables")).map_err(|source| ReportError::Io {
         path: dir.join("tables").display().to_string(),

@@ -371,6 +371,8 @@ pub struct FeSummary {
     /// Threads the wall times were measured with.
     pub wall_threads: usize,
     pub diverged: Option<String>,
+    /// Where a stop request ended the run early ([`crate::interrupt`]).
+    pub interrupted: Option<String>,
     pub dt_critical_coupled_s: Option<f64>,
     pub dt_critical_coupled_checks: Vec<CoupledStep>,
     pub model: String,
@@ -409,8 +411,9 @@ pub struct FeStudy {
     pub summary: FeSummary,
 }
 
-/// Runs a prepared scene and analyses it; `progress` sees the fraction done. A diverged run is
-/// a result too (`summary.diverged` says why), so its partial histories can be written.
+/// Runs a prepared scene and analyses it; `progress` sees the fraction done. A diverged or
+/// interrupted run is a result too (`summary.diverged` or `summary.interrupted` says why), so
+/// its partial histories can be written.
 pub fn run(
     case: &Case,
     scene: &Scene,
@@ -548,6 +551,7 @@ pub fn run(
         total_wall_s: started.elapsed().as_secs_f64() + prepared.setup_wall_s,
         wall_threads: rayon::current_num_threads(),
         diverged: outcome.diverged,
+        interrupted: outcome.interrupted,
         dt_critical_coupled_s: outcome
             .coupled_steps
             .iter()

@@ -36,6 +36,18 @@ pub enum StudyError {
     Input(String),
 }
 
+/// The summary of a run stopped on request ([`crate::interrupt`]): where it stopped and how to
+/// go on. It takes the place of the finished run's summary.json.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct Interrupted {
+    pub case: String,
+    pub command: String,
+    /// Where the run stopped and what is kept.
+    pub interrupted: String,
+    /// The command line that continues it, where the command can resume.
+    pub resume: Option<String>,
+}
+
 /// Progress of a long study: the stage's name, the work done and the whole.
 pub type Progress<'a> = &'a (dyn Fn(&str, usize, usize) + Sync);
 

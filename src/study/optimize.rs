@@ -245,6 +245,9 @@ pub struct OptimizeSummary {
     pub candidates: Vec<CandidateLine>,
     /// The explicit-FE cross-check (`--fe-check`).
     pub fe_check: Option<FeCheck>,
+    /// Where a stop request ended the FE cross-check (absent when it finished or did not run).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub interrupted: Option<String>,
     pub model: &'static str,
 }
 
@@ -745,6 +748,7 @@ fn summarize(
             })
             .collect(),
         fe_check: None,
+        interrupted: None,
         model: "LTCA on the unmodified bodies meshed once (case mesh); the relief enters as the initial gap of the exact modified profiles; frictionless, quasi-static; STE = r_b2 phi of the driven gear",
     })
 }

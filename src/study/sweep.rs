@@ -6,7 +6,7 @@ use serde::Serialize;
 
 use crate::case::Case;
 use crate::lumped::{run_up, RunUp};
-use crate::sweep::{self, SweepPoint};
+use crate::sweep::{self, SweepPoint, SweepProgress};
 
 use super::lumped::{mode_frequencies_hz, setup, LumpedSetup};
 use super::{RpmRange, StudyError};
@@ -17,6 +17,44 @@ pub struct SweepOptions {
     pub rpm: RpmRange,
     /// Also run up through the range in this many seconds (a linear speed ramp).
     pub run_up_s: Option<f64>,
+    /// Continue this interrupted sweep (made with the same case and speeds).
+    pub resume: Option<SweepCheckpoint>,
+}
+
+/// What an interrupted sweep leaves (`sweep_checkpoint.json`): the case and speeds it ran
+/// with and the points and states of both directions, so `--resume` finishes it with the
+/// points an uninterrupted sweep gives.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SweepCheckpoint {
+    /// The effective case file.
+    pub case_text: String,
+    pub rpm: Vec<f64>,
+    pub progress: SweepProgress,
+}
+
+impl SweepCheckpoint {
+    /// Where the sweep stopped, in words.
+    pub fn describe(&self) -> String {
+        let n = self.rpm.len();
+        let (up, down) = (self.progress.up.len(), self.progress.down.len());
+        let last = |points: &[SweepPoint]| {
+            points.last().map_or(String::new(), |p| {
+                format!(" (to {:.1} rpm)", p.driver_speed_rpm)
+            })
+        };
+        format!(
+            "interrupted after {up} of {n} speeds up{} and {down} of {n} down{}",
+            last(&self.progress.up),
+            last(&self.progress.down)
+        )
+    }
+}
+
+/// How a sweep ended.
+pub enum SweepRun {
+    Done(Box<SweepStudy>),
+    /// Stopped on request ([`crate::interrupt`]) before every speed was swept.
+    Interrupted(SweepCheckpoint),
 }
 
 /// Samples kept of the run-up.
@@ -71,14 +109,42 @@ pub struct SweepStudy {
     pub summary: SweepSummary,
 }
 
-/// Sweeps the case's lumped model over `options.rpm`.
-pub fn run(case: &Case, options: &SweepOptions) -> Result<SweepStudy, StudyError> {
+/// Sweeps the case's lumped model over `options.rpm`, from the start or from
+/// `options.resume`; a stop request ([`crate::interrupt`]) ends it between two speeds.
+pub fn run(case: &Case, options: &SweepOptions) -> Result<SweepRun, StudyError> {
     let started = std::time::Instant::now();
     let setup = setup(case)?;
     let rpms = options.rpm.0.clone();
     let model = &setup.model;
+    let progress = match &options.resume {
+        None => SweepProgress::start(model),
+        Some(checkpoint) if !case.is_same_case(&checkpoint.case_text) => {
+            return Err(StudyError::Input(
+                "the interrupted sweep ran another case (or other --set values); run it again \
+                 without --resume, or resume with the case it ran"
+                    .into(),
+            ))
+        }
+        Some(checkpoint) if checkpoint.rpm != rpms => {
+            return Err(StudyError::Input(format!(
+            "the interrupted sweep ran {} speeds from {} to {} rpm; resume it with the same --rpm",
+            checkpoint.rpm.len(),
+            checkpoint.rpm[0],
+            checkpoint.rpm[checkpoint.rpm.len() - 1]
+        )))
+        }
+        Some(checkpoint) => checkpoint.progress.clone(),
+    };
     let sweep_started = std::time::Instant::now();
-    let (up, down) = sweep::sweep(model, &rpms);
+    let progress = sweep::continue_sweep(model, &rpms, progress, &crate::interrupt::stop_requested);
+    if !progress.is_complete(rpms.len()) {
+        return Ok(SweepRun::Interrupted(SweepCheckpoint {
+            case_text: case.text.clone(),
+            rpm: rpms,
+            progress,
+        }));
+    }
+    let (up, down) = progress.into_points();
     let wall_s = sweep_started.elapsed().as_secs_f64();
     let run_up = match options.run_up_s {
         Some(duration) if !(duration > 0.0 && duration.is_finite()) => {
@@ -166,7 +232,7 @@ pub fn run(case: &Case, options: &SweepOptions) -> Result<SweepStudy, StudyError
         strongest_peaks: strongest,
         model: setup.model_note.clone(),
     };
-    Ok(SweepStudy {
+    Ok(SweepRun::Done(Box::new(SweepStudy {
         setup,
         rpms,
         up,
@@ -174,5 +240,5 @@ pub fn run(case: &Case, options: &SweepOptions) -> Result<SweepStudy, StudyError
         run_up,
         primary_rpm_expected,
         summary,
-    })
+    })))
 }

@@ -37,6 +37,10 @@ pub enum Command {
         /// at three speeds, the paper-stiffness study).
         #[arg(long)]
         full: bool,
+        /// Continue the interrupted run in --out DIR: finished explicit FE runs of the same case
+        /// are taken as they are, the other stages run again (seconds each).
+        #[arg(long)]
+        resume: bool,
     },
     /// Derived geometry of the pair: radii, contact ratio, line of action, contact points,
     /// backlash, resolved reliefs; writes summary.json, a drawing (SVG, PNG) and profile CSVs.
@@ -84,6 +88,10 @@ pub enum Command {
         /// transient): writes runup.csv and runup.png.
         #[arg(long, value_name = "SECONDS")]
         run_up_s: Option<f64>,
+        /// Continue the interrupted sweep in --out DIR (same case, --set and --rpm) from its
+        /// sweep_checkpoint.json; the result is the uninterrupted sweep's.
+        #[arg(long)]
+        resume: bool,
     },
     /// Floquet stability map of the linear time-periodic mesh model over a speed range: the
     /// largest multiplier of the monodromy matrix per driver speed (> 1: parametric

@@ -9,7 +9,7 @@
 
 use std::path::Path;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 
 use geardyn::case::StiffnessSource;
 use geardyn::report::run::RunManifest;
@@ -21,24 +21,61 @@ use super::args::{CommonArgs, OptimizeArgs};
 use super::progress::fe_check_run;
 use super::{compare, geometry, load, ltca, mesh, optimize_into, output_dir, stability, sweep};
 
-pub fn run(args: &CommonArgs, full: bool) -> Result<()> {
+pub fn run(args: &CommonArgs, full: bool, resume: bool) -> Result<()> {
     let case = load(args, Vec::new())?;
+    // --resume takes the folder of an earlier run, with its --full.
+    let full = match (&args.out, resume) {
+        (None, true) => anyhow::bail!("--resume needs --out DIR, the interrupted run's folder"),
+        (Some(dir), true) => {
+            let path = dir.join("run.json");
+            let earlier: RunManifest = std::fs::read_to_string(&path)
+                .ok()
+                .and_then(|text| serde_json::from_str(&text).ok())
+                .with_context(|| {
+                    format!(
+                        "{} is not a `geardyn run` folder (no readable run.json)",
+                        dir.display()
+                    )
+                })?;
+            eprintln!(
+                "resuming the run in {}: finished explicit FE runs of the same case are taken \
+                 as they are, the other stages (seconds each) run again",
+                dir.display()
+            );
+            full || earlier.full
+        }
+        (_, false) => full,
+    };
     let dir = output_dir(args, "run", &case)?;
     let started = std::time::Instant::now();
     let unmodified = study::unmodified_name(&case);
     // The report finds the stages through this manifest (and is written even when a stage
     // fails, with what the stages before it left).
-    let manifest = RunManifest {
+    let mut manifest = RunManifest {
         unmodified_relief: unmodified.clone(),
         fe_stiffness_run: format!(
             "fe/{}",
             fe_run_folder(&unmodified, study::compare::STIFFNESS_SCENE)
         ),
         full,
+        interrupted: None,
     };
     OutputDir(&dir).json("run.json", &manifest)?;
     let plan = study::run::RunPlan::new(full);
-    let result = stages(args, &case, &dir, (&manifest, &plan), started);
+    let mut reached = 0;
+    let result = stages(args, &case, &dir, (&manifest, &plan), started, &mut reached);
+    if let Err(e) = &result {
+        if geardyn::interrupt::stop_requested() {
+            let stages = study::run::STAGES;
+            manifest.interrupted = Some(format!(
+                "interrupted in stage {reached}/{} ({}): {e:#}. `geardyn run --resume --out {}` continues it, taking the finished explicit FE runs as they are",
+                stages.len(),
+                stages[reached.max(1) - 1],
+                dir.display()
+            ));
+            OutputDir(&dir).json("run.json", &manifest)?;
+        }
+    }
     geardyn::report::run::write(&dir)?;
     println!("report: {}", dir.join("index.html").display());
     result?;
@@ -56,30 +93,37 @@ fn stages(
     dir: &Path,
     (manifest, plan): (&RunManifest, &study::run::RunPlan),
     started: std::time::Instant,
+    reached: &mut usize,
 ) -> Result<()> {
     let sub = |name: &str| CommonArgs {
         out: Some(dir.join(name)),
         ..args.clone()
     };
     let stages = study::run::STAGES;
-    let mut stage_number = 0;
-    let mut announce = || {
-        stage_number += 1;
+    // Each stage begins by checking for a stop request: a stage that polls none (seconds
+    // long) finishes, and the run stops before the next.
+    let mut announce = || -> Result<()> {
+        if geardyn::interrupt::stop_requested() {
+            anyhow::bail!("stopped on request after stage {}", *reached);
+        }
+        *reached += 1;
         println!(
-            "\n== {stage_number}/{} {} ({:.0} s so far)",
+            "\n== {}/{} {} ({:.0} s so far)",
+            *reached,
             stages.len(),
-            stages[stage_number - 1],
+            stages[*reached - 1],
             started.elapsed().as_secs_f64()
         );
+        Ok(())
     };
 
-    announce();
+    announce()?;
     geometry(&sub("geometry"))?;
     mesh(&sub("mesh"), None)?;
-    announce();
+    announce()?;
     ltca(&sub("ltca"), None, plan.ltca_positions, None)?;
 
-    announce();
+    announce()?;
     // The unmodified pair's runs are the cross-check's baseline runs: one effective case.
     let unmodified_case = load(args, study::optimize::unmodified_fe_overrides(case))?;
     let fe_root = dir.join("fe");
@@ -92,26 +136,27 @@ fn stages(
     .map_err(anyhow::Error::msg)?;
     let stiffness_csv = stiffness_run.join("stiffness.csv");
 
-    announce();
+    announce()?;
     let rpm = plan.sweep_rpm.clone();
     sweep(
         &sub("sweep-ltca"),
         rpm.clone(),
         &LumpedShorthands::default(),
         None,
+        false,
     )?;
     let fe_k = LumpedShorthands {
         stiffness: Some(StiffnessSource::Csv(stiffness_csv.clone())),
         ..LumpedShorthands::default()
     };
-    sweep(&sub("sweep-fe"), rpm, &fe_k, None)?;
+    sweep(&sub("sweep-fe"), rpm, &fe_k, None, false)?;
     stability(
         &sub("stability"),
         &plan.stability_rpm,
         &LumpedShorthands::default(),
     )?;
 
-    announce();
+    announce()?;
     let optimize_dir = dir.join("optimize");
     std::fs::create_dir_all(&optimize_dir)?;
     optimize_into(
@@ -121,7 +166,7 @@ fn stages(
         Some((fe_root.clone(), plan.fe_check.clone())),
     )?;
 
-    announce();
+    announce()?;
     let high_run = fe_root.join(fe_run_folder(
         &manifest.unmodified_relief,
         study::compare::SPEED_SCENE,

@@ -20,9 +20,18 @@ use geardyn::study::{
 use args::{Cli, Command, CommonArgs, OptimizeArgs, ValidationStudy};
 use progress::{fe_check_run, fe_run, fe_run_reusing, progress_bar, stage, staged_bar};
 
+/// The exit code of a run stopped on SIGINT or SIGTERM (128 + SIGINT, as shells report it).
+const EXIT_INTERRUPTED: u8 = 130;
+
 fn main() -> ExitCode {
-    let result = match Cli::parse().command {
-        Command::Run { common, full } => chain::run(&common, full),
+    let cli = Cli::parse();
+    install_stop_handler();
+    let result = match cli.command {
+        Command::Run {
+            common,
+            full,
+            resume,
+        } => chain::run(&common, full, resume),
         Command::Geometry(args) => geometry(&args),
         Command::Mesh { common, relief } => mesh(&common, relief.as_deref()),
         Command::Ltca {
@@ -36,7 +45,8 @@ fn main() -> ExitCode {
             rpm,
             model,
             run_up_s,
-        } => sweep(&common, rpm, &model, run_up_s),
+            resume,
+        } => sweep(&common, rpm, &model, run_up_s, resume),
         Command::Stability { common, rpm, model } => stability(&common, &rpm, &model),
         Command::Fe { common, options } => fe(&common, &options),
         Command::Validate {
@@ -81,11 +91,41 @@ fn main() -> ExitCode {
             .map_err(Into::into),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(()) if !geardyn::interrupt::stop_requested() => ExitCode::SUCCESS,
+        // The command finished its work before it looked at the request: everything is
+        // written, but the user asked for a stop and a script should see that.
+        Ok(()) => {
+            eprintln!("stopped on request after the work was done; every output is complete");
+            ExitCode::from(EXIT_INTERRUPTED)
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+            if geardyn::interrupt::stop_requested() {
+                ExitCode::from(EXIT_INTERRUPTED)
+            } else {
+                ExitCode::FAILURE
+            }
         }
+    }
+}
+
+/// SIGINT (Ctrl-C) and SIGTERM ask the long loops to stop at their next consistent state and
+/// write what they have (every file is written whole, to a temporary name renamed into place);
+/// a second signal quits at once.
+fn install_stop_handler() {
+    let installed = ctrlc::set_handler(|| {
+        if geardyn::interrupt::stop_requested() {
+            eprintln!("\nsecond stop request: quitting now");
+            std::process::exit(EXIT_INTERRUPTED.into());
+        }
+        geardyn::interrupt::request_stop();
+        eprintln!(
+            "\nstop requested: finishing the current step and writing what is done \
+             (send it again to quit at once)"
+        );
+    });
+    if let Err(e) = installed {
+        eprintln!("warning: no stop handler ({e}); Ctrl-C ends the run without writing it");
     }
 }
 
@@ -208,6 +248,16 @@ fn optimize_into(
                 if plan.scenes[s] {
                     let out = root.join(format!("{}-{name}", candidate.name));
                     scene_runs[s] = Some(fe_check_run(&with_relief, name, &out));
+                    if geardyn::interrupt::stop_requested() {
+                        let message = format!(
+                            "the FE cross-check was interrupted in {}; its finished runs in {} are taken as they are by the next run with the same --out",
+                            out.display(),
+                            root.display()
+                        );
+                        result.summary.interrupted = Some(message.clone());
+                        OutputDir(dir).json("summary.json", &result.summary)?;
+                        anyhow::bail!(message);
+                    }
                 }
             }
             runs.push(Some(scene_runs));
@@ -238,12 +288,68 @@ fn sweep(
     rpm: RpmRange,
     options: &LumpedShorthands,
     run_up_s: Option<f64>,
+    resume: bool,
 ) -> Result<()> {
     let case = lumped_case(args, options)?;
-    let result = study::sweep::run(&case, &study::sweep::SweepOptions { rpm, run_up_s })?;
-    print!("{}", report::lumped::setup_console(&result.setup));
+    let checkpoint_file = "sweep_checkpoint.json";
+    let resume = match (&args.out, resume) {
+        (None, true) => anyhow::bail!("--resume needs --out DIR, the interrupted sweep's folder"),
+        (Some(dir), true) => {
+            let path = dir.join(checkpoint_file);
+            let text = std::fs::read_to_string(&path).with_context(|| {
+                format!(
+                    "cannot read {}: is {} an interrupted sweep's folder?",
+                    path.display(),
+                    dir.display()
+                )
+            })?;
+            let checkpoint: study::sweep::SweepCheckpoint = serde_json::from_str(&text)
+                .with_context(|| format!("{} is not a sweep checkpoint", path.display()))?;
+            eprintln!("resuming: {}", checkpoint.describe());
+            Some(checkpoint)
+        }
+        (_, false) => None,
+    };
+    let options = study::sweep::SweepOptions {
+        rpm,
+        run_up_s,
+        resume,
+    };
+    eprintln!(
+        "sweeping {} speeds up and down (Ctrl-C stops and keeps the points for --resume) ...",
+        options.rpm.0.len()
+    );
+    let outcome = study::sweep::run(&case, &options)?;
     let dir = output_dir(args, "sweep", &case)?;
-    report::lumped::write_sweep(OutputDir(&dir), &case, &result)?;
+    let out = OutputDir(&dir);
+    let result = match outcome {
+        study::sweep::SweepRun::Done(result) => result,
+        study::sweep::SweepRun::Interrupted(checkpoint) => {
+            let message = checkpoint.describe();
+            out.case(&case)?;
+            out.json(checkpoint_file, &checkpoint)?;
+            out.json(
+                "summary.json",
+                &study::Interrupted {
+                    case: case.name().to_string(),
+                    command: "sweep".into(),
+                    interrupted: message.clone(),
+                    resume: Some(format!(
+                        "geardyn sweep ... --resume --out {} (the same case, --set and --rpm)",
+                        dir.display()
+                    )),
+                },
+            )?;
+            anyhow::bail!(
+                "sweep {message}; its points are kept in {}: add --resume --out {} to continue",
+                dir.join(checkpoint_file).display(),
+                dir.display()
+            );
+        }
+    };
+    print!("{}", report::lumped::setup_console(&result.setup));
+    report::lumped::write_sweep(out, &case, &result)?;
+    out.remove(checkpoint_file)?;
     print!("{}", report::lumped::sweep_console(&result));
     println!("wrote {}", dir.display());
     Ok(())

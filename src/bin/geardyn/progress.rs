@@ -12,7 +12,8 @@ use geardyn::report::{self, OutputDir};
 use geardyn::study;
 
 /// Prepares and runs an explicit scene with progress (a bar, or a line every 10 % without a
-/// terminal) and writes it to `dir`; a diverged run is written too, then reported as an error.
+/// terminal) and writes it to `dir`; a diverged or interrupted run is written too, then reported
+/// as an error.
 pub fn fe_run(case: &Case, scene: &Scene, dir: &Path) -> Result<study::fe::FeStudy> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     eprintln!("{}", report::fe::scene_line(scene));
@@ -39,7 +40,12 @@ pub fn fe_run(case: &Case, scene: &Scene, dir: &Path) -> Result<study::fe::FeStu
     })?;
     bar.finish_and_clear();
     report::fe::write(OutputDir(dir), case, &result)?;
-    if let Some(message) = &result.summary.diverged {
+    if let Some(message) = result
+        .summary
+        .diverged
+        .as_ref()
+        .or(result.summary.interrupted.as_ref())
+    {
         anyhow::bail!("{message}; partial results in {}", dir.display());
     }
     print!("{}", report::fe::console(&result));
@@ -51,9 +57,8 @@ pub fn fe_run(case: &Case, scene: &Scene, dir: &Path) -> Result<study::fe::FeStu
 /// so an interrupted chain resumes. summary.json is written last, so a run is finished when it
 /// is there; it is removed before a new run, so a stale one is never taken for the new case's.
 pub fn fe_run_reusing(case: &Case, scene: &str, dir: &Path) -> Result<()> {
-    let table = |text: &str| text.parse::<toml::Table>().ok();
-    let same_case = std::fs::read_to_string(dir.join("case.toml"))
-        .is_ok_and(|text| table(&text).is_some_and(|t| Some(t) == table(&case.text)));
+    let same_case =
+        std::fs::read_to_string(dir.join("case.toml")).is_ok_and(|text| case.is_same_case(&text));
     let finished = report::compare::read_fe_run(dir).is_ok();
     if same_case && finished {
         eprintln!("reusing the finished run in {}", dir.display());

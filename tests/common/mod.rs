@@ -1,0 +1,67 @@
+//! Helpers shared by the integration tests that drive the binary.
+
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+/// Starts `command`, waits for a line containing `marker` on its stdout or stderr (`stderr`
+/// picks which), waits `delay` more, sends SIGTERM and returns the finished process's status
+/// code and what it printed to stderr.
+pub fn interrupt(
+    command: &mut Command,
+    marker: &str,
+    stderr: bool,
+    delay: Duration,
+) -> (i32, String) {
+    let mut child: Child = command
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (watched, other): (Box<dyn std::io::Read + Send>, Box<dyn std::io::Read + Send>) = if stderr
+    {
+        (
+            Box::new(child.stderr.take().unwrap()),
+            Box::new(child.stdout.take().unwrap()),
+        )
+    } else {
+        (
+            Box::new(child.stdout.take().unwrap()),
+            Box::new(child.stderr.take().unwrap()),
+        )
+    };
+    // Drain the other pipe so the child never blocks on it.
+    let other = std::thread::spawn(move || {
+        let mut text = String::new();
+        let _ = std::io::Read::read_to_string(&mut BufReader::new(other), &mut text);
+        text
+    });
+    let mut lines = BufReader::new(watched).lines();
+    let mut seen = String::new();
+    for line in lines.by_ref() {
+        let line = line.unwrap();
+        seen += &line;
+        seen.push('\n');
+        if line.contains(marker) {
+            break;
+        }
+    }
+    assert!(
+        seen.contains(marker),
+        "the run ended before printing {marker:?}:\n{seen}"
+    );
+    std::thread::sleep(delay);
+    let killed = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    for line in lines {
+        seen += &line.unwrap();
+        seen.push('\n');
+    }
+    let status = child.wait().unwrap();
+    let other = other.join().unwrap();
+    let stderr_text = if stderr { seen } else { other };
+    (status.code().unwrap_or(-1), stderr_text)
+}

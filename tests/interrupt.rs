@@ -1,0 +1,152 @@
+//! SIGTERM to a running `geardyn`: the run stops at its next consistent state, every file on
+//! disk is whole (no temporary file left), the summary says where it stopped, the exit code is
+//! 130, and `--resume` finishes a sweep with the points an uninterrupted sweep gives.
+
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+use std::time::Duration;
+
+use common::interrupt;
+
+use geardyn::report::is_timing_key;
+
+const DEFAULT: &str = include_str!("../data/cases/paper36.toml");
+
+fn geardyn() -> Command {
+    Command::new(assert_cmd::cargo::cargo_bin!("geardyn"))
+}
+
+fn read_json(path: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
+}
+
+/// No temporary file of an atomic write is left anywhere under `dir`.
+fn assert_no_partial_files(dir: &Path) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            assert_no_partial_files(&path);
+        } else {
+            let name = path.file_name().unwrap().to_string_lossy().into_owned();
+            assert!(!name.contains(".tmp"), "{} left behind", path.display());
+        }
+    }
+}
+
+fn coarse_case(dir: &Path) -> std::path::PathBuf {
+    let case = dir.join("case.toml");
+    std::fs::write(
+        &case,
+        DEFAULT.replace("fine_element_mm = 0.2", "fine_element_mm = 0.6"),
+    )
+    .unwrap();
+    case
+}
+
+#[test]
+fn an_interrupted_fe_run_keeps_its_history_and_says_where_it_stopped() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = coarse_case(dir.path());
+    let out = dir.path().join("fe");
+    // The stiffness scene runs for minutes: the signal comes 2 s into the time loop.
+    let (code, stderr) = interrupt(
+        geardyn()
+            .args(["fe", "--scene", "stiffness"])
+            .arg(&case)
+            .arg("--out")
+            .arg(&out),
+        " steps",
+        false,
+        Duration::from_secs(2),
+    );
+    assert_eq!(code, 130, "{stderr}");
+    assert!(stderr.contains("interrupted at t ="), "{stderr}");
+    let summary = read_json(&out.join("summary.json"));
+    let message = summary["interrupted"].as_str().unwrap();
+    assert!(message.contains("results up to t ="), "{message}");
+    assert!(summary["diverged"].is_null());
+    let mut history = csv::Reader::from_path(out.join("history.csv")).unwrap();
+    let rows = history
+        .records()
+        .collect::<Result<Vec<_>, _>>()
+        .unwrap()
+        .len();
+    assert!(rows > 1, "history.csv has {rows} rows");
+    assert_no_partial_files(&out);
+}
+
+#[test]
+fn an_interrupted_sweep_resumes_to_the_uninterrupted_result() {
+    let dir = tempfile::tempdir().unwrap();
+    let rpm = "100:12000:20000";
+    let sweep = |out: &Path| {
+        let mut command = geardyn();
+        command
+            .args(["sweep", "--stiffness", "pe", "--rpm", rpm, "--out"])
+            .arg(out);
+        command
+    };
+    let whole = dir.path().join("whole");
+    let status = sweep(&whole).output().unwrap();
+    assert!(status.status.success());
+
+    let parted = dir.path().join("parted");
+    let (code, stderr) = interrupt(
+        &mut sweep(&parted),
+        "sweeping",
+        true,
+        Duration::from_millis(1500),
+    );
+    assert_eq!(code, 130, "{stderr}");
+    assert!(stderr.contains("--resume"), "{stderr}");
+    let summary = read_json(&parted.join("summary.json"));
+    assert!(
+        summary["interrupted"]
+            .as_str()
+            .unwrap()
+            .contains("of 20000 speeds up"),
+        "{summary}"
+    );
+    assert!(parted.join("sweep_checkpoint.json").exists());
+    assert!(!parted.join("sweep.csv").exists());
+    assert_no_partial_files(&parted);
+
+    // The wrong speeds are refused; the same ones finish the sweep.
+    let wrong = geardyn()
+        .args([
+            "sweep",
+            "--stiffness",
+            "pe",
+            "--rpm",
+            "100:12000:300",
+            "--resume",
+            "--out",
+        ])
+        .arg(&parted)
+        .output()
+        .unwrap();
+    assert!(!wrong.status.success());
+    assert!(String::from_utf8_lossy(&wrong.stderr).contains("same --rpm"));
+    let resumed = sweep(&parted).arg("--resume").output().unwrap();
+    assert!(
+        resumed.status.success(),
+        "{}",
+        String::from_utf8_lossy(&resumed.stderr)
+    );
+    assert!(!parted.join("sweep_checkpoint.json").exists());
+    assert_eq!(
+        std::fs::read(whole.join("sweep.csv")).unwrap(),
+        std::fs::read(parted.join("sweep.csv")).unwrap(),
+        "the resumed sweep differs from the uninterrupted one"
+    );
+    let strip = |mut v: serde_json::Value| {
+        v.as_object_mut().unwrap().retain(|k, _| !is_timing_key(k));
+        v
+    };
+    assert_eq!(
+        strip(read_json(&whole.join("summary.json"))),
+        strip(read_json(&parted.join("summary.json")))
+    );
+}

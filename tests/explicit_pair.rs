@@ -188,7 +188,7 @@ fn relaxed(p: &PreparedScene, duration: f64) -> (PairIntegrator<'_>, PairState) 
 /// near the optimum for the mesh mode) against the LTCA on the same mesh at the same position.
 /// Tolerance 8 %: at 1.5 mm flank elements the two contact discretizations differ by 6 % (the
 /// FE's two-pass Gauss-point contact against the LTCA's exact-profile lattice) and the penalty
-/// (factor 16) adds 0.2 %; the difference shrinks with refinement (validation/README.md).
+/// (factor 16) adds 0.2 %; the difference shrinks with refinement (validation/low-speed).
 #[test]
 fn static_dte_matches_the_ltca_on_the_same_mesh() {
     let case = coarse_case();

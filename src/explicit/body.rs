@@ -363,7 +363,7 @@ impl ExplicitBody {
 /// compiler's version of the generic kernel fills the lanes of its work arrays one scalar at a
 /// time and reads them back as vectors (a store-forwarding stall on each); here the nodes go
 /// from memory to registers as (x, y) pairs and back the same way, and the kernel takes 1.4×
-/// less time on the 3000 rpm body (validation/README.md, Cost).
+/// less time on the 3000 rpm body (validation/performance).
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
     use super::{ExplicitBody, ForceOutput, LANES};

@@ -1209,7 +1209,7 @@ impl<'a> PairIntegrator<'a> {
     /// from tripping the check) and the transmitted work (at low speed the others are small: at
     /// 60 rpm a tenth of a joule, so a discretization error of a millijoule per mesh cycle
     /// would read as divergence). Stable runs stay below 5e-5 of the net work; a step 1.3 × the
-    /// critical one on the loaded pair passes 1 % within 0.15 ms (validation/README.md).
+    /// critical one on the loaded pair passes 1 % within 0.15 ms (validation/fe-elements).
     pub fn update_energy(&mut self, state: &PairState) -> Result<(), String> {
         self.energy.kinetic = self.kinetic(state);
         let total = self.energy.kinetic + self.energy.strain;

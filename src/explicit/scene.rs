@@ -35,7 +35,7 @@
 //! scaled run is 40 % larger, the low-passed one 6 %; the ringing also loads the gear body's
 //! inertia between the contact and the hub, so W = kδ holds only approximately and single bins
 //! of k(θ) move by up to 4 % (the static TE's peak-to-peak by 1.5 % at margin 3, 10.7 % at
-//! margin 2; validation/README.md). The level-1
+//! margin 2; validation/low-speed). The level-1
 //! impact detail is not reported for a scaled run (its 25–50 kHz band then holds body modes
 //! lowered by √s). Where 5·margin·f_mesh ≥ f_n (the 3000 rpm scenes: f_mesh = 1 800 Hz against
 //! f_n ≈ 3.1 kHz), s = 1: the dynamics matter and nothing is scaled. The scaled mesh mode is

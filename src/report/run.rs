@@ -397,7 +397,7 @@ fn sections(
     };
     let trust = vec![
         format!(
-            "LTCA (2D FE bodies, exact contact, quasi-static, frictionless; {} mm flank elements here): k(θ), STE and load sharing; the reference for relief. Its mesh convergence is in validation/README.md and `geardyn validate quick`.",
+            "LTCA (2D FE bodies, exact contact, quasi-static, frictionless; {} mm flank elements here): k(θ), STE and load sharing; the reference for relief. Its mesh convergence is in validation/ltca and `geardyn validate quick`.",
             show(number(ltca, &["fine_element_mm"]), 2)
         ),
         format!(

@@ -135,7 +135,7 @@ pub fn run(case: &Case, progress: Progress) -> Result<QuickValidation, StudyErro
             case.file.mesh.fine_element_mm
         ),
         (mean(&case_mesh), mean(&finest)),
-        "the same LTCA at 0.05 mm flanks (validation/README.md, mesh refinement)",
+        "the same LTCA at 0.05 mm flanks (validation/ltca, mesh refinement)",
         (CheckKind::Relative, 0.005),
     ));
     let worst_balance = case_mesh

@@ -56,11 +56,73 @@ pub struct SweepPoint {
     pub converged: bool,
 }
 
-fn analyse(model: &MeshModel, rpm: f64, start: State) -> (SweepPoint, State) {
+/// Where a sweep's response grew without bound ([`MeshModel::has_diverged`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SweepDivergence {
+    pub driver_speed_rpm: f64,
+    /// "up" or "down".
+    pub direction: String,
+    /// Mesh periods integrated at that speed before the response left the model's range.
+    pub periods: usize,
+    /// Largest Floquet multiplier of the linear model at that speed (> 1: parametric
+    /// instability).
+    pub floquet_max_multiplier: f64,
+    /// The bound it passed [m].
+    pub bound_m: f64,
+}
+
+impl std::fmt::Display for SweepDivergence {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the lumped response diverged at {:.1} rpm (sweeping {}): after {} mesh periods it was \
+             farther than {:.3e} mm from the static state (1000 static deflections)",
+            self.driver_speed_rpm,
+            self.direction,
+            self.periods,
+            self.bound_m * 1e3
+        )?;
+        if self.floquet_max_multiplier > 1.0 {
+            write!(
+                f,
+                ". The speed lies in a parametric-instability region (largest Floquet multiplier \
+                 {:.4} > 1) and the mesh damping is too small to hold the growth: raise the \
+                 damping (lumped.damping_ratio or --damping-ratio; 0.02-0.1 is usual for steel \
+                 spur gears) or keep the speeds out of the region (`geardyn stability` maps it)",
+                self.floquet_max_multiplier
+            )
+        } else {
+            write!(
+                f,
+                ". The linear model is not parametrically unstable here (largest Floquet \
+                 multiplier {:.4}), so a forced resonance grew: a mesh harmonic at a natural \
+                 frequency, with too little damping to bound it. Raise the damping \
+                 (lumped.damping_ratio or --damping-ratio; 0.02-0.1 is usual for steel spur gears)",
+                self.floquet_max_multiplier
+            )
+        }
+    }
+}
+
+fn analyse(
+    model: &MeshModel,
+    rpm: f64,
+    start: State,
+    direction: &str,
+) -> Result<(SweepPoint, State), SweepDivergence> {
     let speed = rpm * 2.0 * std::f64::consts::PI / 60.0;
     let tolerance = 1e-7;
     let steps = steps_per_period(model, speed);
     let s = steady_state(model, speed, steps, start, tolerance, 4000);
+    if s.diverged {
+        return Err(SweepDivergence {
+            driver_speed_rpm: rpm,
+            direction: direction.into(),
+            periods: s.periods,
+            floquet_max_multiplier: floquet_max_multiplier(model, speed, steps),
+            bound_m: model.divergence_bound(),
+        });
+    }
     let n = s.displacement.len() as f64;
     let mean = s.displacement.iter().sum::<f64>() / n;
     let rms = (s
@@ -104,14 +166,20 @@ fn analyse(model: &MeshModel, rpm: f64, start: State) -> (SweepPoint, State) {
         periods: s.periods,
         converged: s.converged,
     };
-    (point, s.start)
+    Ok((point, s.start))
 }
 
 /// Up-sweep and down-sweep over `rpms` (ascending), run in parallel with each other; each
-/// continues from the previous speed's steady state.
-pub fn sweep(model: &MeshModel, rpms: &[f64]) -> (Vec<SweepPoint>, Vec<SweepPoint>) {
+/// continues from the previous speed's steady state. Fails where the response diverges.
+pub fn sweep(
+    model: &MeshModel,
+    rpms: &[f64],
+) -> Result<(Vec<SweepPoint>, Vec<SweepPoint>), SweepDivergence> {
     let done = continue_sweep(model, rpms, SweepProgress::start(model), &|| false);
-    done.into_points()
+    match done.diverged {
+        Some(divergence) => Err(divergence),
+        None => Ok(done.into_points()),
+    }
 }
 
 /// A sweep part done: the points of each direction so far and the steady state the next speed
@@ -124,6 +192,9 @@ pub struct SweepProgress {
     /// Down-sweep points in the order swept (descending speed).
     pub down: Vec<SweepPoint>,
     pub down_state: State,
+    /// Where a direction diverged (the first found); that direction stops there, the points
+    /// before it are kept.
+    pub diverged: Option<SweepDivergence>,
 }
 
 impl SweepProgress {
@@ -134,6 +205,7 @@ impl SweepProgress {
             up_state: model.static_state(),
             down: Vec::new(),
             down_state: model.static_state(),
+            diverged: None,
         }
     }
 
@@ -150,41 +222,64 @@ impl SweepProgress {
     }
 }
 
-/// Continues `progress` over `rpms` (ascending) until both directions are done or `stop`
-/// returns true (asked before each speed); the two directions run in parallel. A sweep
-/// continued from its own progress gives the same points, bit for bit, as one run through.
+/// Continues `progress` over `rpms` (ascending) until both directions are done, one diverges
+/// (`diverged`; the other goes on) or `stop` returns true (asked before each speed); the two
+/// directions run in parallel. A sweep continued from its own progress gives the same points,
+/// bit for bit, as one run through.
 pub fn continue_sweep(
     model: &MeshModel,
     rpms: &[f64],
     progress: SweepProgress,
     stop: &(dyn Fn() -> bool + Sync),
 ) -> SweepProgress {
-    let run = |order: Vec<f64>, mut points: Vec<SweepPoint>, mut state: State| {
+    let run = |order: Vec<f64>, mut points: Vec<SweepPoint>, mut state: State, direction| {
         for rpm in order.into_iter().skip(points.len()) {
             if stop() {
                 break;
             }
-            let (point, next) = analyse(model, rpm, state);
-            state = next;
-            points.push(point);
+            match analyse(model, rpm, state, direction) {
+                Ok((point, next)) => {
+                    state = next;
+                    points.push(point);
+                }
+                Err(divergence) => return (points, state, Some(divergence)),
+            }
         }
-        (points, state)
+        (points, state, None)
     };
     let SweepProgress {
         up,
         up_state,
         down,
         down_state,
+        diverged,
     } = progress;
-    let ((up, up_state), (down, down_state)) = rayon::join(
-        || run(rpms.to_vec(), up, up_state),
-        || run(rpms.iter().rev().copied().collect(), down, down_state),
+    if diverged.is_some() {
+        return SweepProgress {
+            up,
+            up_state,
+            down,
+            down_state,
+            diverged,
+        };
+    }
+    let ((up, up_state, up_diverged), (down, down_state, down_diverged)) = rayon::join(
+        || run(rpms.to_vec(), up, up_state, "up"),
+        || {
+            run(
+                rpms.iter().rev().copied().collect(),
+                down,
+                down_state,
+                "down",
+            )
+        },
     );
     SweepProgress {
         up,
         up_state,
         down,
         down_state,
+        diverged: up_diverged.or(down_diverged),
     }
 }
 

@@ -1,7 +1,7 @@
 //! The 1-DOF mesh model against analytic solutions: the forced response of a constant-stiffness
 //! mesh (FRF), the Mathieu instability tongue from Floquet theory, and brute-force integration.
 
-use geardyn::lumped::{floquet_max_multiplier, steady_state, MeshModel, State};
+use geardyn::lumped::{floquet_max_multiplier, integrate_period, steady_state, MeshModel, State};
 use geardyn::stiffness::{MeshStiffness, PeriodicTable};
 use std::f64::consts::PI;
 
@@ -220,8 +220,13 @@ fn rk4_step_limit_is_where_theory_puts_it() {
         let period_time = steps as f64 * omega_h / wn;
         let speed = PERIOD / period_time;
         let periods = 3;
-        let s = steady_state(&free, speed, steps, (1e-9, 0.0), 0.0, periods);
-        let (x, v) = (s.displacement[0], s.velocity[0]);
+        // The integrator alone (`steady_state` would stop the unstable case at its divergence
+        // bound): the state after periods − 1 whole periods.
+        let mut state = State::from((1e-9, 0.0));
+        for _ in 0..periods - 1 {
+            state = integrate_period(&free, speed, steps, state, |_, _, _| {});
+        }
+        let (x, v) = (state.q[0], state.v[0]);
         let amplitude = (x * x + (v / wn).powi(2)).sqrt() / 1e-9;
         let z2 = omega_h * omega_h;
         let (re, im) = (
@@ -626,4 +631,39 @@ fn back_flanks_carry_the_mirrored_stiffness_and_relief() {
             }
         }
     }
+}
+
+/// Inside the principal instability tongue without damping the response grows by the Floquet
+/// multiplier every period, so it passes any bound: the steady-state search reports it as
+/// diverged (instead of returning a record of 1e23 µm), within the periods the growth rate
+/// predicts; with damping above the tongue's 4ζ > ε closure the same speed is bounded. The
+/// run-up through the tongue stops where it leaves the model's range.
+#[test]
+fn unbounded_growth_is_reported_as_divergence() {
+    let eps = 0.2;
+    let undamped = model(cosine_stiffness(eps), 0.0, 0.0);
+    let w = 2.0 * undamped.natural_frequency();
+    let speed = driver_speed(w);
+    let lambda = floquet_max_multiplier(&undamped, speed, 512);
+    assert!(lambda > 1.05, "{lambda}");
+    let s = steady_state(&undamped, speed, 512, undamped.static_state(), 1e-9, 4000);
+    assert!(s.diverged && !s.converged);
+    // From the static state the free part starts at the static deflection δ's order and must
+    // grow by the bound's factor, 1000 (δ + TE)/δ = 1000: ln 1000 / ln λ periods, within a
+    // factor of two for the transient before the growing mode dominates.
+    let expected = 1000f64.ln() / lambda.ln();
+    assert!(
+        (s.periods as f64) < 2.0 * expected && (s.periods as f64) > 0.5 * expected,
+        "diverged after {} periods; λ = {lambda} predicts about {expected:.0}",
+        s.periods
+    );
+    let damped = model(cosine_stiffness(eps), 0.0, 0.1);
+    let s = steady_state(&damped, speed, 512, damped.static_state(), 1e-9, 4000);
+    assert!(!s.diverged && s.converged);
+    let through = geardyn::lumped::run_up(&undamped, 0.8 * speed, 1.2 * speed, 2.0, 1000);
+    let t = through
+        .diverged_at
+        .expect("the undamped run-up diverges in the tongue");
+    assert!(t > 0.0 && t < 2.0);
+    assert!(through.displacement.iter().all(|x| x.is_finite()));
 }

@@ -128,6 +128,57 @@ fn an_active_limit_holds_and_gives_the_known_constrained_optimum() {
     ));
 }
 
+/// A response that diverges (NaN, as a contact solve that failed would give) once the recess
+/// relief passes 1 µm: the loop does not feed NaN into the QP or take it as a design; it stops
+/// the start with `Stop::Failed`, says which iteration and why, and keeps the last good design —
+/// finite, feasible, and no worse than the start.
+#[test]
+fn a_diverging_response_stops_the_start_and_keeps_the_last_good_design() {
+    let diverging = |design: &ReliefDesign| {
+        let mut response = synthetic(design)?;
+        if design.tip[0] + design.root[1] > 1e-6 {
+            response.objective_um = f64::NAN;
+        }
+        Ok(response)
+    };
+    let optimum = robust::optimize(
+        &diverging,
+        &ReliefDesign::none(ReliefShape::Linear),
+        &synthetic_range(),
+        &limits(10e-6),
+        &Settings::default(),
+        &|_| {},
+    )
+    .unwrap();
+    assert_eq!(optimum.stop, robust::Stop::Failed);
+    assert!(!optimum.stop.converged());
+    let failure = optimum.failure.as_deref().unwrap();
+    assert!(
+        failure.starts_with("iteration ") && failure.contains("not finite"),
+        "{failure}"
+    );
+    let best = &optimum.best;
+    assert!(best.response.objective_um.is_finite());
+    assert!(best.design.tip[0] + best.design.root[1] <= 1e-6);
+    assert!(best.response.objective_um <= optimum.start.response.objective_um);
+    assert!(robust::feasible(best, &limits(10e-6)));
+    // A start that is itself not finite is an error, not a result.
+    let nan_everywhere = |design: &ReliefDesign| {
+        let mut response = synthetic(design)?;
+        response.contact_ratio[0] = f64::NAN;
+        Ok(response)
+    };
+    let start = robust::optimize(
+        &nan_everywhere,
+        &ReliefDesign::none(ReliefShape::Linear),
+        &synthetic_range(),
+        &limits(10e-6),
+        &Settings::default(),
+        &|_| {},
+    );
+    assert!(matches!(start, Err(OptimizeError::NotFinite(_))));
+}
+
 /// With the loaded contact ratio held at ≥ 1.5 the sums may total 2 µm at most (1.7 − 0.1 · 2):
 /// the best split makes both ends equally short of flat, u = w = ½, so C_a1 = 1.5 µm,
 /// C_a2 = 0.5 µm, s₀ = s₁ = 1.575 µm, objective ½(0.575 + 1.5 · 0.575) — the contact-ratio

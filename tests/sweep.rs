@@ -41,7 +41,7 @@ fn linear_sweeps_agree_and_peak_at_the_natural_frequency() {
     let rpms: Vec<f64> = (0..201)
         .map(|i| rpm_of(&m, 0.8 + 0.002 * i as f64))
         .collect();
-    let (up, down) = sweep(&m, &rpms);
+    let (up, down) = sweep(&m, &rpms).unwrap();
     for (u, d) in up.iter().zip(&down) {
         assert!(((u.dte_rms - d.dte_rms) / u.dte_rms).abs() < 1e-4);
         assert!(!u.separated);
@@ -65,7 +65,7 @@ fn backlash_gives_a_jump_with_hysteresis() {
     let rpms: Vec<f64> = (0..121)
         .map(|i| rpm_of(&m, 0.6 + 0.005 * i as f64))
         .collect();
-    let (up, down) = sweep(&m, &rpms);
+    let (up, down) = sweep(&m, &rpms).unwrap();
     assert!(up.iter().any(|p| p.separated), "no separation found");
     let parted = up
         .iter()
@@ -120,7 +120,7 @@ fn spectrum_finds_sub_harmonics_and_harmonics() {
 fn sweep_peaks_are_the_mesh_harmonics_of_a_periodic_response() {
     let m = model(1e-6, None);
     let rpms: Vec<f64> = (0..5).map(|i| rpm_of(&m, 0.5 + 0.2 * i as f64)).collect();
-    let (up, _) = sweep(&m, &rpms);
+    let (up, _) = sweep(&m, &rpms).unwrap();
     for p in &up {
         assert!(p.converged);
         let (hz, amplitude) = p.peaks[0];

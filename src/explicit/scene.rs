@@ -575,13 +575,26 @@ pub fn run(
             }
         });
         if let Err(cause) = result {
+            let remedy = if prepared.dt > prepared.dt_critical {
+                format!(
+                    "The time step {:.4e} s is above the stable step {:.4e} s; use fe.step_factor \
+                     below 1 (default 0.9)",
+                    prepared.dt, prepared.dt_critical
+                )
+            } else {
+                format!(
+                    "The time step {:.4e} s is {:.2} of the estimated stable step {:.4e} s, so a \
+                     contact state stiffer than the estimate's bound set in: lower fe.step_factor \
+                     (e.g. 0.6) or fe.penalty_factor",
+                    prepared.dt,
+                    prepared.dt / prepared.dt_critical,
+                    prepared.dt_critical
+                )
+            };
             diverged = Some(format!(
-                "the explicit run diverged at t = {:.6e} s (step {step}): {cause}. The time step {:.4e} s is \
-                 above the stable step {:.4e} s; use fe.step_factor below 1 (default 0.9). The results up to \
-                 t = {:.6e} s are kept",
+                "the explicit run diverged at t = {:.6e} s (step {step}): {cause}. {remedy}. The \
+                 results up to t = {:.6e} s are kept",
                 state.time,
-                prepared.dt,
-                prepared.dt_critical,
                 history.time.last().copied().unwrap_or(0.0)
             ));
             break;

@@ -209,6 +209,19 @@ mod tests {
 
     /// Against brute force: every subset of active points, keep the one that satisfies all KKT
     /// conditions; it must equal the active-set answer.
+    /// A compliance that is not positive definite (the second point's negative) makes the active
+    /// set's KKT system singular: a named error, not a wrong force.
+    #[test]
+    fn a_singular_contact_subproblem_is_a_clear_error() {
+        let compliance = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, -1.0]);
+        let gap = DVector::from_vec(vec![0.0, 0.0]);
+        let arm = DVector::from_vec(vec![1.0, 1.0]);
+        let mut forces = DVector::zeros(2);
+        let err = solve_contact(&compliance, &gap, &arm, 1.0, &mut forces).unwrap_err();
+        assert_eq!(err, ContactError::Singular);
+        assert!(err.to_string().contains("not positive definite"));
+    }
+
     #[test]
     fn matches_brute_force_enumeration() {
         let n = 8;

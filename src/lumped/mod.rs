@@ -91,6 +91,11 @@ pub struct Bearings {
     pub damping: [f64; 2],
 }
 
+/// Static deflections (plus backlash and unloaded TE) beyond which a response counts as
+/// diverged: a DTE a thousand times the static one (millimetres on a pair deflecting a few
+/// µm) is past any tooth's height, and no bounded steady state gets there.
+pub const DIVERGENCE_DEFLECTIONS: f64 = 1e3;
+
 /// The lumped mesh model: 1 DOF (p), or 3 DOFs (p, y₁, y₂) with [`Bearings`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeshModel {
@@ -250,6 +255,36 @@ impl MeshModel {
         }
     }
 
+    /// The largest excursion of any coordinate from the static state the model stands for [m]:
+    /// [`DIVERGENCE_DEFLECTIONS`] × (the static deflection F/k̄, plus the backlash and the
+    /// unloaded TE's largest value; at least 1 µm). Farther than that a response has grown without bound
+    /// (in practice a linear parametric instability, with too little damping to hold it).
+    pub fn divergence_bound(&self) -> f64 {
+        let te = self
+            .mesh
+            .unloaded_te
+            .values
+            .iter()
+            .fold(0.0f64, |m, e| m.max(e.abs()));
+        // At least 1 µm as the scale, so an unloaded model (F = 0) has a bound too: 1 mm.
+        let scale = (self.force / self.mesh.mean()).abs() + self.backlash.unwrap_or(0.0).abs() + te;
+        DIVERGENCE_DEFLECTIONS * scale.max(1e-6)
+    }
+
+    /// Whether `state` has left the model's range ([`MeshModel::divergence_bound`]) or is not
+    /// finite.
+    pub fn has_diverged(&self, state: &State) -> bool {
+        let bound = self.divergence_bound();
+        let reference = self.static_state();
+        let finite = state.q.iter().chain(&state.v).all(|x| x.is_finite());
+        !finite
+            || state
+                .q
+                .iter()
+                .zip(&reference.q)
+                .any(|(q, q0)| !((q - q0).abs() <= bound))
+    }
+
     /// The static state under F at the mean stiffness (TE and backlash left out): δ = F/k̄,
     /// y₁ = −F/k_b1, y₂ = F/k_b2.
     pub fn static_state(&self) -> State {
@@ -331,6 +366,9 @@ pub struct SteadyState {
     pub mesh_force: Vec<f64>,
     /// Whether the mesh force was zero (teeth apart) anywhere in the period.
     pub separated: bool,
+    /// The response grew without bound ([`MeshModel::has_diverged`]) in period `periods`; the
+    /// samples are not a steady state then.
+    pub diverged: bool,
 }
 
 /// Integrates at driver speed Ω₁ (rad/s) from `initial` until the state at period boundaries
@@ -353,6 +391,7 @@ pub fn steady_state(
         velocity: vec![0.0; steps_per_period],
         mesh_force: vec![0.0; steps_per_period],
         separated: false,
+        diverged: false,
     };
     let omega_scale = model.highest_frequency().max(driver_speed);
     for period in 1..=max_periods {
@@ -370,6 +409,10 @@ pub fn steady_state(
         );
         out.periods = period;
         out.start = start;
+        if model.has_diverged(&state) {
+            out.diverged = true;
+            return out;
+        }
         let change = (0..3)
             .map(|i| {
                 (state.q[i] - start.q[i])
@@ -475,8 +518,9 @@ pub fn floquet_frequency(model: &MeshModel, driver_speed: f64, steps_per_period:
 }
 
 /// RK4 over one mesh period in `steps` equal steps from `start` at θ = 0; `sample` sees the
-/// state at the start of every step. Returns the state after the period.
-fn integrate_period(
+/// state at the start of every step. Returns the state after the period. No divergence check:
+/// [`steady_state`] makes it, per period.
+pub fn integrate_period(
     model: &MeshModel,
     driver_speed: f64,
     steps: usize,
@@ -508,6 +552,9 @@ pub struct RunUp {
     /// Elastic mesh force [N].
     pub mesh_force: Vec<f64>,
     pub steps: usize,
+    /// Time at which the response left the model's range ([`MeshModel::has_diverged`]); the
+    /// run stops there.
+    pub diverged_at: Option<f64>,
 }
 
 pub fn run_up(model: &MeshModel, from: f64, to: f64, duration: f64, max_samples: usize) -> RunUp {
@@ -538,6 +585,10 @@ pub fn run_up(model: &MeshModel, from: f64, to: f64, duration: f64, max_samples:
             break;
         }
         state = rk4_step(derivative, t, &state, h);
+        if model.has_diverged(&state) {
+            out.diverged_at = Some(t + h);
+            break;
+        }
     }
     out
 }

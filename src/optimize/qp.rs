@@ -44,6 +44,8 @@ pub enum QpError {
     Shape(String),
     #[error("the QP has no solution: Clarabel reports {0} (the constraints cannot all hold, or the objective is unbounded)")]
     NotSolved(String),
+    #[error("the QP's data hold NaN or infinity (the linearization it came from is broken)")]
+    NotFinite,
 }
 
 /// Column-compressed form of `m`; with `upper`, only its upper triangle (Clarabel reads P so).
@@ -79,6 +81,17 @@ pub fn solve(problem: &QuadraticProgram) -> Result<QpSolution, QpError> {
             problem.g.shape(),
             problem.h.len()
         )));
+    }
+    let data = [
+        problem.p.as_slice(),
+        problem.q.as_slice(),
+        problem.a.as_slice(),
+        problem.b.as_slice(),
+        problem.g.as_slice(),
+        problem.h.as_slice(),
+    ];
+    if !data.iter().all(|d| d.iter().all(|x| x.is_finite())) {
+        return Err(QpError::NotFinite);
     }
     let rows = DMatrix::from_fn(me + mi, n, |i, j| {
         if i < me {
@@ -217,5 +230,8 @@ mod tests {
         assert!(matches!(solve(&p), Err(QpError::NotSolved(_))));
         p.h = DVector::zeros(3);
         assert!(matches!(solve(&p), Err(QpError::Shape(_))));
+        let mut p = problem(1.0);
+        p.q[0] = f64::NAN;
+        assert!(matches!(solve(&p), Err(QpError::NotFinite)));
     }
 }

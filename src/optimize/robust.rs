@@ -63,6 +63,9 @@ pub enum OptimizeError {
     /// The start design breaks a limit: the loop does not repair a start silently.
     #[error("{0}")]
     InfeasibleStart(String),
+    /// A response with NaN or infinity in it.
+    #[error("{0}")]
+    NotFinite(String),
 }
 
 /// Scale of the variables: amounts in µm, λ in tenths.
@@ -239,11 +242,14 @@ pub enum Stop {
     TrustRadius,
     /// The iteration limit was reached first: not converged.
     Iterations,
+    /// A step could not be computed: the QP failed, or the response (the LTCA) failed or came
+    /// back not finite. [`Optimum::failure`] says which; the last good design is kept.
+    Failed,
 }
 
 impl Stop {
     pub fn converged(self) -> bool {
-        self != Stop::Iterations
+        !matches!(self, Stop::Iterations | Stop::Failed)
     }
 }
 
@@ -277,6 +283,8 @@ pub struct Optimum {
     pub best: Evaluation,
     pub iterations: Vec<IterationRecord>,
     pub stop: Stop,
+    /// What failed when `stop` is [`Stop::Failed`]: the iteration, the cause.
+    pub failure: Option<String>,
     /// Time in Clarabel over all iterations [s].
     pub qp_solve_s: f64,
     pub ltca_evaluations: usize,
@@ -375,10 +383,12 @@ pub fn optimize(
     let shape = start.shape;
     let (lo, hi) = bounds(limits);
     let evaluate = |design: &ReliefDesign| {
-        respond(design).map(|response| Evaluation {
-            design: *design,
-            response,
-        })
+        respond(design)
+            .and_then(|response| finite(design, response))
+            .map(|response| Evaluation {
+                design: *design,
+                response,
+            })
     };
     let first = evaluate(start)?;
     if !feasible(&first, limits) {
@@ -392,13 +402,21 @@ pub fn optimize(
     let mut radius = settings.initial_radius;
     let mut records = Vec::new();
     let mut stop = Stop::Iterations;
+    let mut failure = None;
     let mut qp_solve_s = 0.0;
     // The linearization of the current design (kept while steps from it are rejected).
     let mut jacobian: Option<Jacobian> = None;
     for iteration in 1..=settings.max_iterations {
         let v0 = scaled(&current.design);
         if jacobian.is_none() {
-            jacobian = Some(linearize(&evaluate, &current, settings, (&lo, &hi))?);
+            match linearize(&evaluate, &current, settings, (&lo, &hi)) {
+                Ok(linear) => jacobian = Some(linear),
+                Err(e) => {
+                    failure = Some(format!("iteration {iteration}, linearizing: {e}"));
+                    stop = Stop::Failed;
+                    break;
+                }
+            }
             evaluations += VARIABLES;
         }
         let linear = jacobian.as_ref().expect("linearized above");
@@ -411,7 +429,14 @@ pub fn optimize(
             radius,
             (&lo, &hi),
         );
-        let solution = qp::solve(&problem)?;
+        let solution = match qp::solve(&problem) {
+            Ok(solution) => solution,
+            Err(e) => {
+                failure = Some(format!("iteration {iteration}, the step's QP: {e}"));
+                stop = Stop::Failed;
+                break;
+            }
+        };
         qp_solve_s += solution.solve_s;
         let dv: [f64; VARIABLES] = std::array::from_fn(|k| solution.x[k]);
         let f0 = merit(&current, settings.regularization);
@@ -461,7 +486,13 @@ pub fn optimize(
             // A step the geometry cannot carry (a relief too steep for its length) is a failed
             // step: the radius shrinks and the loop goes on from the current design.
             Err(OptimizeError::Geometry(_)) => radius *= 0.5,
-            Err(e) => return Err(e),
+            Err(e) => {
+                failure = Some(format!("iteration {iteration}, the trial design: {e}"));
+                stop = Stop::Failed;
+                progress(&record);
+                records.push(record);
+                break;
+            }
         }
         if let Some(trial) = accepted {
             current = trial;
@@ -480,9 +511,32 @@ pub fn optimize(
         best: current,
         iterations: records,
         stop,
+        failure,
         qp_solve_s,
         ltca_evaluations: evaluations,
     })
+}
+
+/// `response` if every number in it is finite; else the error that names the design.
+fn finite(design: &ReliefDesign, response: LoadResponse) -> Result<LoadResponse, OptimizeError> {
+    let numbers = std::iter::once(response.objective_um)
+        .chain(response.ste_um.iter().flatten().copied())
+        .chain(response.contact_ratio.iter().copied());
+    if numbers.into_iter().all(f64::is_finite) {
+        Ok(response)
+    } else {
+        Err(OptimizeError::NotFinite(format!(
+            "the load response of the design (tip {:.3} / {:.3} µm, root {:.3} / {:.3} µm, λ {:.3}) is \
+             not finite (objective {}, contact ratios {:?}): the contact solve behind it diverged",
+            design.tip[0] * 1e6,
+            design.tip[1] * 1e6,
+            design.root[0] * 1e6,
+            design.root[1] * 1e6,
+            design.length,
+            response.objective_um,
+            response.contact_ratio
+        )))
+    }
 }
 
 /// Forward-difference sensitivities of the STE ([torque][position][variable], µm per scaled

@@ -109,7 +109,7 @@ fn answers(
     holds_body_twist: bool,
     torque: f64,
     speed_rpm: f64,
-) -> Answers {
+) -> Result<Answers, StudyError> {
     let started = std::time::Instant::now();
     let pair = &case.pair;
     let rb = [pair.gears[0].base_radius, pair.gears[1].base_radius];
@@ -137,18 +137,21 @@ fn answers(
     let speed = speed_rpm * std::f64::consts::TAU / 60.0;
     let steps = crate::sweep::steps_per_period(&model, speed);
     let steady = steady_state(&model, speed, steps, model.static_state(), 1e-9, 2000);
+    if steady.diverged {
+        return Err(super::compare::lumped_diverged(speed_rpm));
+    }
     let dte_amplitude = amplitude_spectrum(&steady.displacement)
         .first()
         .copied()
         .unwrap_or(0.0)
         / rb[1];
-    Answers {
+    Ok(Answers {
         mean: mesh.mean(),
         static_te_pp,
         resonance_rpm: 60.0 * f_n / teeth,
         dte_amplitude,
         lumped_s: started.elapsed().as_secs_f64(),
-    }
+    })
 }
 
 /// Builds the chart's data from the FE stiffness runs (at least one unscaled) and the explicit
@@ -240,7 +243,7 @@ pub fn run(
     let all: Vec<Answers> = rows
         .iter()
         .map(|(_, family, _, mesh)| answers(case, mesh, *family != "analytic", torque, speed_rpm))
-        .collect();
+        .collect::<Result<_, _>>()?;
     let r = &all[reference];
     let error = |a: f64, b: f64| (a / b - 1.0).abs();
     let points = rows

@@ -457,7 +457,7 @@ pub fn run(
                 (held_modal, held_body),
             )
         })
-        .collect();
+        .collect::<Result<_, _>>()?;
     let first = primary.map(|i| &speeds[i]);
     let paper = match (paper_stiffness, primary) {
         (false, _) => None,
@@ -520,7 +520,7 @@ fn compare_speed(
     teeth: f64,
     rb2: f64,
     (mesh_mode_hz, body_hz): (f64, Option<f64>),
-) -> SpeedComparison {
+) -> Result<SpeedComparison, StudyError> {
     let mesh_hz = run.speed_rpm / 60.0 * teeth;
     let (ramp, stats) = run.window_starts();
     let end = run.dte.len();
@@ -557,6 +557,9 @@ fn compare_speed(
     let harmonics = |model: &MeshModel| {
         let steps = crate::sweep::steps_per_period(model, speed);
         let steady = steady_state(model, speed, steps, model.static_state(), 1e-9, 2000);
+        if steady.diverged {
+            return Err(lumped_diverged(run.speed_rpm));
+        }
         let lines = amplitude_spectrum(&steady.displacement);
         let amplitudes: Vec<f64> = (0..HARMONICS)
             .map(|n| lines.get(n).copied().unwrap_or(0.0) / rb2)
@@ -566,11 +569,11 @@ fn compare_speed(
             .zip(&fe_harmonics_rad)
             .map(|(l, f)| l / f - 1.0)
             .collect();
-        (steady, amplitudes, errors)
+        Ok((steady, amplitudes, errors))
     };
-    let (steady, lumped_harmonics_rad, harmonic_error_rel) = harmonics(model);
-    let (_, lumped_rigid_harmonics_rad, rigid_harmonic_error_rel) = harmonics(rigid);
-    SpeedComparison {
+    let (steady, lumped_harmonics_rad, harmonic_error_rel) = harmonics(model)?;
+    let (_, lumped_rigid_harmonics_rad, rigid_harmonic_error_rel) = harmonics(rigid)?;
+    Ok(SpeedComparison {
         speed_rpm: run.speed_rpm,
         mesh_hz,
         source: run.source.clone(),
@@ -589,7 +592,16 @@ fn compare_speed(
         mesh_over_mode: mesh_hz / mesh_mode_hz,
         fe_spectrum,
         fe_early_spectrum,
-    }
+    })
+}
+
+/// The error of a lumped steady state that grew without bound at `speed_rpm`.
+pub fn lumped_diverged(speed_rpm: f64) -> StudyError {
+    StudyError::Input(format!(
+        "the lumped twin's response at {speed_rpm:.0} rpm grew without bound (1000 static \
+         deflections): the speed lies in a parametric-instability region or on an undamped \
+         resonance; raise fe.mesh_damping_ratio (the twin's damping) or choose another speed"
+    ))
 }
 
 /// The lumped speed-drive model `model` with a compliance in series that brings its mean

@@ -36,14 +36,19 @@ pub enum StudyError {
     Input(String),
 }
 
-/// The summary of a run stopped on request ([`crate::interrupt`]): where it stopped and how to
-/// go on. It takes the place of the finished run's summary.json.
+/// The summary of a run that stopped before its end, on request ([`crate::interrupt`]) or
+/// because its response diverged: where and why it stopped and how to go on. It takes the place
+/// of the finished run's summary.json.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
-pub struct Interrupted {
+pub struct StoppedEarly {
     pub case: String,
     pub command: String,
-    /// Where the run stopped and what is kept.
-    pub interrupted: String,
+    /// Where a stop request ended the run and what is kept.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub interrupted: Option<String>,
+    /// Where the response diverged, the cause and the remedy.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub diverged: Option<String>,
     /// The command line that continues it, where the command can resume.
     pub resume: Option<String>,
 }

@@ -183,6 +183,9 @@ pub struct StartSummary {
     pub objective_um: f64,
     pub iterations: usize,
     pub stop: robust::Stop,
+    /// What failed when `stop` is `failed` (the last good design is the start's result).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub failure: Option<String>,
     pub ltca_evaluations: usize,
     pub qp_solve_wall_s: f64,
     pub wall_s: f64,
@@ -451,6 +454,7 @@ pub fn run(
             objective_um: optimum.best.response.objective_um,
             iterations: optimum.iterations.len(),
             stop: optimum.stop,
+            failure: optimum.failure.clone(),
             ltca_evaluations: optimum.ltca_evaluations,
             qp_solve_wall_s: optimum.qp_solve_s,
             wall_s: t.elapsed().as_secs_f64(),
@@ -602,7 +606,8 @@ fn judge(
     let mesh_stiffness = stiffness::from_ltca(pair, &at_design, torque, format!("ltca ({name})"))
         .map_err(StudyError::Input)?;
     let (lumped, _) = super::lumped::model_on(case, mesh_stiffness.clone(), torque);
-    let (up, _) = sweep::sweep(&lumped, &options.rpm.0);
+    let (up, _) = sweep::sweep(&lumped, &options.rpm.0)
+        .map_err(|d| StudyError::Input(format!("candidate {name}'s lumped sweep: {d}")))?;
     let as_design = design.unwrap_or_else(|| amounts_of(&modifications));
     let ends = end_relief(&as_design);
     let feasible = robust::feasible(

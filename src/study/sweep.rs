@@ -43,7 +43,7 @@ impl SweepCheckpoint {
             })
         };
         format!(
-            "interrupted after {up} of {n} speeds up{} and {down} of {n} down{}",
+            "stopped after {up} of {n} speeds up{} and {down} of {n} down{}",
             last(&self.progress.up),
             last(&self.progress.down)
         )
@@ -55,6 +55,9 @@ pub enum SweepRun {
     Done(Box<SweepStudy>),
     /// Stopped on request ([`crate::interrupt`]) before every speed was swept.
     Interrupted(SweepCheckpoint),
+    /// A direction diverged (`progress.diverged` says where and why); the points before it are
+    /// kept.
+    Diverged(SweepCheckpoint),
 }
 
 /// Samples kept of the run-up.
@@ -94,6 +97,9 @@ pub struct SweepSummary {
     pub total_wall_s: f64,
     pub strongest_peaks: Vec<SpectralLine>,
     pub model: String,
+    /// Where the `--run-up-s` transient diverged, the cause and the remedy.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub run_up_diverged: Option<String>,
 }
 
 /// The study's result.
@@ -138,11 +144,17 @@ pub fn run(case: &Case, options: &SweepOptions) -> Result<SweepRun, StudyError> 
     let sweep_started = std::time::Instant::now();
     let progress = sweep::continue_sweep(model, &rpms, progress, &crate::interrupt::stop_requested);
     if !progress.is_complete(rpms.len()) {
-        return Ok(SweepRun::Interrupted(SweepCheckpoint {
+        let diverged = progress.diverged.is_some();
+        let checkpoint = SweepCheckpoint {
             case_text: case.text.clone(),
             rpm: rpms,
             progress,
-        }));
+        };
+        return Ok(if diverged {
+            SweepRun::Diverged(checkpoint)
+        } else {
+            SweepRun::Interrupted(checkpoint)
+        });
     }
     let (up, down) = progress.into_points();
     let wall_s = sweep_started.elapsed().as_secs_f64();
@@ -155,19 +167,31 @@ pub fn run(case: &Case, options: &SweepOptions) -> Result<SweepRun, StudyError> 
         Some(duration) => {
             let to_speed = |rpm: f64| rpm * std::f64::consts::TAU / 60.0;
             let (from, to) = (rpms[0], rpms[rpms.len() - 1]);
-            Some((
+            let run_up = run_up(
+                model,
+                to_speed(from),
+                to_speed(to),
                 duration,
-                run_up(
-                    model,
-                    to_speed(from),
-                    to_speed(to),
-                    duration,
-                    RUN_UP_SAMPLES,
-                ),
-            ))
+                RUN_UP_SAMPLES,
+            );
+            Some((duration, run_up))
         }
         None => None,
     };
+    // A diverged run-up is kept up to where it left the model's range; the sweep stands.
+    let run_up_diverged = run_up
+        .as_ref()
+        .and_then(|(duration, r)| r.diverged_at.map(|t| (*duration, t)))
+        .map(|(duration, t)| {
+            let (from, to) = (rpms[0], rpms[rpms.len() - 1]);
+            format!(
+                "the run-up diverged at t = {t:.4} s ({:.0} rpm): the response left the model's \
+                 range (1000 static deflections); runup.csv holds it up to there. Raise the \
+                 damping (lumped.damping_ratio or --damping-ratio) or run up faster through the \
+                 parametric-instability regions `geardyn stability` maps",
+                from + (to - from) * t / duration
+            )
+        });
     let rms: Vec<f64> = up.iter().map(|p| p.dte_rms).collect();
     let resonance_rpm = sweep::peaks(&rpms, &rms);
     let z1 = case.pair.gears[0].teeth() as f64;
@@ -231,6 +255,7 @@ pub fn run(case: &Case, options: &SweepOptions) -> Result<SweepRun, StudyError> 
         total_wall_s: started.elapsed().as_secs_f64(),
         strongest_peaks: strongest,
         model: setup.model_note.clone(),
+        run_up_diverged,
     };
     Ok(SweepRun::Done(Box::new(SweepStudy {
         setup,

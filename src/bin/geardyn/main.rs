@@ -271,6 +271,26 @@ fn optimize_into(
         result.summary.fe_check = Some(check);
         OutputDir(dir).json("summary.json", &result.summary)?;
     }
+    let failures: Vec<String> = result
+        .summary
+        .starts
+        .iter()
+        .filter_map(|s| {
+            let failure = s.failure.as_ref()?;
+            Some(format!("{} from {}: {failure}", s.shape.name(), s.start))
+        })
+        .collect();
+    if !failures.is_empty() {
+        anyhow::bail!(
+            "the optimizer stopped early in {} of {} starts ({}); each keeps its last good design \
+             and every output is written to {}. The cause is numerical: refine the LTCA \
+             (mesh.fine_element_mm, --positions) or narrow the search (--max-relief-um)",
+            failures.len(),
+            result.summary.starts.len(),
+            failures.join("; "),
+            dir.display()
+        );
+    }
     Ok(result)
 }
 
@@ -330,10 +350,11 @@ fn sweep(
             out.json(checkpoint_file, &checkpoint)?;
             out.json(
                 "summary.json",
-                &study::Interrupted {
+                &study::StoppedEarly {
                     case: case.name().to_string(),
                     command: "sweep".into(),
-                    interrupted: message.clone(),
+                    interrupted: Some(message.clone()),
+                    diverged: None,
                     resume: Some(format!(
                         "geardyn sweep ... --resume --out {} (the same case, --set and --rpm)",
                         dir.display()
@@ -346,12 +367,35 @@ fn sweep(
                 dir.display()
             );
         }
+        study::sweep::SweepRun::Diverged(checkpoint) => {
+            let divergence = checkpoint.progress.diverged.as_ref().expect("diverged");
+            let message = format!("{divergence}; {}", checkpoint.describe());
+            out.case(&case)?;
+            out.json(checkpoint_file, &checkpoint)?;
+            out.json(
+                "summary.json",
+                &study::StoppedEarly {
+                    case: case.name().to_string(),
+                    command: "sweep".into(),
+                    interrupted: None,
+                    diverged: Some(message.clone()),
+                    resume: None,
+                },
+            )?;
+            anyhow::bail!(
+                "{message}. The points swept before it are in {}",
+                dir.join(checkpoint_file).display()
+            );
+        }
     };
     print!("{}", report::lumped::setup_console(&result.setup));
     report::lumped::write_sweep(out, &case, &result)?;
     out.remove(checkpoint_file)?;
     print!("{}", report::lumped::sweep_console(&result));
     println!("wrote {}", dir.display());
+    if let Some(message) = &result.summary.run_up_diverged {
+        anyhow::bail!("{message}");
+    }
     Ok(())
 }
 

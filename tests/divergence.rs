@@ -1,0 +1,107 @@
+//! Divergence on the command line: a run whose response blows up stops with a message that names
+//! the cause and the remedy, exits non-zero, and leaves every result up to that point on disk.
+//! (The optimizer's failure path and the contact solve's are tested on synthetic inputs in
+//! tests/optimize.rs and src/ltca/contact.rs; the lumped integrator's in src/lumped.)
+
+use assert_cmd::Command;
+use std::path::Path;
+
+fn geardyn() -> Command {
+    Command::cargo_bin("geardyn").unwrap()
+}
+
+fn read_json(path: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
+}
+
+/// An explicit step 2.5× the stable one: the energy balance catches the blow-up within a few
+/// dozen steps, the message says to lower fe.step_factor, the partial run is written.
+#[test]
+fn an_unstable_explicit_step_is_stopped_and_explained() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("fe");
+    let output = geardyn()
+        .args([
+            "fe",
+            "--scene",
+            "stiffness",
+            "--set",
+            "fe.step_factor=2.5",
+            "--set",
+            "scene[stiffness].duration_s=0.004",
+            "--set",
+            "scene[stiffness].ramp_s=0.002",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("diverged") && stderr.contains("fe.step_factor below 1"),
+        "{stderr}"
+    );
+    let summary = read_json(&out.join("summary.json"));
+    assert!(summary["diverged"]
+        .as_str()
+        .is_some_and(|m| m.contains("energy")));
+    assert!(out.join("history.csv").exists() && out.join("dte.png").exists());
+}
+
+/// The undamped lumped model inside its principal parametric-instability region (Floquet
+/// multiplier 1.23 at 16 700 rpm on the potential-energy stiffness): the response grows without
+/// bound. The sweep stops there with the multiplier and the remedy (damping), and keeps the
+/// points swept before it.
+#[test]
+fn an_unbounded_lumped_response_is_stopped_and_explained() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sweep");
+    let output = geardyn()
+        .args([
+            "sweep",
+            "--stiffness",
+            "pe",
+            "--damping-ratio",
+            "0",
+            "--rpm",
+            "16000:17500:16",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("diverged at 16700.0 rpm")
+            && stderr.contains("parametric-instability")
+            && stderr.contains("--damping-ratio"),
+        "{stderr}"
+    );
+    let summary = read_json(&out.join("summary.json"));
+    assert!(summary["diverged"].as_str().is_some());
+    let checkpoint = read_json(&out.join("sweep_checkpoint.json"));
+    let up = checkpoint["progress"]["up"].as_array().unwrap();
+    assert_eq!(up.len(), 7, "the seven speeds below 16 700 rpm");
+    for point in up {
+        let factor = point["dynamic_factor"].as_f64().unwrap();
+        assert!(factor.is_finite() && factor < 100.0, "{point}");
+    }
+    // With damping the same speeds are a bounded steady state.
+    let damped = geardyn()
+        .args([
+            "sweep",
+            "--stiffness",
+            "pe",
+            "--damping-ratio",
+            "0.05",
+            "--rpm",
+            "16000:17500:16",
+            "--out",
+        ])
+        .arg(dir.path().join("damped"))
+        .output()
+        .unwrap();
+    assert!(damped.status.success());
+}

@@ -94,10 +94,12 @@ impl std::fmt::Display for SweepDivergence {
         } else {
             write!(
                 f,
-                ". The linear model is not parametrically unstable here (largest Floquet \
-                 multiplier {:.4}), so a forced resonance grew: a mesh harmonic at a natural \
-                 frequency, with too little damping to bound it. Raise the damping \
-                 (lumped.damping_ratio or --damping-ratio; 0.02-0.1 is usual for steel spur gears)",
+                ". The linear model (drive flanks in contact throughout) is stable here (largest \
+                 Floquet multiplier {:.4}), so the growth comes from the contact: with zero \
+                 backlash the teeth switch between drive and back flanks, each with its own k(θ), \
+                 and that switching pumps energy in faster than the damping takes it out (or a \
+                 mesh harmonic meets an undamped mode). Raise the damping (lumped.damping_ratio \
+                 or --damping-ratio; 0.02-0.1 is usual for steel spur gears)",
                 self.floquet_max_multiplier
             )
         }

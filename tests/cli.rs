@@ -1159,3 +1159,55 @@ fn validate_quick_fails_when_a_tolerance_breaks() {
     assert!(s["failed"].as_u64().unwrap() >= 1);
     assert!(out.join("checks.md").exists());
 }
+
+/// `--rims` takes the free bodies' twist out of the hub-to-hub LTCA k: the mean stiffness rises
+/// to 1/(1/k̄ − c_b) pointwise and the natural frequency with its square root (1e-9: the same
+/// tables); it is refused for a tooth-level source. `lumped.relief` picks the LTCA variant and
+/// an unknown one is named.
+#[test]
+fn lumped_rims_and_relief_choose_the_stiffness() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = write_case(
+        dir.path(),
+        &DEFAULT.replace("fine_element_mm = 0.2", "fine_element_mm = 0.6"),
+    );
+    let sweep = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        run_ok(
+            geardyn()
+                .arg("sweep")
+                .arg(&case)
+                .args(["--rpm", "1000:3000:5", "--damping-ratio", "0.08"])
+                .args(extra)
+                .arg("--out")
+                .arg(&out),
+        );
+        read_summary(&out)
+    };
+    let hub = sweep("hub", &[]);
+    let rims = sweep("rims", &["--rims"]);
+    let k = |s: &serde_json::Value| s["mean_stiffness_n_per_m"].as_f64().unwrap();
+    let f = |s: &serde_json::Value| s["natural_frequency_hz"].as_f64().unwrap();
+    assert!(k(&rims) > 1.05 * k(&hub), "{} vs {}", k(&rims), k(&hub));
+    assert!(((f(&rims) / f(&hub)).powi(2) / (k(&rims) / k(&hub)) - 1.0).abs() < 1e-9);
+    assert!(rims["model"].as_str().unwrap().contains("rims"));
+    let relief = sweep("relief", &["--set", "lumped.relief=tip20-root10"]);
+    assert_eq!(relief["stiffness_source"], "ltca (relief tip20-root10)");
+    assert!(k(&relief) < k(&hub));
+    for (args, expected) in [
+        (&["--stiffness", "pe", "--rims"][..], "pe holds none"),
+        (&["--set", "lumped.relief=nope"][..], "lumped.relief"),
+    ] {
+        let bad = geardyn()
+            .arg("sweep")
+            .arg(&case)
+            .args(args)
+            .args(["--out"])
+            .arg(dir.path().join("bad"))
+            .output()
+            .unwrap();
+        assert!(!bad.status.success());
+        let stderr = String::from_utf8_lossy(&bad.stderr);
+        assert!(stderr.contains(expected), "{stderr}");
+    }
+}

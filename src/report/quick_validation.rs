@@ -8,6 +8,7 @@ pub fn write(dir: OutputDir, result: &QuickValidation) -> Result<String, ReportE
     let rule = |kind: CheckKind, tolerance: f64| match kind {
         CheckKind::Absolute => format!("abs(value − reference) ≤ {tolerance:e}"),
         CheckKind::Relative => format!("abs(value / reference − 1) ≤ {tolerance:e}"),
+        CheckKind::Below if tolerance > 0.0 => format!("value < (1 − {tolerance}) reference"),
         CheckKind::Below => "value < reference".to_string(),
     };
     dir.csv(

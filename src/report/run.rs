@@ -59,6 +59,10 @@ pub struct RunSummary {
     pub max_dynamic_factor_ltca: Option<f64>,
     pub primary_resonance_rpm_fe: Option<f64>,
     pub max_dynamic_factor_fe: Option<f64>,
+    /// The sweeps' own mesh mode √(k̄/m_e) (hub-to-hub k, rigid gears) on the LTCA's and the
+    /// FE's k [Hz]: what their resonance speeds follow.
+    pub natural_frequency_sweep_ltca_hz: Option<f64>,
+    pub natural_frequency_sweep_fe_hz: Option<f64>,
     pub max_floquet_multiplier: Option<f64>,
     pub tip_relief_um: Option<Value>,
     pub root_relief_um: Option<Value>,
@@ -73,6 +77,8 @@ pub struct RunSummary {
     /// The torque span of the Harris map over which the recommended relief's STE peak-to-peak
     /// is below the unmodified pair's [N·m] (its first and last such torque).
     pub relief_beats_unmodified_nm: Option<(f64, f64)>,
+    /// Whether it is below at every torque of the map inside that span.
+    pub relief_beats_unmodified_throughout: Option<bool>,
     /// Low-passed or raw DTE peak-to-peak (as the cross-check ranked).
     pub fe_low_speed_measure: Option<String>,
     pub mesh_mode_fe_modal_free_hz: Option<f64>,
@@ -100,6 +106,48 @@ fn field(v: &Option<Value>, path: &[&str]) -> Option<Value> {
 
 fn show(value: Option<f64>, digits: usize) -> String {
     value.map_or("–".into(), |v| format!("{v:.digits$}"))
+}
+
+/// `value` against `reference` as a signed percentage.
+fn relative(value: Option<f64>, reference: Option<f64>) -> String {
+    match (value, reference) {
+        (Some(v), Some(r)) => format!("{:+.1} %", 100.0 * (v / r - 1.0)),
+        _ => "–".into(),
+    }
+}
+
+/// A JSON array of numbers, `digits` decimals, comma separated.
+fn list(v: Option<Value>, digits: usize) -> String {
+    v.and_then(|v| v.as_array().cloned())
+        .map_or("–".into(), |a| {
+            let shown: Vec<String> = a.iter().map(|x| show(x.as_f64(), digits)).collect();
+            if shown.is_empty() {
+                "none".into()
+            } else {
+                shown.join(", ")
+            }
+        })
+}
+
+/// A JSON array of [from, to] pairs as "from–to" (0 decimals), comma separated.
+fn ranges(v: Option<Value>) -> String {
+    let pairs: Vec<String> = v
+        .and_then(|v| v.as_array().cloned())
+        .unwrap_or_default()
+        .iter()
+        .filter_map(|r| {
+            Some(format!(
+                "{:.0}–{:.0}",
+                r.get(0)?.as_f64()?,
+                r.get(1)?.as_f64()?
+            ))
+        })
+        .collect();
+    if pairs.is_empty() {
+        "no speed".into()
+    } else {
+        pairs.join(", ")
+    }
 }
 
 fn show_e(value: Option<f64>) -> String {
@@ -164,6 +212,7 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
         || format!("fe/{unmodified_name}-stiffness"),
         |m| m.fe_stiffness_run.clone(),
     );
+    let harris = harris_span(dir, &unmodified_name);
     let fe = read(dir, &fe_run).filter(|s| {
         ["diverged", "interrupted"]
             .iter()
@@ -186,6 +235,8 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
         max_dynamic_factor_ltca: number(&sweep_ltca, &["max_dynamic_factor"]),
         primary_resonance_rpm_fe: number(&sweep_fe, &["primary_resonance_rpm"]),
         max_dynamic_factor_fe: number(&sweep_fe, &["max_dynamic_factor"]),
+        natural_frequency_sweep_ltca_hz: number(&sweep_ltca, &["natural_frequency_hz"]),
+        natural_frequency_sweep_fe_hz: number(&sweep_fe, &["natural_frequency_hz"]),
         max_floquet_multiplier: number(&stability, &["max_multiplier"]),
         tip_relief_um: field(&optimize, &["tip_relief_um"]),
         root_relief_um: field(&optimize, &["root_relief_um"]),
@@ -197,7 +248,8 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
         robust_ste_pp_paper_um: number(&optimize, &["objective_paper"]),
         fe_low_speed_dte_pp_unmodified_um: fe_low(&unmodified_name),
         fe_low_speed_dte_pp_optimum_um: fe_low(crate::study::optimize::BEST),
-        relief_beats_unmodified_nm: harris_span(dir, &unmodified_name),
+        relief_beats_unmodified_nm: harris.map(|h| h.0),
+        relief_beats_unmodified_throughout: harris.map(|h| h.1),
         fe_low_speed_measure: field(&optimize, &["fe_check", "fe_low_measure"])
             .and_then(|m| m.as_str().map(String::from)),
         mesh_mode_fe_modal_free_hz: number(&compare, &["f_natural_fe_modal_hz"]),
@@ -267,18 +319,8 @@ fn sections(
     [geometry, ltca, fe, sweep_ltca, stability, optimize, compare]: [&Option<Value>; 7],
 ) -> Vec<Section> {
     let torque = show(s.torque_nm, 1);
-    let unstable: Vec<String> = field(stability, &["unstable_rpm_ranges"])
-        .and_then(|r| r.as_array().cloned())
-        .unwrap_or_default()
-        .iter()
-        .filter_map(|r| {
-            Some(format!(
-                "{:.0}–{:.0}",
-                r.get(0)?.as_f64()?,
-                r.get(1)?.as_f64()?
-            ))
-        })
-        .collect();
+    let unstable = field(stability, &["unstable_rpm_ranges"])
+        .filter(|r| r.as_array().is_some_and(|a| !a.is_empty()));
     let amounts = |v: &Option<Value>| {
         v.as_ref()
             .and_then(|v| v.as_array().cloned())
@@ -313,13 +355,25 @@ fn sections(
             row(&[
                 "primary resonance, max dynamic factor".into(),
                 format!(
-                    "{} rpm, {} (LTCA k) · {} rpm, {} (FE k)",
+                    "{} rpm, {} (LTCA k) · {} rpm, {} (FE k). The sweeps' model (hub-to-hub k, rigid gears) has its mesh mode at {} / {} Hz, {} against the FE modal analysis: its resonance speeds are low by about as much (validation/frequencies)",
                     show(s.primary_resonance_rpm_ltca, 0),
                     show(s.max_dynamic_factor_ltca, 2),
                     show(s.primary_resonance_rpm_fe, 0),
-                    show(s.max_dynamic_factor_fe, 2)
+                    show(s.max_dynamic_factor_fe, 2),
+                    show(s.natural_frequency_sweep_ltca_hz, 0),
+                    show(s.natural_frequency_sweep_fe_hz, 0),
+                    relative(s.natural_frequency_sweep_fe_hz, s.mesh_mode_fe_modal_free_hz),
                 ),
                 "sweep-ltca/, sweep-fe/".into(),
+            ]),
+            row(&[
+                "other resonance peaks, tooth separation (LTCA k) [rpm]".into(),
+                format!(
+                    "peaks of the DTE rms at {}; teeth apart at {}",
+                    list(field(sweep_ltca, &["resonance_rpm"]), 0),
+                    ranges(field(sweep_ltca, &["separation_rpm_ranges"]))
+                ),
+                "sweep-ltca/".into(),
             ]),
             row(&[
                 "parametric stability".into(),
@@ -328,8 +382,8 @@ fn sections(
                     show(s.max_floquet_multiplier, 3),
                     match (s.max_floquet_multiplier, &unstable) {
                         (None, _) => "–".to_string(),
-                        (Some(_), ranges) if ranges.is_empty() => "stable over the range".into(),
-                        (Some(_), ranges) => format!("unstable at {} rpm", ranges.join(", ")),
+                        (Some(_), None) => "stable over the range".into(),
+                        (Some(_), Some(r)) => format!("unstable at {} rpm", ranges(Some(r.clone()))),
                     }
                 ),
                 "stability/".into(),
@@ -349,7 +403,10 @@ fn sections(
                 "optimize/".into(),
             ]),
             row(&[
-                "what it gains (STE peak-to-peak over the load range) [µm]".into(),
+                format!(
+                    "what it gains (loaded STE peak-to-peak, mean over {} N·m) [µm]",
+                    list(field(optimize, &["torque_range_nm"]), 1)
+                ),
                 format!(
                     "{} against {} unmodified, {} classic rule, {} the case's relief",
                     show(s.robust_ste_pp_optimum_um, 3),
@@ -360,12 +417,17 @@ fn sections(
                 "optimize/harris.png".into(),
             ]),
             row(&[
-                "where it is quieter than no relief (Harris map)".into(),
-                s.relief_beats_unmodified_nm.map_or("–".into(), |(a, b)| {
-                    format!(
-                        "from {a:.0} to {b:.0} N·m (STE peak-to-peak below the unmodified pair's)"
-                    )
-                }),
+                "where it is quieter than no relief (Harris map, 10–200 % of the design torque)"
+                    .into(),
+                match (s.relief_beats_unmodified_nm, s.relief_beats_unmodified_throughout) {
+                    (Some((a, b)), Some(true)) => format!(
+                        "at every torque of the map from {a:.0} to {b:.0} N·m (STE peak-to-peak below the unmodified pair's)"
+                    ),
+                    (Some((a, b)), _) => format!(
+                        "between {a:.0} and {b:.0} N·m, not at every torque of the map in between (optimize/harris.png)"
+                    ),
+                    _ => "at no torque of the map".into(),
+                },
                 "optimize/harris.csv".into(),
             ]),
             row(&[
@@ -383,15 +445,16 @@ fn sections(
                 "optimize/fe_check.md".into(),
             ]),
             row(&[
-                "mesh mode, FE modal against lumped (FE k) [Hz]".into(),
+                "mesh mode, both gears free [Hz]".into(),
                 format!(
-                    "both free {} / {}, driver held {} / {}",
+                    "FE modal {} · lumped on the FE k with the bodies' twist out (rigid rims) {} · the sweeps' model (hub-to-hub k) {}; driver held: FE modal {}, lumped rims {}",
                     show(s.mesh_mode_fe_modal_free_hz, 0),
                     show(s.mesh_mode_lumped_fe_k_free_hz, 0),
+                    show(s.natural_frequency_sweep_fe_hz, 0),
                     show(s.mesh_mode_fe_modal_driver_held_hz, 0),
                     show(s.mesh_mode_lumped_fe_k_driver_held_hz, 0)
                 ),
-                "compare/".into(),
+                "compare/, sweep-fe/".into(),
             ]),
         ],
     };
@@ -401,14 +464,15 @@ fn sections(
             show(number(ltca, &["fine_element_mm"]), 2)
         ),
         format!(
-            "Explicit FE ({} mm flank elements here, penalty contact, friction, impacts): the dynamics the others leave out — tooth separation, impacts, friction. Its k(θ) from the DTE is {} against the LTCA on its own mesh: the penalty contact's share, not a different physics.",
+            "Explicit FE ({} mm flank elements here, penalty contact, friction, large rotations): what the lumped model reduces to one degree of freedom — impacts at tooth engagement, friction, the teeth's and bodies' own modes. Its k(θ) from the DTE is {} against the LTCA on its own mesh: the penalty contact's share, not a different physics.",
             show(number(fe, &["fine_element_mm"]), 2),
             s.fe_stiffness_vs_ltca_same_mesh_rel.map_or("–".into(), |r| format!("{:+.1} %", 100.0 * r))
         ),
         format!(
-            "Lumped model ({}): speed sweeps, resonances and stability in seconds. Its k is hub to hub: on the FE's k its mesh mode is {} against the FE modal analysis with both gears free (compare/ lists every method, rigid rims among them).",
+            "Lumped model ({}): speed sweeps, resonances, tooth separation and stability in seconds. Its k is hub to hub with rigid gears: on the FE's k its mesh mode is {} against the FE modal analysis with both gears free, so its resonance speeds read low by about as much; with the bodies' twist taken out (rigid rims, compare/) it is {}.",
             field(sweep_ltca, &["model"]).and_then(|m| m.as_str().map(String::from)).unwrap_or_else(|| "–".into()),
-            number(compare, &["both_free", "lumped_fe_over_modal_rel"]).map_or("–".into(), |r| format!("{:+.1} %", 100.0 * r))
+            relative(s.natural_frequency_sweep_fe_hz, s.mesh_mode_fe_modal_free_hz),
+            relative(s.mesh_mode_lumped_fe_k_free_hz, s.mesh_mode_fe_modal_free_hz),
         ),
         "ISO 6336 and potential energy: first estimates; they do not see the bodies' compliance the FE sees.".into(),
     ];
@@ -566,7 +630,7 @@ fn sections(
         title: "Relief optimization".into(),
         text: vec![format!(
             "Robust objective: loaded STE peak-to-peak averaged over {} N·m. QP loop {} s.",
-            field(optimize, &["torque_range_nm"]).map_or("–".into(), |t| t.to_string()),
+            list(field(optimize, &["torque_range_nm"]), 1),
             show(number(optimize, &["qp_loop_wall_s"]), 1)
         )],
         tables: vec![
@@ -633,8 +697,8 @@ fn sections(
             caption: "Mesh-mode frequency by method [Hz]".into(),
             header: ["method", "both gears free", "driver held"].map(String::from).to_vec(),
             rows: [
-                ("lumped √(k/m), k LTCA", "lumped_ltca_secant_hz"),
-                ("lumped, k LTCA, rigid rims", "lumped_ltca_rim_hz"),
+                ("lumped √(k/m), k LTCA on the explicit mesh", "lumped_ltca_secant_hz"),
+                ("lumped, k LTCA on the explicit mesh, rigid rims", "lumped_ltca_rim_hz"),
                 ("lumped, k FE DTE", "lumped_fe_hz"),
                 ("lumped, k FE DTE, rigid rims", "lumped_fe_rim_hz"),
                 ("FE modal (mean over positions)", "fe_modal_mean_hz"),
@@ -655,23 +719,24 @@ fn sections(
 }
 
 /// From optimize/harris.csv: the first and last torque at which the best optimum's STE
-/// peak-to-peak is below the unmodified candidate's.
-fn harris_span(dir: &Path, unmodified: &str) -> Option<(f64, f64)> {
+/// peak-to-peak is below the unmodified candidate's, and whether it is below at every torque
+/// between them.
+fn harris_span(dir: &Path, unmodified: &str) -> Option<((f64, f64), bool)> {
     let mut reader = csv::Reader::from_path(dir.join("optimize/harris.csv")).ok()?;
     let headers = reader.headers().ok()?.clone();
     let column = |name: String| headers.iter().position(|h| h == name);
     let best = column(format!("{}_ste_pp_um", crate::study::optimize::BEST))?;
     let none = column(format!("{unmodified}_ste_pp_um"))?;
-    let mut span: Option<(f64, f64)> = None;
+    let mut below = Vec::new();
     for record in reader.records() {
         let record = record.ok()?;
         let value = |i: usize| record.get(i)?.parse::<f64>().ok();
-        let (torque, a, b) = (value(0)?, value(best)?, value(none)?);
-        if a < b {
-            span = Some(span.map_or((torque, torque), |(from, _)| (from, torque)));
-        }
+        below.push((value(0)?, value(best)? < value(none)?));
     }
-    span
+    let first = below.iter().position(|b| b.1)?;
+    let last = below.iter().rposition(|b| b.1)?;
+    let throughout = below[first..=last].iter().all(|b| b.1);
+    Some(((below[first].0, below[last].0), throughout))
 }
 
 /// The FE-against-lumped spectra `compare` drew (one per FE speed), if any.

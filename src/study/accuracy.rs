@@ -164,17 +164,13 @@ pub fn run(
 ) -> Result<AccuracyCost, StudyError> {
     let torque = dte_run.torque_nm;
     let speed_rpm = dte_run.speed_rpm;
-    let variant = super::relief_variant(case, Some("none"))?;
+    // The unmodified pair, whatever the case names its variants (the runs are of it).
+    let unmodified = [crate::geometry::FlankModification::none(); 2];
     let mut rows: Vec<(String, &'static str, f64, MeshStiffness)> = Vec::new();
     for (i, (fine, coarse)) in LTCA_LEVELS.iter().enumerate() {
         progress("LTCA levels", i, LTCA_LEVELS.len());
         let started = std::time::Instant::now();
-        let model = super::ltca::model_with_sizes(
-            case,
-            &variant.modifications,
-            fine * 1e-3,
-            coarse * 1e-3,
-        )?;
+        let model = super::ltca::model_with_sizes(case, &unmodified, fine * 1e-3, coarse * 1e-3)?;
         let results = model.run(POSITIONS, torque, &|_| {})?;
         let mesh = stiffness::from_ltca(&case.pair, &results, torque, "ltca")
             .map_err(StudyError::Input)?;

@@ -318,10 +318,10 @@ pub fn run(
     let torque = primary
         .map(|i| input.fe_runs[i].torque_nm)
         .map_or_else(|| super::load_torque(case), Ok)?;
-    let variant =
-        super::relief_variant(case, Some("none")).or_else(|_| super::relief_variant(case, None))?;
+    // The unmodified pair, whatever the case names its variants (the FE runs are of it).
+    let unmodified = [crate::geometry::FlankModification::none(); 2];
     let (fine, coarse) = (case.fe.fine_size, case.fe.coarse_size);
-    let model = super::ltca::model_with_sizes(case, &variant.modifications, fine, coarse)?;
+    let model = super::ltca::model_with_sizes(case, &unmodified, fine, coarse)?;
 
     // (c) FE modal analysis, and the LTCA's secant and tangent stiffness at the same positions.
     let mut modal = Vec::new();

@@ -16,7 +16,7 @@ use super::{load_torque, StudyError};
 /// override of the case.
 #[derive(Debug, Clone, Default, PartialEq, clap::Args)]
 pub struct LumpedShorthands {
-    /// Stiffness source: ltca (the case's FE, first relief variant), pe (potential energy), iso
+    /// Stiffness source: ltca (the case's FE LTCA of lumped.relief, default the first variant), pe (potential energy), iso
     /// (ISO 6336-1 c_gamma_alpha, constant) or a CSV file with columns roll_angle_deg,
     /// mesh_stiffness_n_per_m[, unloaded_te_um] over one mesh period (lumped.stiffness).
     #[arg(long, value_name = "SOURCE")]
@@ -33,6 +33,10 @@ pub struct LumpedShorthands {
     /// Add each gear's translation on its bearings along the line of action (lumped.bearings).
     #[arg(long)]
     pub bearings: bool,
+    /// Take the free gear bodies' twist out of a hub-to-hub stiffness (ltca or an FE CSV),
+    /// so the mesh mode matches the FE modal analysis (lumped.rims).
+    #[arg(long)]
+    pub rims: bool,
 }
 
 impl LumpedShorthands {
@@ -58,6 +62,9 @@ impl LumpedShorthands {
         }
         if self.bearings {
             overrides.push(Override::set("lumped.bearings", true));
+        }
+        if self.rims {
+            overrides.push(Override::set("lumped.rims", true));
         }
         Ok(overrides)
     }
@@ -102,7 +109,7 @@ pub fn mesh_stiffness(
     let pair = &case.pair;
     Ok(match source {
         StiffnessSource::Ltca => {
-            let variant = super::relief_variant(case, None)?;
+            let variant = super::relief_variant(case, case.lumped.relief.as_deref())?;
             super::ltca::mesh_stiffness(
                 case,
                 &variant.name,
@@ -140,20 +147,28 @@ pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
     let settings = &case.lumped;
     let torque = load_torque(case)?;
     let started = std::time::Instant::now();
-    let mesh = mesh_stiffness(case, &settings.stiffness, torque)?;
+    let mut mesh = mesh_stiffness(case, &settings.stiffness, torque)?;
     let stiffness_wall_s = started.elapsed().as_secs_f64();
+    let mut rims_note = String::new();
+    if settings.rims {
+        mesh = rims(case, &settings.stiffness, mesh)?;
+        rims_note = format!(
+            "; rims: the free bodies' twist ({:.3e} m/N) taken out of the hub-to-hub k",
+            super::compare::twist_behind_free_hubs(case, settings.drive)
+        );
+    }
     let inertias = gear_inertias(case);
     let (model, damping_ratio) = model_on(case, mesh, torque);
     let natural_frequency_hz = model.natural_frequency() / std::f64::consts::TAU;
     let drive = settings.drive.name();
     let model_note = match &model.bearings {
         None => format!(
-            "1-DOF along the line of action ({drive} drive; the torsional 2-DOF with rigid shafts and bearings reduced exactly: torque drive -> relative coordinate, speed drive -> driven gear only); mesh stiffness periodic in the driver roll angle"
+            "1-DOF along the line of action ({drive} drive; the torsional 2-DOF with rigid shafts and bearings reduced exactly: torque drive -> relative coordinate, speed drive -> driven gear only); mesh stiffness periodic in the driver roll angle{rims_note}"
         ),
         Some(b) => format!(
             "3-DOF: relative rotation along the line of action ({drive} drive) + each gear's translation on its bearings along the line of action (k_b = {:.3e} / {:.3e} N/m, m = {:.3} / {:.3} kg); translations across the line of action left out (a frictionless spur mesh force does not excite them)",
             b.stiffness[0], b.stiffness[1], b.mass[0], b.mass[1]
-        ),
+        ) + &rims_note,
     };
     Ok(LumpedSetup {
         torque,
@@ -164,6 +179,33 @@ pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
         damping_ratio,
         natural_frequency_hz,
         model_note,
+    })
+}
+
+/// `mesh` (a hub-to-hub stiffness from `source`) with the bodies' twist behind free hubs taken
+/// out of series ([`super::compare::twist_behind_free_hubs`]); refused for the tooth-level
+/// sources, which hold no body twist.
+fn rims(
+    case: &Case,
+    source: &StiffnessSource,
+    mesh: MeshStiffness,
+) -> Result<MeshStiffness, StudyError> {
+    if matches!(
+        source,
+        StiffnessSource::PotentialEnergy | StiffnessSource::Iso
+    ) {
+        return Err(StudyError::Input(format!(
+            "lumped.rims takes the gear bodies' twist out of a hub-to-hub stiffness, and {} holds \
+             none: use it with lumped.stiffness = \"ltca\" or an FE stiffness CSV, or drop --rims",
+            source.name()
+        )));
+    }
+    let twist = super::compare::twist_behind_free_hubs(case, case.lumped.drive);
+    mesh.without_series_compliance(twist).ok_or_else(|| {
+        StudyError::Input(format!(
+            "the gear bodies' twist ({twist:.3e} m/N) is not below the mesh compliance: check \
+             bore_radius_mm and the stiffness source, or drop lumped.rims"
+        ))
     })
 }
 

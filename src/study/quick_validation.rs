@@ -60,7 +60,8 @@ impl Check {
         let passed = match kind {
             CheckKind::Absolute => (value - reference).abs() <= tolerance,
             CheckKind::Relative => (value / reference - 1.0).abs() <= tolerance,
-            CheckKind::Below => value < reference,
+            // Below by at least the tolerance's share of the reference.
+            CheckKind::Below => value < reference * (1.0 - tolerance),
         };
         Check {
             study,
@@ -142,22 +143,36 @@ pub fn run(case: &Case, progress: Progress) -> Result<QuickValidation, StudyErro
         .iter()
         .map(|p| (p.total_force * rb2 / torque - 1.0).abs())
         .fold(0.0, f64::max);
+    // The contact solve balances Σ W a = T on each force's own moment arm a; that every arm is
+    // the base radius checks the contact normals: an involute's normal is tangent to the base
+    // circle, so the forces act along the line of action.
     checks.push(Check::new(
         "ltca",
         "largest abs(Σ W r_b2 / T − 1) over the cycle",
         (worst_balance, 0.0),
-        "equilibrium",
+        "involute action: every contact force along the line of action (moment arm r_b2)",
         (CheckKind::Absolute, 1e-3),
     ));
 
     progress("relief optimization", 0, 1);
     let optimum: OptimizeStudy = super::optimize::run(case, &OptimizeOptions::default(), progress)?;
     let s = &optimum.summary;
-    for (baseline, value) in [
-        ("no relief", Some(s.objective_none)),
-        ("the case's relief", s.objective_paper),
-        ("the classic rule, long", Some(s.objective_classic)),
-        ("the classic rule, short", Some(s.objective_classic_short)),
+    // The loop starts from no relief and from the classic rule (long) and accepts only
+    // descending steps, so against those two the check asks for real progress, 10 %; the other
+    // baselines it never visits.
+    for (baseline, value, margin) in [
+        ("no relief (a start)", Some(s.objective_none), 0.1),
+        ("the case's relief", s.objective_paper, 0.0),
+        (
+            "the classic rule, long (a start)",
+            Some(s.objective_classic),
+            0.1,
+        ),
+        (
+            "the classic rule, short",
+            Some(s.objective_classic_short),
+            0.0,
+        ),
     ] {
         if let Some(reference) = value {
             checks.push(Check::new(
@@ -165,7 +180,7 @@ pub fn run(case: &Case, progress: Progress) -> Result<QuickValidation, StudyErro
                 format!("robust STE peak-to-peak of the optimum against {baseline} [µm]"),
                 (s.objective_optimum, reference),
                 baseline,
-                (CheckKind::Below, 0.0),
+                (CheckKind::Below, margin),
             ));
         }
     }
@@ -212,5 +227,7 @@ mod tests {
         assert!(!check((99.4, 100.0), (CheckKind::Relative, 0.005)));
         assert!(check((0.8, 1.3), (CheckKind::Below, 0.0)));
         assert!(!check((1.3, 1.3), (CheckKind::Below, 0.0)));
+        assert!(check((0.89, 1.0), (CheckKind::Below, 0.1)));
+        assert!(!check((0.91, 1.0), (CheckKind::Below, 0.1)));
     }
 }

@@ -99,6 +99,18 @@ fn stages(
         out: Some(dir.join(name)),
         ..args.clone()
     };
+    // The LTCA, its sweep and the stability map are of the unmodified pair (added to the case
+    // when it has none), whatever the case's first variant is.
+    let unmodified = |name: &str| {
+        let mut with = sub(name);
+        with.set
+            .extend(study::optimize::unmodified_fe_overrides(case));
+        with.set.push(geardyn::case::Override::set(
+            "lumped.relief",
+            manifest.unmodified_relief.clone(),
+        ));
+        with
+    };
     let stages = study::run::STAGES;
     // Each stage begins by checking for a stop request: a stage that polls none (seconds
     // long) finishes, and the run stops before the next.
@@ -121,7 +133,7 @@ fn stages(
     geometry(&sub("geometry"))?;
     mesh(&sub("mesh"), None)?;
     announce()?;
-    ltca(&sub("ltca"), None, plan.ltca_positions, None)?;
+    ltca(&unmodified("ltca"), None, plan.ltca_positions, None)?;
 
     announce()?;
     // The unmodified pair's runs are the cross-check's baseline runs: one effective case.
@@ -139,7 +151,7 @@ fn stages(
     announce()?;
     let rpm = plan.sweep_rpm.clone();
     sweep(
-        &sub("sweep-ltca"),
+        &unmodified("sweep-ltca"),
         rpm.clone(),
         &LumpedShorthands::default(),
         None,
@@ -151,7 +163,7 @@ fn stages(
     };
     sweep(&sub("sweep-fe"), rpm, &fe_k, None, false)?;
     stability(
-        &sub("stability"),
+        &unmodified("stability"),
         &plan.stability_rpm,
         &LumpedShorthands::default(),
     )?;

@@ -578,6 +578,11 @@ impl StiffnessSource {
     }
 }
 
+/// Hertzian pressure above which a case gets a warning [Pa]: twice the allowable contact stress
+/// of the strongest case-hardened steels (σ_H,lim ≈ 1.5 GPa, ISO 6336-5), where the flanks
+/// yield and no linear-elastic model holds.
+pub const HERTZ_PRESSURE_LIMIT: f64 = 3.0e9;
+
 /// The `[lumped]` section in SI, checked.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LumpedSettings {
@@ -1090,6 +1095,49 @@ impl Case {
         &self.file.name
     }
 
+    /// Largest Hertzian contact pressure at the pitch point over the case's loads (operating
+    /// points and scenes) [Pa]: line contact of two cylinders with the flanks' radii of
+    /// curvature ρ_i = r_wi sin α_w, carrying the whole normal load F_n = T₂/r_b2 (single
+    /// contact) on the face width b: p₀ = √(F_n E* / (π b R)), 1/R = 1/ρ₁ + 1/ρ₂,
+    /// E* = E / (2(1 − ν²)) (Johnson, *Contact Mechanics*, eq. 4.45).
+    pub fn hertz_pressure_pitch(&self) -> f64 {
+        let pair = &self.pair;
+        let torque = self
+            .operating_points
+            .iter()
+            .map(|o| o.torque.abs())
+            .chain(self.scenes.iter().map(|s| s.torque.abs()))
+            .fold(0.0, f64::max);
+        let force = torque / pair.gears[1].base_radius;
+        let width = pair.gears[0]
+            .spec
+            .face_width
+            .min(pair.gears[1].spec.face_width);
+        let [rho1, rho2] = pair
+            .working_pitch_radii
+            .map(|r| r * pair.operating_pressure_angle.sin());
+        let radius = rho1 * rho2 / (rho1 + rho2);
+        let nu = self.material.poisson_ratio;
+        let e_star = self.material.youngs_modulus / (2.0 * (1.0 - nu * nu));
+        (force * e_star / (std::f64::consts::PI * width * radius)).sqrt()
+    }
+
+    /// What the case asks that the models cannot answer faithfully, though it is valid input.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut warnings = Vec::new();
+        let pressure = self.hertz_pressure_pitch();
+        if pressure > HERTZ_PRESSURE_LIMIT {
+            warnings.push(format!(
+                "the largest load gives a Hertzian pressure of {:.1} GPa at the pitch point, above \
+                 any steel's contact strength (case-hardened steels allow about 1.5 GPa, ISO \
+                 6336-5): the flanks would yield, and the linear-elastic, small-strain models here \
+                 no longer apply. Check the torque's unit (N·m) and the face width",
+                pressure * 1e-9
+            ));
+        }
+        warnings
+    }
+
     /// Whether a case file's `text` describes this effective case: compared as TOML values, so
     /// comments, layout and the `--set` header aside. Decides when a finished or interrupted
     /// run on disk may be reused or resumed.
@@ -1437,6 +1485,27 @@ fn gear_relief_request(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The paper pair at 143.6 N·m, by hand: r_w = m z/2 = 57.24 mm (no shift, standard centre
+    /// distance), ρ = r_w sin 20°, R = ρ/2, F_n = T/(r_w cos 20°) = 2 669.74 N, b = 25.4 mm,
+    /// E* = 206 GPa/(2 · 0.91): p₀ = 621.99 MPa, no warning. A hundred times the torque gives
+    /// ten times the pressure, 6.2 GPa, and the warning that names it.
+    #[test]
+    fn hertz_pressure_of_the_paper_pair_and_the_overload_warning() {
+        let case = Case::embedded_default().unwrap();
+        let p = case.hertz_pressure_pitch();
+        assert!((p / 621_985_075.136 - 1.0).abs() < 1e-9, "{p}");
+        assert!(case.warnings().is_empty());
+        let heavy = Case::load_with(
+            None,
+            &[Override::set("operating_point[0].torque_nm", 14360.0)],
+        )
+        .unwrap();
+        assert!((heavy.hertz_pressure_pitch() / p - 10.0).abs() < 1e-9);
+        let warnings = heavy.warnings();
+        assert_eq!(warnings.len(), 1);
+        assert!(warnings[0].contains("6.2 GPa") && warnings[0].contains("linear-elastic"));
+    }
 
     #[test]
     fn embedded_default_is_the_paper_pair() {

@@ -105,3 +105,37 @@ fn an_unbounded_lumped_response_is_stopped_and_explained() {
         .unwrap();
     assert!(damped.status.success());
 }
+
+/// Resources up front: the paper's 3000 rpm scene on the LTCA's 0.2 mm mesh (51 000 elements,
+/// 10 million steps) is announced with its estimate and refused before the time loop starts,
+/// with the ways out (coarser mesh, shorter scene, --force).
+#[test]
+fn an_explicit_run_estimated_above_the_limit_is_refused_up_front() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("fe");
+    let output = geardyn()
+        .args([
+            "fe",
+            "--scene",
+            "high-unmodified",
+            "--fine-element-mm",
+            "0.2",
+            "--coarse-element-mm",
+            "1.5",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("estimated: ") && stderr.contains("hours"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("above the 4.0 hours limit") && stderr.contains("--force"),
+        "{stderr}"
+    );
+    assert!(!out.join("history.csv").exists(), "refused before it ran");
+}

@@ -183,6 +183,65 @@ pub fn scene<'a>(case: &'a Case, name: &str) -> Result<&'a Scene, StudyError> {
         .ok_or_else(|| StudyError::Input(format!("no scene {name:?} in the case")))
 }
 
+/// Wall time per element and step the up-front estimate assumes [ns]: the slowest scenes
+/// measured on 2 cores (52–64 ns at 60 rpm with few congruent elements, 40 ns at 3000 rpm;
+/// validation/performance), rounded up.
+pub const ESTIMATE_NS_PER_ELEMENT_STEP: f64 = 65.0;
+
+/// Estimated wall time above which an explicit run needs `--force` [s]: 4 hours, twice the
+/// longest scene the validation runs.
+pub const ESTIMATE_LIMIT_S: f64 = 4.0 * 3600.0;
+
+/// The cost of running `prepared` for `duration` seconds, before it starts.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CostEstimate {
+    pub elements: usize,
+    pub steps: usize,
+    /// elements × steps × [`ESTIMATE_NS_PER_ELEMENT_STEP`] [s].
+    pub wall_s: f64,
+}
+
+impl CostEstimate {
+    pub fn of(prepared: &PreparedScene, duration: f64) -> Self {
+        let elements = prepared.model.elements();
+        let steps = (duration / prepared.dt).ceil() as usize;
+        CostEstimate {
+            elements,
+            steps,
+            wall_s: elements as f64 * steps as f64 * ESTIMATE_NS_PER_ELEMENT_STEP * 1e-9,
+        }
+    }
+
+    /// Whether it is above [`ESTIMATE_LIMIT_S`].
+    pub fn too_long(&self) -> bool {
+        self.wall_s > ESTIMATE_LIMIT_S
+    }
+
+    /// In words, with what it would take to shorten it.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} elements × {} steps ≈ {} on 2 cores (at {} ns per element-step)",
+            self.elements,
+            self.steps,
+            duration_words(self.wall_s),
+            ESTIMATE_NS_PER_ELEMENT_STEP
+        )
+    }
+}
+
+/// A duration as seconds, minutes, hours or days.
+pub fn duration_words(seconds: f64) -> String {
+    if seconds < 120.0 {
+        format!("{seconds:.0} s")
+    } else if seconds < 7200.0 {
+        format!("{:.0} minutes", seconds / 60.0)
+    } else if seconds < 2.0 * 86400.0 {
+        format!("{:.1} hours", seconds / 3600.0)
+    } else {
+        format!("{:.1} days", seconds / 86400.0)
+    }
+}
+
 /// Meshes and assembles the pair for `scene` with the case's `[fe]` settings and measures its
 /// critical step: the one constructor of an explicit scene (the command, tests and benches).
 /// The mesh dashpot is sized with the pair's own mean mesh stiffness: the LTCA of the scene's

@@ -217,6 +217,25 @@ pub enum ValidationStudy {
     MassScaling,
 }
 
+impl Command {
+    /// The options every case-driven command shares.
+    pub fn common(&self) -> Option<&CommonArgs> {
+        match self {
+            Command::Run { common, .. }
+            | Command::Mesh { common, .. }
+            | Command::Ltca { common, .. }
+            | Command::Sweep { common, .. }
+            | Command::Stability { common, .. }
+            | Command::Fe { common, .. }
+            | Command::Compare { common, .. }
+            | Command::Optimize { common, .. }
+            | Command::Validate { common, .. } => Some(common),
+            Command::Geometry(common) => Some(common),
+            Command::Report { .. } | Command::Case { .. } => None,
+        }
+    }
+}
+
 #[derive(Args, Clone)]
 pub struct CommonArgs {
     /// Case file (TOML). Default: the embedded paper36 case.
@@ -224,6 +243,10 @@ pub struct CommonArgs {
     /// Output folder. Default: a fresh folder out/<command>-<case>-NNN.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Run explicit scenes whose estimated wall time (elements × steps × 65 ns) is above
+    /// the 4-hour limit.
+    #[arg(long)]
+    pub force: bool,
     /// Change a value of the case before it is checked, e.g. fe.plane=stress,
     /// mesh.fine_element_mm=0.05, scene[low-unmodified].duration_s=0.02 (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]

@@ -26,6 +26,9 @@ const EXIT_INTERRUPTED: u8 = 130;
 fn main() -> ExitCode {
     let cli = Cli::parse();
     install_stop_handler();
+    if cli.command.common().is_some_and(|c| c.force) {
+        progress::FORCE.store(true, std::sync::atomic::Ordering::Relaxed);
+    }
     let result = match cli.command {
         Command::Run {
             common,
@@ -133,7 +136,11 @@ fn install_stop_handler() {
 fn load(args: &CommonArgs, shorthands: Vec<Override>) -> Result<Case> {
     let mut overrides = shorthands;
     overrides.extend(args.set.iter().cloned());
-    Ok(Case::load_with(args.case.as_deref(), &overrides)?)
+    let case = Case::load_with(args.case.as_deref(), &overrides)?;
+    for warning in case.warnings() {
+        eprintln!("warning: {warning}");
+    }
+    Ok(case)
 }
 
 /// The output folder: the one asked for (created), or a fresh one under out/.

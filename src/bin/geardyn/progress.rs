@@ -19,6 +19,17 @@ pub fn fe_run(case: &Case, scene: &Scene, dir: &Path) -> Result<study::fe::FeStu
     eprintln!("{}", report::fe::scene_line(scene));
     let prepared = study::fe::prepare(case, scene)?;
     print!("{}", report::fe::prepared_console(case, &prepared, scene));
+    let cost = study::fe::CostEstimate::of(&prepared, scene.duration);
+    eprintln!("estimated: {}", cost.describe());
+    if cost.too_long() && !FORCE.load(std::sync::atomic::Ordering::Relaxed) {
+        anyhow::bail!(
+            "the explicit run would take {}, above the {} limit: coarsen the mesh \
+             (--fine-element-mm, --coarse-element-mm), shorten the scene (--duration-s), or \
+             add --force to run it anyway",
+            study::fe::duration_words(cost.wall_s),
+            study::fe::duration_words(study::fe::ESTIMATE_LIMIT_S)
+        );
+    }
     let bar = progress_bar("explicit FE [{bar:40}] {percent}% elapsed {elapsed}, ETA {eta}");
     bar.set_length(1000);
     // Without a terminal (a log file, CI) the bar is hidden: a line every 10 % instead.
@@ -83,6 +94,9 @@ pub fn fe_check_run(
         .map_err(|e| format!("{e:#}"))
         .and_then(|_| report::optimize::read_fe_check_run(dir))
 }
+
+/// `--force`: run explicit scenes whose estimated cost is above the limit.
+pub static FORCE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
 pub fn progress_bar(template: &str) -> ProgressBar {
     let bar = ProgressBar::new(0);

@@ -791,7 +791,7 @@ impl Case {
                 "mesh.fine_element_mm",
                 fine.to_string(),
                 &format!(
-                    "must be in [0.005·m, coarse_element_mm] = [{:.4}, {coarse}] mm",
+                    "must be in [0.005·m, coarse_element_mm] = [{:.4}, {coarse}] mm (m = tool.module_mm = {module_mm})",
                     0.005 * module_mm
                 ),
             ));
@@ -902,7 +902,7 @@ impl Case {
                 "fe.explicit_coarse_element_mm",
                 explicit_coarse.to_string(),
                 &format!(
-                    "must be in [0.005·m, m] = [{:.4}, {module_mm}] mm",
+                    "must be in [0.005·m, m] = [{:.4}, {module_mm}] mm (m = tool.module_mm; the default is mesh.coarse_element_mm)",
                     0.005 * module_mm
                 ),
             ));
@@ -913,7 +913,7 @@ impl Case {
                 "fe.explicit_fine_element_mm",
                 explicit_fine.to_string(),
                 &format!(
-                    "must be in [0.005·m, the explicit coarse size] = [{:.4}, {explicit_coarse}] mm",
+                    "must be in [0.005·m, the explicit coarse size] = [{:.4}, {explicit_coarse}] mm (m = tool.module_mm = {module_mm})",
                     0.005 * module_mm
                 ),
             ));

@@ -109,15 +109,15 @@ pub enum GeometryError {
 
     #[error(
         "contact ratio {contact_ratio:.4} is below 1: the next tooth pair does not engage before \
-         the present one leaves. Increase the addendum_coeff of the gears, reduce \
-         center_distance_mm, or reduce the pressure angle"
+         the present one leaves. Increase gear1.addendum_coeff and gear2.addendum_coeff, reduce \
+         pair.center_distance_mm, or reduce tool.pressure_angle_deg"
     )]
     ContactRatioBelowOne { contact_ratio: f64 },
 
     #[error(
         "contact ratio {contact_ratio:.4} is 2 or more (high-contact-ratio gearing): the single/double \
          contact points (LPSTC, HPSTC) used throughout geardyn are not defined for it yet. Reduce \
-         the addendum_coeff of the gears or increase the pressure angle"
+         gear1.addendum_coeff and gear2.addendum_coeff or increase tool.pressure_angle_deg"
     )]
     ContactRatioTwoOrMore { contact_ratio: f64 },
 

@@ -366,7 +366,12 @@ fn validate_rack(rack: &BasicRack) -> Result<(), GeometryError> {
         return out(
             "tool.tip_radius_coeff",
             rack.tip_radius_coeff,
-            format!("in [0, {max_rho:.4}] (the full-radius limit of this rack)"),
+            format!(
+                "in [0, {max_rho:.4}] (the full-radius limit of this rack, set by \
+                 tool.pressure_angle_deg = {:.4} and tool.dedendum_coeff = {})",
+                rack.pressure_angle.to_degrees(),
+                rack.dedendum_coeff
+            ),
         );
     }
     Ok(())

@@ -14,6 +14,7 @@ pub mod ltca;
 pub mod lumped;
 pub mod mesh;
 pub mod optimize;
+pub mod properties;
 pub mod quick_validation;
 pub mod run;
 pub mod stability;

@@ -190,6 +190,12 @@ pub enum Command {
         /// The explicit FE scene of `mass-scaling` (default: stiffness).
         #[arg(long, value_name = "NAME", default_value = "stiffness")]
         scene: String,
+        /// Generated cases of `properties`.
+        #[arg(long, value_name = "N", default_value_t = 100_000)]
+        cases: usize,
+        /// Seed of `properties`' generator.
+        #[arg(long, value_name = "S", default_value_t = 1)]
+        seed: u64,
     },
     /// Prints a case file: the given one, or the embedded default (start your own from it:
     /// `geardyn case > my.toml`); with --set, the effective case.
@@ -215,6 +221,10 @@ pub enum ValidationStudy {
     /// The explicit FE's low-speed mass scaling against the same scene unscaled (--scene):
     /// DTE mean and peak-to-peak, k(θ) bin by bin, the cost of each.
     MassScaling,
+    /// Case parsing and geometry over --cases generated cases (the embedded case with keys
+    /// changed to plausible, out-of-range or wrong-typed values, or removed): a finite result
+    /// or an error naming the parameter, never a panic; exits non-zero otherwise.
+    Properties,
 }
 
 impl Command {

@@ -64,6 +64,13 @@ fn main() -> ExitCode {
             ..
         } => validate_integrators(&common, &model),
         Command::Validate {
+            study: ValidationStudy::Properties,
+            common,
+            cases,
+            seed,
+            ..
+        } => validate_properties(&common, cases, seed),
+        Command::Validate {
             study: ValidationStudy::MassScaling,
             common,
             scene,
@@ -435,6 +442,49 @@ fn validate_quick(args: &CommonArgs) -> Result<()> {
             result.checks.len(),
             dir.display()
         );
+    }
+    Ok(())
+}
+
+fn validate_properties(args: &CommonArgs, cases: usize, seed: u64) -> Result<()> {
+    let case = load(args, Vec::new())?;
+    if args.case.is_some() || !args.set.is_empty() {
+        anyhow::bail!(
+            "validate properties generates its cases from the embedded one: give no case file or --set"
+        );
+    }
+    let dir = output_dir(args, "validate-properties", &case)?;
+    let bar = staged_bar();
+    // The samples' panics are caught and counted; their messages would only interleave.
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let result = study::properties::run(cases, seed, &stage(&bar));
+    std::panic::set_hook(hook);
+    bar.finish_and_clear();
+    OutputDir(&dir).json("summary.json", &result)?;
+    println!(
+        "{} generated cases in {:.0} s: {} valid, {} rejected with the parameter named; {} rejected \
+         without it, {} with a NaN or infinite output, {} panicked; plausible-only cases valid: \
+         {:.1} % of {}",
+        result.cases,
+        result.wall_s,
+        result.valid,
+        result.rejected,
+        result.unnamed,
+        result.not_finite,
+        result.panicked,
+        100.0 * result.plausible_valid_share,
+        result.plausible_cases
+    );
+    for failure in &result.failures {
+        println!(
+            "  #{} {:?}: {:?}",
+            failure.index, failure.changes, failure.outcome
+        );
+    }
+    println!("wrote {}", dir.display());
+    if !result.passed() {
+        anyhow::bail!("the property check failed (failures above and in summary.json)");
     }
     Ok(())
 }

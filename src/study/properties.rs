@@ -87,8 +87,11 @@ pub enum Change {
     Removed,
 }
 
+/// The changes that make one generated case from the embedded one.
+pub type Changes = Vec<(Override, Change)>;
+
 /// One generated case: the changes made to the embedded one.
-pub fn sample(seed: u64, index: u64) -> Vec<(Override, Change)> {
+pub fn sample(seed: u64, index: u64) -> Changes {
     let mut rng = StdRng::seed_from_u64(seed ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15));
     let count = rng.random_range(1..=4);
     (0..count)
@@ -315,13 +318,13 @@ impl PropertyReport {
 pub fn run(cases: usize, seed: u64, progress: super::Progress) -> PropertyReport {
     let started = std::time::Instant::now();
     let done = std::sync::atomic::AtomicUsize::new(0);
-    let results: Vec<(u64, Vec<(Override, Change)>, Outcome)> = (0..cases as u64)
+    let results: Vec<(u64, Changes, Outcome)> = (0..cases as u64)
         .into_par_iter()
         .map(|index| {
             let changes = sample(seed, index);
             let outcome = check(&changes);
             let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            if n % 1000 == 0 {
+            if n.is_multiple_of(1000) {
                 progress("generated cases", n, cases);
             }
             (index, changes, outcome)

@@ -150,3 +150,36 @@ fn an_interrupted_sweep_resumes_to_the_uninterrupted_result() {
         strip(read_json(&parted.join("summary.json")))
     );
 }
+
+/// SIGTERM during `optimize --fe-check`'s first explicit run: the optimization's files are
+/// whole, summary.json says the cross-check was interrupted and where its finished runs are,
+/// exit code 130.
+#[test]
+fn an_interrupted_relief_cross_check_says_where_it_stopped() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = coarse_case(dir.path());
+    let out = dir.path().join("optimize");
+    let (code, stderr) = interrupt(
+        geardyn()
+            .arg("optimize")
+            .arg(&case)
+            .args([
+                "--positions",
+                "16",
+                "--rpm",
+                "1000:12000:20",
+                "--fe-check",
+                "--out",
+            ])
+            .arg(&out),
+        " steps",
+        false,
+        Duration::from_secs(1),
+    );
+    assert_eq!(code, 130, "{stderr}");
+    let summary = read_json(&out.join("summary.json"));
+    let message = summary["interrupted"].as_str().unwrap();
+    assert!(message.contains("FE cross-check"), "{message}");
+    assert!(out.join("iterations.csv").exists() && out.join("candidates.csv").exists());
+    assert_no_partial_files(dir.path());
+}

@@ -1,0 +1,107 @@
+//! `geardyn optimize`: the relief optimization and its explicit-FE cross-check.
+
+use super::*;
+
+pub fn optimize(args: &CommonArgs, options: &OptimizeArgs) -> Result<()> {
+    let case = load(
+        args,
+        study::torque_override(options.torque_nm)
+            .into_iter()
+            .collect(),
+    )?;
+    let dir = output_dir(args, "optimize", &case)?;
+    let fe_check = options
+        .fe_check_plan()
+        .map(|plan| (dir.join("fe-check"), plan));
+    optimize_into(args, options, &dir, fe_check)?;
+    println!("wrote {}", dir.display());
+    Ok(())
+}
+
+/// The relief optimization into `dir`, with the FE cross-check `fe_check` (its runs in
+/// FE_ROOT/<candidate>-<scene>; a finished run of the same effective case there is reused; a
+/// run that fails is a row with its reason, not the end of the check).
+pub fn optimize_into(
+    args: &CommonArgs,
+    options: &OptimizeArgs,
+    dir: &Path,
+    fe_check: Option<(PathBuf, FeCheckPlan)>,
+) -> Result<study::optimize::OptimizeStudy> {
+    let torque = || study::torque_override(options.torque_nm).into_iter();
+    let case = load(args, torque().collect())?;
+    let bar = staged_bar();
+    let mut result = study::optimize::run(&case, &options.options(), &stage(&bar))?;
+    bar.finish_and_clear();
+    print!("{}", report::optimize::console(&result));
+    report::optimize::write(OutputDir(dir), &case, &result)?;
+    if let Some((root, plan)) = fe_check {
+        let names: Vec<&str> = result.candidates.iter().map(|c| c.name.as_str()).collect();
+        if let Some(unknown) = plan
+            .only
+            .iter()
+            .flatten()
+            .find(|n| !names.contains(&n.as_str()))
+        {
+            anyhow::bail!(
+                "--fe-check-only {unknown:?} is not a candidate; the candidates are {names:?}"
+            );
+        }
+        let mut runs = Vec::new();
+        for candidate in &result.candidates {
+            if !plan.includes(candidate) {
+                runs.push(None);
+                continue;
+            }
+            let mut overrides: Vec<Override> = torque().collect();
+            overrides.extend(study::optimize::fe_check_overrides(&case, candidate)?);
+            let with_relief = load(args, overrides)?;
+            let mut scene_runs = [None, None];
+            for (s, name) in study::optimize::FE_CHECK_SCENES.iter().enumerate() {
+                if plan.scenes[s] {
+                    let out = root.join(format!("{}-{name}", candidate.name));
+                    scene_runs[s] = Some(fe_check_run(&with_relief, name, &out));
+                    if geardyn::interrupt::stop_requested() {
+                        let message = format!(
+                            "the FE cross-check was interrupted in {}; its finished runs in {} are taken as they are by the next run with the same --out",
+                            out.display(),
+                            root.display()
+                        );
+                        result.summary.interrupted = Some(message.clone());
+                        OutputDir(dir).json("summary.json", &result.summary)?;
+                        anyhow::bail!(message);
+                    }
+                }
+            }
+            runs.push(Some(scene_runs));
+        }
+        let rb2 = case.pair.gears[1].base_radius;
+        let check = study::optimize::fe_check(&result, &runs, rb2);
+        print!(
+            "{}",
+            report::optimize::write_fe_check(OutputDir(dir), &check)?
+        );
+        result.summary.fe_check = Some(check);
+        OutputDir(dir).json("summary.json", &result.summary)?;
+    }
+    let failures: Vec<String> = result
+        .summary
+        .starts
+        .iter()
+        .filter_map(|s| {
+            let failure = s.failure.as_ref()?;
+            Some(format!("{} from {}: {failure}", s.shape.name(), s.start))
+        })
+        .collect();
+    if !failures.is_empty() {
+        anyhow::bail!(
+            "the optimizer stopped early in {} of {} starts ({}); each keeps its last good design \
+             and every output is written to {}. The cause is numerical: refine the LTCA \
+             (mesh.fine_element_mm, --positions) or narrow the search (--max-relief-um)",
+            failures.len(),
+            result.summary.starts.len(),
+            failures.join("; "),
+            dir.display()
+        );
+    }
+    Ok(result)
+}

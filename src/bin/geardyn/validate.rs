@@ -1,0 +1,97 @@
+//! `geardyn validate STUDY`: the quick set, the generated-case property check, the lumped
+//! integrators' failure table and the explicit FE's mass scaling.
+
+use super::*;
+
+pub fn validate_quick(args: &CommonArgs) -> Result<()> {
+    let case = load(args, Vec::new())?;
+    let dir = output_dir(args, "validate-quick", &case)?;
+    let bar = staged_bar();
+    let result = study::quick_validation::run(&case, &stage(&bar))?;
+    bar.finish_and_clear();
+    print!(
+        "{}",
+        report::quick_validation::write(OutputDir(&dir), &result)?
+    );
+    println!("wrote {}", dir.display());
+    if result.failed > 0 {
+        anyhow::bail!(
+            "{} of {} validation checks broke their tolerance (checks.md in {})",
+            result.failed,
+            result.checks.len(),
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+pub fn validate_properties(args: &CommonArgs, cases: usize, seed: u64) -> Result<()> {
+    let case = load(args, Vec::new())?;
+    if args.case.is_some() || !args.set.is_empty() {
+        anyhow::bail!(
+            "validate properties generates its cases from the embedded one: give no case file or --set"
+        );
+    }
+    let dir = output_dir(args, "validate-properties", &case)?;
+    let bar = staged_bar();
+    // The samples' panics are caught and counted; their messages would only interleave.
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let result = study::properties::run(cases, seed, &stage(&bar));
+    std::panic::set_hook(hook);
+    bar.finish_and_clear();
+    OutputDir(&dir).json("summary.json", &result)?;
+    println!(
+        "{} generated cases in {:.0} s: {} valid, {} rejected with the parameter named; {} rejected \
+         without it, {} with a NaN or infinite output, {} panicked; plausible-only cases valid: \
+         {:.1} % of {}",
+        result.cases,
+        result.wall_s,
+        result.valid,
+        result.rejected,
+        result.unnamed,
+        result.not_finite,
+        result.panicked,
+        100.0 * result.plausible_valid_share,
+        result.plausible_cases
+    );
+    for failure in &result.failures {
+        println!(
+            "  #{} {:?}: {:?}",
+            failure.index, failure.changes, failure.outcome
+        );
+    }
+    println!("wrote {}", dir.display());
+    if !result.passed() {
+        anyhow::bail!("the property check failed (failures above and in summary.json)");
+    }
+    Ok(())
+}
+
+pub fn validate_integrators(args: &CommonArgs, options: &LumpedShorthands) -> Result<()> {
+    let case = lumped_case(args, options)?;
+    let summary = study::validate::integrators(&case)?;
+    let dir = output_dir(args, "validate-integrators", &case)?;
+    print!(
+        "{}",
+        report::lumped::write_integrators(OutputDir(&dir), &summary)?
+    );
+    println!("wrote {}", dir.display());
+    Ok(())
+}
+
+pub fn validate_mass_scaling(args: &CommonArgs, scene: &str) -> Result<()> {
+    let scaled = load(args, Vec::new())?;
+    let unscaled = load(args, vec![Override::set("fe.mass_scaling", false)])?;
+    let dir = output_dir(args, "validate-mass-scaling", &scaled)?;
+    let mut runs = Vec::new();
+    for (case, name) in [(&scaled, "scaled"), (&unscaled, "unscaled")] {
+        let out = dir.join(name);
+        runs.push(fe_run(case, study::fe::scene(case, scene)?, &out)?);
+        study::validate::check_scaled(&runs[0])?;
+    }
+    let result = study::validate::mass_scaling(scaled.name(), &scaled.pair, &runs[0], &runs[1])?;
+    let table = report::fe::write_mass_scaling(OutputDir(&dir), &scaled, &result)?;
+    println!("{table}wrote {}", dir.display());
+    Ok(())
+}

@@ -319,10 +319,11 @@ fn run_closes_the_chain_and_writes_the_report() {
             .arg(&out);
         command
     };
-    // SIGTERM in the FE stage: the run stops, says where, and still writes its report.
+    // SIGTERM in the relief stage, after the unmodified pair's FE run has finished: the run
+    // stops, says where, and still writes its report.
     let (code, stderr) = common::interrupt(
         &mut run(),
-        "== 3/6",
+        "== 5/6",
         false,
         std::time::Duration::from_millis(500),
     );
@@ -331,19 +332,27 @@ fn run_closes_the_chain_and_writes_the_report() {
         serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
     let stopped = manifest["interrupted"].as_str().unwrap();
     assert!(
-        stopped.contains("stage 3/6") && stopped.contains("--resume"),
+        stopped.contains("stage 5/6") && stopped.contains("--resume"),
         "{stopped}"
     );
     assert_eq!(read_summary(&out)["interrupted"].as_str(), Some(stopped));
     let partial = std::fs::read_to_string(out.join("index.html")).unwrap();
     assert!(partial.contains("The run stopped early"));
-    assert!(!out.join("sweep-ltca").exists());
-    // --resume finishes it.
+    assert!(!out.join("compare").exists());
+    common::assert_no_partial_files(&out);
+    // --resume takes the finished FE run as it is (the file is not written again) and finishes.
+    let history = out.join("fe/none-stiffness/history.csv");
+    let written = std::fs::metadata(&history).unwrap().modified().unwrap();
     let output = run_ok(&mut Command::from_std({
         let mut command = run();
         command.arg("--resume");
         command
     }));
+    assert_eq!(
+        std::fs::metadata(&history).unwrap().modified().unwrap(),
+        written,
+        "the finished FE run was made again"
+    );
     for file in [
         "geometry/summary.json",
         "mesh/mesh_gear1.vtk",

@@ -8,7 +8,7 @@ use std::path::Path;
 use std::process::Command;
 use std::time::Duration;
 
-use common::interrupt;
+use common::{assert_no_partial_files, interrupt};
 
 use geardyn::report::is_timing_key;
 
@@ -20,19 +20,6 @@ fn geardyn() -> Command {
 
 fn read_json(path: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
-}
-
-/// No temporary file of an atomic write is left anywhere under `dir`.
-fn assert_no_partial_files(dir: &Path) {
-    for entry in std::fs::read_dir(dir).unwrap() {
-        let path = entry.unwrap().path();
-        if path.is_dir() {
-            assert_no_partial_files(&path);
-        } else {
-            let name = path.file_name().unwrap().to_string_lossy().into_owned();
-            assert!(!name.contains(".tmp"), "{} left behind", path.display());
-        }
-    }
 }
 
 fn coarse_case(dir: &Path) -> std::path::PathBuf {

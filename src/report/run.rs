@@ -22,6 +22,9 @@ pub struct RunManifest {
     /// Where a stop request ended the run, and how to continue it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub interrupted: Option<String>,
+    /// The effective case the run was made with (`--resume` refuses another).
+    #[serde(default)]
+    pub case_text: Option<String>,
 }
 
 /// A table of the report.

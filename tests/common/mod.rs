@@ -65,3 +65,16 @@ pub fn interrupt(
     let stderr_text = if stderr { seen } else { other };
     (status.code().unwrap_or(-1), stderr_text)
 }
+
+/// No temporary file of an atomic write is left anywhere under `dir`.
+pub fn assert_no_partial_files(dir: &std::path::Path) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            assert_no_partial_files(&path);
+        } else {
+            let name = path.file_name().unwrap().to_string_lossy().into_owned();
+            assert!(!name.contains(".tmp"), "{} left behind", path.display());
+        }
+    }
+}

@@ -21,6 +21,19 @@ use super::args::{CommonArgs, OptimizeArgs};
 use super::progress::fe_check_run;
 use super::{compare, geometry, load, ltca, mesh, optimize_into, output_dir, stability, sweep};
 
+/// The stages' own folders (the explicit runs live in fe/ and are kept).
+const STAGE_FOLDERS: [&str; 9] = [
+    "geometry",
+    "mesh",
+    "ltca",
+    "sweep-ltca",
+    "sweep-fe",
+    "stability",
+    "optimize",
+    "compare",
+    "tables",
+];
+
 pub fn run(args: &CommonArgs, full: bool, resume: bool) -> Result<()> {
     let case = load(args, Vec::new())?;
     // --resume takes the folder of an earlier run, with its --full.
@@ -37,6 +50,17 @@ pub fn run(args: &CommonArgs, full: bool, resume: bool) -> Result<()> {
                         dir.display()
                     )
                 })?;
+            if !earlier
+                .case_text
+                .as_deref()
+                .is_some_and(|t| case.is_same_case(t))
+            {
+                anyhow::bail!(
+                    "{} holds a run of another case (or other --set values): resume it with the \
+                     case it ran, or start a new run with another --out",
+                    dir.display()
+                );
+            }
             eprintln!(
                 "resuming the run in {}: finished explicit FE runs of the same case are taken \
                  as they are, the other stages (seconds each) run again",
@@ -59,7 +83,22 @@ pub fn run(args: &CommonArgs, full: bool, resume: bool) -> Result<()> {
         ),
         full,
         interrupted: None,
+        case_text: Some(case.text.clone()),
     };
+    // Every stage but the explicit runs (which carry and check their own case) starts from an
+    // empty folder, so the report never shows a stage an earlier run left.
+    for stage in STAGE_FOLDERS {
+        match std::fs::remove_dir_all(dir.join(stage)) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(e)
+                    .with_context(|| format!("cannot clear {}", dir.join(stage).display()))
+            }
+            _ => {}
+        }
+    }
+    for file in ["summary.json", "report.md", "index.html"] {
+        OutputDir(&dir).remove(file)?;
+    }
     OutputDir(&dir).json("run.json", &manifest)?;
     let plan = study::run::RunPlan::new(full);
     let mut reached = 0;

@@ -139,3 +139,47 @@ fn an_explicit_run_estimated_above_the_limit_is_refused_up_front() {
     );
     assert!(!out.join("history.csv").exists(), "refused before it ran");
 }
+
+/// The relief study with an undamped lumped model: the candidates' sweeps diverge near their
+/// resonances. The optimization still finishes and writes everything, each diverged sweep
+/// keeps its speeds before the divergence, and the command names them and exits non-zero.
+#[test]
+fn a_diverging_candidate_sweep_keeps_the_optimization_and_fails_the_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = dir.path().join("case.toml");
+    std::fs::write(
+        &case,
+        include_str!("../data/cases/paper36.toml")
+            .replace("fine_element_mm = 0.2", "fine_element_mm = 0.6"),
+    )
+    .unwrap();
+    let out = dir.path().join("optimize");
+    let output = geardyn()
+        .arg("optimize")
+        .arg(&case)
+        .args([
+            "--positions",
+            "16",
+            "--rpm",
+            "1000:12000:40",
+            "--set",
+            "lumped.damping_ratio=0",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("lumped sweeps of") && stderr.contains("diverged"),
+        "{stderr}"
+    );
+    let summary = read_json(&out.join("summary.json"));
+    let candidates = summary["candidates"].as_array().unwrap();
+    assert!(summary["objective_optimum"].as_f64().unwrap().is_finite());
+    assert!(out.join("sweep.csv").exists() && out.join("harris.csv").exists());
+    assert!(candidates.iter().any(|c| c["sweep_diverged"]
+        .as_str()
+        .is_some_and(|m| m.contains("rpm"))));
+}

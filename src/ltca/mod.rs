@@ -47,7 +47,7 @@ pub enum LtcaError {
     Positions { positions: usize },
     #[error(transparent)]
     Fe(#[from] FeError),
-    #[error("contact solve failed at position {position} (driver rotation {rotation_deg:.4}°): {source}")]
+    #[error("contact solve failed at position {position} (driver rotation {rotation_deg:.4}°): {source}. The flank's compliance or gaps there are not a contact problem the solve can hold: refine mesh.fine_element_mm, check the relief amounts (relief_variant) and bore_radius_mm, or change --positions to step over the position")]
     Contact {
         position: usize,
         rotation_deg: f64,
@@ -421,6 +421,10 @@ impl LtcaModel {
                 progress(done.fetch_add(1, Ordering::Relaxed) + 1);
                 results
             })
+            // Collected whole first, so a failure reports the first failing position whatever
+            // the thread count.
+            .collect::<Vec<Result<Vec<PositionResult>, LtcaError>>>()
+            .into_iter()
             .collect::<Result<_, LtcaError>>()?;
         let mut cycles: Vec<Vec<PositionResult>> = torques
             .iter()

@@ -30,10 +30,11 @@ pub fn console(study: &OptimizeStudy) -> String {
             start.iterations,
             start.ltca_evaluations,
             start.wall_s,
-            if start.stop.converged() {
-                ""
-            } else {
-                ", NOT CONVERGED (iteration limit)"
+            match (&start.stop, &start.failure) {
+                (crate::optimize::robust::Stop::Iterations, _) =>
+                    ", NOT CONVERGED (iteration limit)".to_string(),
+                (_, Some(failure)) => format!(", STOPPED: {failure}"),
+                _ => String::new(),
             }
         );
     }
@@ -58,6 +59,11 @@ pub fn console(study: &OptimizeStudy) -> String {
             c.max_dynamic_factor,
             c.max_dynamic_factor_rpm
         );
+    }
+    for c in &study.candidates {
+        if let Some(diverged) = &c.sweep.diverged {
+            out += &format!("  {}'s lumped sweep stopped: {diverged}\n", c.name);
+        }
     }
     out += &format!(
         "  (* breaks a limit of the optimizer)\nQP loop {:.2} s ({:.3} s in Clarabel), bodies {:.2} s, all {:.2} s\n",
@@ -190,7 +196,13 @@ pub fn write(dir: OutputDir, case: &Case, study: &OptimizeStudy) -> Result<(), R
         &sweep_header.iter().map(|s| s.as_str()).collect::<Vec<_>>(),
         study.rpms.iter().enumerate().map(|(i, rpm)| {
             std::iter::once(f(*rpm))
-                .chain(candidates.iter().map(|c| f(c.sweep.dynamic_factor[i])))
+                .chain(candidates.iter().map(|c| {
+                    // Empty beyond a sweep that diverged there.
+                    c.sweep
+                        .dynamic_factor
+                        .get(i)
+                        .map_or(String::new(), |d| f(*d))
+                }))
                 .collect()
         }),
     )?;

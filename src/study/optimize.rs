@@ -138,6 +138,10 @@ pub struct CandidateSweep {
     pub dte_rms_um: Vec<f64>,
     /// Speeds where the teeth separate.
     pub separated_points: usize,
+    /// Where the lumped response grew without bound, with the cause; the lists above stop at
+    /// the speed before it and the maxima are over those speeds.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub diverged: Option<String>,
 }
 
 /// One design judged by every measure of the study.
@@ -326,6 +330,9 @@ pub struct CandidateLine {
     pub feasible: bool,
     pub max_dynamic_factor: f64,
     pub max_dynamic_factor_rpm: f64,
+    /// Where its lumped sweep diverged (the maximum above is over the speeds before it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sweep_diverged: Option<String>,
 }
 
 /// The study's result.
@@ -606,8 +613,15 @@ fn judge(
     let mesh_stiffness = stiffness::from_ltca(pair, &at_design, torque, format!("ltca ({name})"))
         .map_err(StudyError::Input)?;
     let (lumped, _) = super::lumped::model_on(case, mesh_stiffness.clone(), torque);
-    let (up, _) = sweep::sweep(&lumped, &options.rpm.0)
-        .map_err(|d| StudyError::Input(format!("candidate {name}'s lumped sweep: {d}")))?;
+    // A diverged sweep does not end the study: the candidate keeps the speeds before it.
+    let progress = sweep::continue_sweep(
+        &lumped,
+        &options.rpm.0,
+        sweep::SweepProgress::start(&lumped),
+        &|| false,
+    );
+    let diverged = progress.diverged.as_ref().map(|d| d.to_string());
+    let up = progress.up;
     let as_design = design.unwrap_or_else(|| amounts_of(&modifications));
     let ends = end_relief(&as_design);
     let feasible = robust::feasible(
@@ -638,7 +652,7 @@ fn judge(
         response,
         harris,
         mesh_stiffness,
-        sweep: candidate_sweep(&up, &options.rpm.0),
+        sweep: candidate_sweep(&up, &options.rpm.0, diverged),
     })
 }
 
@@ -654,7 +668,7 @@ fn amounts_of(modifications: &[FlankModification; 2]) -> ReliefDesign {
     }
 }
 
-fn candidate_sweep(up: &[SweepPoint], rpms: &[f64]) -> CandidateSweep {
+fn candidate_sweep(up: &[SweepPoint], rpms: &[f64], diverged: Option<String>) -> CandidateSweep {
     let (at, max) = up
         .iter()
         .enumerate()
@@ -666,6 +680,7 @@ fn candidate_sweep(up: &[SweepPoint], rpms: &[f64]) -> CandidateSweep {
         dynamic_factor: up.iter().map(|p| p.dynamic_factor).collect(),
         dte_rms_um: up.iter().map(|p| p.dte_rms * 1e6).collect(),
         separated_points: up.iter().filter(|p| p.separated).count(),
+        diverged,
     }
 }
 
@@ -750,6 +765,7 @@ fn summarize(
                 feasible: c.feasible,
                 max_dynamic_factor: c.sweep.max_dynamic_factor,
                 max_dynamic_factor_rpm: c.sweep.max_dynamic_factor_rpm,
+                sweep_diverged: c.sweep.diverged.clone(),
             })
             .collect(),
         fe_check: None,

@@ -92,6 +92,20 @@ pub fn optimize_into(
             Some(format!("{} from {}: {failure}", s.shape.name(), s.start))
         })
         .collect();
+    let diverged: Vec<String> = result
+        .candidates
+        .iter()
+        .filter_map(|c| Some(format!("{}: {}", c.name, c.sweep.diverged.as_ref()?)))
+        .collect();
+    if !diverged.is_empty() {
+        anyhow::bail!(
+            "the lumped sweeps of {} candidates diverged ({}); the optimization and every output \
+             up to there are written to {}",
+            diverged.len(),
+            diverged.join("; "),
+            dir.display()
+        );
+    }
     if !failures.is_empty() {
         anyhow::bail!(
             "the optimizer stopped early in {} of {} starts ({}); each keeps its last good design \

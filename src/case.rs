@@ -1014,7 +1014,11 @@ impl Case {
                 return Err(invalid(
                     &key("ramp_s"),
                     sc.ramp_s.to_string(),
-                    "must be ≥ 0 and shorter than duration_s",
+                    &format!(
+                        "must be ≥ 0 and shorter than {} = {}",
+                        key("duration_s"),
+                        sc.duration_s
+                    ),
                 ));
             }
             if let Some(margin) = sc.mass_scaling_margin {

@@ -184,9 +184,11 @@ pub fn check(changes: &[(Override, Change)]) -> Outcome {
     })
 }
 
-/// Whether `message` names a parameter of the case file: one of the changed keys (whole, its
-/// last part such as `teeth` or `module_mm`, or that without its unit), or any key of the case
-/// file written as `section.key` (a limit set by another parameter names that one).
+/// Whether `message` names a parameter of the case file precisely: a changed key by its path
+/// (`gear1.teeth`; an array entry's key by its index and name, `scene[0]` … `.duration_s`, or
+/// by its path inside the entry, `gear1.tip.amount_um`), as the TOML line that holds it
+/// (`teeth = "abc"`) or as a missing field (`` `teeth` ``); or, for a limit another parameter
+/// sets, any key of the case file by its full `section.key`.
 fn names_a_parameter(message: &str, changes: &[(Override, Change)]) -> bool {
     let changed = changes.iter().any(|(o, _)| {
         let key = match o {
@@ -194,26 +196,23 @@ fn names_a_parameter(message: &str, changes: &[(Override, Change)]) -> bool {
             Override::Append { array, .. } => array.as_str(),
         };
         let last = key.rsplit('.').next().unwrap_or(key);
-        let bare = [
-            "_mm",
-            "_um",
-            "_gpa",
-            "_deg",
-            "_nm",
-            "_rpm",
-            "_s",
-            "_kg_per_m3",
-            "_us",
-        ]
-        .iter()
-        .fold(last, |k, unit| k.strip_suffix(unit).unwrap_or(k));
-        message.contains(key) || message.contains(last) || message.contains(bare)
+        let in_entry = match key.split_once("].") {
+            Some((entry, inner)) => {
+                message.contains(&format!("{entry}]")) && message.contains(&format!(".{inner}"))
+                    || inner.contains('.') && message.contains(inner)
+            }
+            None => false,
+        };
+        message.contains(key)
+            || in_entry
+            || message.contains(&format!("{last} ="))
+            || message.contains(&format!("`{last}`"))
     });
     changed || case_keys().iter().any(|k| message.contains(k.as_str()))
 }
 
-/// Every key of the embedded case as `section.key`, and the arrays of tables by name
-/// (`relief_variant`, `scene`, `operating_point`: their messages name the entry).
+/// Every key of the embedded case's tables as `section.key`, and the dotted keys inside its
+/// arrays of tables (`gear1.tip.amount_um` of a relief variant).
 fn case_keys() -> &'static [String] {
     static KEYS: std::sync::OnceLock<Vec<String>> = std::sync::OnceLock::new();
     KEYS.get_or_init(|| {
@@ -226,7 +225,11 @@ fn case_keys() -> &'static [String] {
                 toml::Value::Table(inner) => {
                     keys.extend(inner.keys().map(|k| format!("{section}.{k}")))
                 }
-                toml::Value::Array(_) => keys.push(section.clone()),
+                toml::Value::Array(entries) => {
+                    for entry in entries.iter().filter_map(|e| e.as_table()) {
+                        dotted(entry, String::new(), &mut keys);
+                    }
+                }
                 _ => {}
             }
         }
@@ -359,5 +362,62 @@ pub fn run(cases: usize, seed: u64, progress: super::Progress) -> PropertyReport
         plausible_valid_share: plausible_valid as f64 / plausible.len().max(1) as f64,
         failures,
         wall_s: started.elapsed().as_secs_f64(),
+    }
+}
+
+/// The keys of `table` below the first level, as `a.b.c` (`gear1.tip.amount_um`).
+fn dotted(table: &toml::Table, prefix: String, keys: &mut Vec<String>) {
+    for (k, v) in table {
+        let path = if prefix.is_empty() {
+            k.clone()
+        } else {
+            format!("{prefix}.{k}")
+        };
+        match v {
+            toml::Value::Table(inner) => dotted(inner, path, keys),
+            _ if !prefix.is_empty() => keys.push(path),
+            _ => {}
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn set(key: &str) -> Vec<(Override, Change)> {
+        vec![(Override::set(key, 1.0), Change::OutOfRange)]
+    }
+
+    /// The check accepts a message that names the changed key precisely, or another key by
+    /// its full path, and nothing vaguer.
+    #[test]
+    fn a_message_names_a_parameter_only_precisely() {
+        let teeth = set("gear1.teeth");
+        assert!(names_a_parameter("gear1.teeth = 3 is invalid", &teeth));
+        assert!(names_a_parameter("12 | teeth = \"abc\"", &teeth));
+        assert!(names_a_parameter("missing field `teeth`", &teeth));
+        assert!(names_a_parameter("must be below tool.module_mm", &teeth));
+        assert!(!names_a_parameter("solve failed", &teeth));
+        assert!(!names_a_parameter("too many teeth", &teeth));
+        let scene = set("scene[0].duration_s");
+        assert!(names_a_parameter(
+            "scene[0] (\"low-unmodified\").duration_s = -1 is invalid",
+            &scene
+        ));
+        assert!(!names_a_parameter("the scene failed", &scene));
+        assert!(!names_a_parameter(
+            "scene[1] (\"x\").ramp_s is invalid",
+            &scene
+        ));
+        let relief = set("relief_variant[1].gear1.tip.amount_um");
+        assert!(names_a_parameter(
+            "relief_variant \"tip20-root10\": gear1.tip.amount_um: -5 µm is out of range",
+            &relief
+        ));
+        assert!(!names_a_parameter(
+            "relief_variant \"tip20-root10\" is wrong",
+            &relief
+        ));
     }
 }

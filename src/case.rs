@@ -1506,6 +1506,12 @@ mod tests {
         )
         .unwrap();
         assert!((heavy.hertz_pressure_pitch() / p - 10.0).abs() < 1e-9);
+        // Unequal gears, 36:72, by hand the same way: r_w2 = 114.48 mm carries F_n = T/r_b2
+        // and the flank radii differ (R = ρ₁ρ₂/(ρ₁ + ρ₂)): 380.89 MPa. Swapping the gears' roles
+        // would give another number.
+        let ratio2 = Case::load_with(None, &[Override::set("gear2.teeth", 72)]).unwrap();
+        let p2 = ratio2.hertz_pressure_pitch();
+        assert!((p2 / 380_886_515.428 - 1.0).abs() < 1e-9, "{p2}");
         let warnings = heavy.warnings();
         assert_eq!(warnings.len(), 1);
         assert!(warnings[0].contains("6.2 GPa") && warnings[0].contains("linear-elastic"));

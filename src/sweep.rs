@@ -95,10 +95,10 @@ impl std::fmt::Display for SweepDivergence {
             write!(
                 f,
                 ". The linear model (drive flanks in contact throughout) is stable here (largest \
-                 Floquet multiplier {:.4}), so the growth comes from the contact: with zero \
-                 backlash the teeth switch between drive and back flanks, each with its own k(θ), \
-                 and that switching pumps energy in faster than the damping takes it out (or a \
-                 mesh harmonic meets an undamped mode). Raise the damping (lumped.damping_ratio \
+                 Floquet multiplier {:.4}), so the growth comes from the contact: the teeth \
+                 leave the drive flanks (and, at zero backlash, meet the back flanks with their own \
+                 k(θ)), and that switching pumps energy in faster than the damping takes it out \
+                 (or a mesh harmonic meets an undamped mode). Raise the damping (lumped.damping_ratio \
                  or --damping-ratio; 0.02-0.1 is usual for steel spur gears)",
                 self.floquet_max_multiplier
             )

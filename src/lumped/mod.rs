@@ -271,18 +271,26 @@ impl MeshModel {
         DIVERGENCE_DEFLECTIONS * scale.max(1e-6)
     }
 
-    /// Whether `state` has left the model's range ([`MeshModel::divergence_bound`]) or is not
-    /// finite.
+    /// Whether `state` has left the model's range or is not finite: the mesh coordinate beyond
+    /// [`MeshModel::divergence_bound`], a bearing coordinate beyond [`DIVERGENCE_DEFLECTIONS`]
+    /// × its own static deflection F/k_b (at least 1 µm), so a soft support's bounded
+    /// resonance is not taken for divergence.
     pub fn has_diverged(&self, state: &State) -> bool {
-        let bound = self.divergence_bound();
         let reference = self.static_state();
         let finite = state.q.iter().chain(&state.v).all(|x| x.is_finite());
+        let bound = |i: usize| match (i, &self.bearings) {
+            (0, _) | (_, None) => self.divergence_bound(),
+            (i, Some(b)) => {
+                DIVERGENCE_DEFLECTIONS * (self.force / b.stiffness[i - 1]).abs().max(1e-6)
+            }
+        };
         !finite
             || state
                 .q
                 .iter()
                 .zip(&reference.q)
-                .any(|(q, q0)| !((q - q0).abs() <= bound))
+                .enumerate()
+                .any(|(i, (q, q0))| !((q - q0).abs() <= bound(i)))
     }
 
     /// The static state under F at the mean stiffness (TE and backlash left out): δ = F/k̄,

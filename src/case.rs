@@ -638,6 +638,20 @@ impl Case {
             value,
             limit: limit.into(),
         };
+        // `name` at `key` is one of `variants`, or the error that lists them.
+        let known_variant = |key: &str, name: &str, variants: &[ReliefVariant]| {
+            if variants.iter().any(|v| v.name == name) {
+                return Ok(());
+            }
+            Err(invalid(
+                key,
+                format!("{name:?}"),
+                &format!(
+                    "name one of the relief variants: {:?}",
+                    variants.iter().map(|v| v.name.as_str()).collect::<Vec<_>>()
+                ),
+            ))
+        };
         // A mass-scaling margin: the scaled mesh mode over the fifth mesh harmonic.
         let check_mass_scaling_margin = |parameter: &str, margin: f64| {
             if (1.5..=100.0).contains(&margin) {
@@ -983,19 +997,7 @@ impl Case {
                     ))
                 }
             };
-            if !relief_variants.iter().any(|v| v.name == sc.relief) {
-                return Err(invalid(
-                    &key("relief"),
-                    format!("{:?}", sc.relief),
-                    &format!(
-                        "name one of the relief variants: {:?}",
-                        relief_variants
-                            .iter()
-                            .map(|v| v.name.as_str())
-                            .collect::<Vec<_>>()
-                    ),
-                ));
-            }
+            known_variant(&key("relief"), &sc.relief, &relief_variants)?;
             if !(sc.friction >= 0.0 && sc.friction < 1.0) {
                 return Err(invalid(
                     &key("friction"),
@@ -1064,19 +1066,7 @@ impl Case {
             relief: lumped.relief.clone(),
         };
         if let Some(name) = &lumped.relief {
-            if !relief_variants.iter().any(|v| &v.name == name) {
-                return Err(invalid(
-                    "lumped.relief",
-                    format!("{name:?}"),
-                    &format!(
-                        "name one of the relief variants: {:?}",
-                        relief_variants
-                            .iter()
-                            .map(|v| v.name.as_str())
-                            .collect::<Vec<_>>()
-                    ),
-                ));
-            }
+            known_variant("lumped.relief", name, &relief_variants)?;
         }
         Ok(Case {
             source: source.into(),

@@ -51,25 +51,36 @@ pub fn sweep(
     let outcome = study::sweep::run(&case, &options)?;
     let dir = output_dir(args, "sweep", &case)?;
     let out = OutputDir(&dir);
+    // A sweep that stopped early keeps its points in the checkpoint, and its summary says why.
+    let stopped = |checkpoint: &study::sweep::SweepCheckpoint,
+                   interrupted: Option<String>,
+                   diverged: Option<String>|
+     -> Result<()> {
+        out.case(&case)?;
+        out.json(checkpoint_file, checkpoint)?;
+        let resume = interrupted.as_ref().map(|_| {
+            format!(
+                "geardyn sweep ... --resume --out {} (the same case, --set and --rpm)",
+                dir.display()
+            )
+        });
+        out.json(
+            "summary.json",
+            &study::StoppedEarly {
+                case: case.name().to_string(),
+                command: "sweep".into(),
+                interrupted,
+                diverged,
+                resume,
+            },
+        )?;
+        Ok(())
+    };
     let result = match outcome {
         study::sweep::SweepRun::Done(result) => result,
         study::sweep::SweepRun::Interrupted(checkpoint) => {
             let message = checkpoint.describe();
-            out.case(&case)?;
-            out.json(checkpoint_file, &checkpoint)?;
-            out.json(
-                "summary.json",
-                &study::StoppedEarly {
-                    case: case.name().to_string(),
-                    command: "sweep".into(),
-                    interrupted: Some(message.clone()),
-                    diverged: None,
-                    resume: Some(format!(
-                        "geardyn sweep ... --resume --out {} (the same case, --set and --rpm)",
-                        dir.display()
-                    )),
-                },
-            )?;
+            stopped(&checkpoint, Some(message.clone()), None)?;
             anyhow::bail!(
                 "sweep {message}; its points are kept in {}: add --resume --out {} to continue",
                 dir.join(checkpoint_file).display(),
@@ -79,18 +90,7 @@ pub fn sweep(
         study::sweep::SweepRun::Diverged(checkpoint) => {
             let divergence = checkpoint.progress.diverged.as_ref().expect("diverged");
             let message = format!("{divergence}; {}", checkpoint.describe());
-            out.case(&case)?;
-            out.json(checkpoint_file, &checkpoint)?;
-            out.json(
-                "summary.json",
-                &study::StoppedEarly {
-                    case: case.name().to_string(),
-                    command: "sweep".into(),
-                    interrupted: None,
-                    diverged: Some(message.clone()),
-                    resume: None,
-                },
-            )?;
+            stopped(&checkpoint, None, Some(message.clone()))?;
             anyhow::bail!(
                 "{message}. The points swept before it are in {}",
                 dir.join(checkpoint_file).display()

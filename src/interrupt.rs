@@ -1,5 +1,6 @@
 //! A request to stop, set by the binary on SIGINT or SIGTERM and polled by the long loops (the
-//! explicit time loop, the speed sweep, the relief optimizer, the stages of `geardyn run`). A
+//! explicit time loop, the speed sweep, the relief study's FE cross-check, the stages of
+//! `geardyn run`; the optimizer's own loop, seconds long, finishes first). A
 //! loop that sees it stops at a consistent state, between two steps or points, and hands back
 //! what it has; the caller writes that, says where it stopped and exits non-zero.
 //!

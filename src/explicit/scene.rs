@@ -477,6 +477,24 @@ pub struct CoupledStep {
     pub dt_critical_s: f64,
 }
 
+/// Wall time per element and step of `prepared` on this machine and thread count [s]: `steps`
+/// steps from the scene's initial state, timed (the first of them warm the caches and are
+/// included, so the figure errs high).
+pub fn measure_step_cost(prepared: &PreparedScene, steps: usize) -> f64 {
+    let model = &prepared.model;
+    let mut integrator = PairIntegrator::new(model, prepared.drive, prepared.dt, prepared.beta_k);
+    integrator.mesh_damping = prepared.mesh_damping;
+    let mut state = model.initial_state(&prepared.drive);
+    integrator.initialize(&mut state);
+    let started = Instant::now();
+    for _ in 0..steps {
+        if integrator.step(&mut state).is_err() {
+            break;
+        }
+    }
+    started.elapsed().as_secs_f64() / (steps.max(1) as f64 * model.elements().max(1) as f64)
+}
+
 /// Integrates the scene for `duration` seconds; `progress` sees the fraction done (called about
 /// every 0.5 % of the run). On divergence, or on a stop request ([`crate::interrupt`]), the
 /// history up to the last recorded sample is kept.

@@ -183,10 +183,13 @@ pub fn scene<'a>(case: &'a Case, name: &str) -> Result<&'a Scene, StudyError> {
         .ok_or_else(|| StudyError::Input(format!("no scene {name:?} in the case")))
 }
 
-/// Wall time per element and step the up-front estimate assumes [ns]: the slowest scenes
-/// measured on 2 cores (52–64 ns at 60 rpm with few congruent elements, 40 ns at 3000 rpm;
-/// validation/performance), rounded up.
-pub const ESTIMATE_NS_PER_ELEMENT_STEP: f64 = 65.0;
+/// Steps timed on the prepared scene for the up-front estimate (a fraction of a second).
+pub const CALIBRATION_STEPS: usize = 200;
+
+/// The least wall time per element and step the estimate takes [ns]: the fastest measured
+/// whole scene on 2 cores (36 ns at 3000 rpm, validation/performance), rounded down; the
+/// calibration from rest can read lower, without the contact's share.
+pub const ESTIMATE_MIN_NS_PER_ELEMENT_STEP: f64 = 30.0;
 
 /// Estimated wall time above which an explicit run needs `--force` [s]: 4 hours, twice the
 /// longest scene the validation runs.
@@ -197,18 +200,26 @@ pub const ESTIMATE_LIMIT_S: f64 = 4.0 * 3600.0;
 pub struct CostEstimate {
     pub elements: usize,
     pub steps: usize,
-    /// elements × steps × [`ESTIMATE_NS_PER_ELEMENT_STEP`] [s].
+    /// Wall time per element and step measured on this machine over [`CALIBRATION_STEPS`]
+    /// steps of the scene, at least [`ESTIMATE_MIN_NS_PER_ELEMENT_STEP`] [ns].
+    pub ns_per_element_step: f64,
+    /// elements × steps × the rate [s].
     pub wall_s: f64,
 }
 
 impl CostEstimate {
+    /// Times [`CALIBRATION_STEPS`] steps of `prepared` and scales them to `duration`.
     pub fn of(prepared: &PreparedScene, duration: f64) -> Self {
         let elements = prepared.model.elements();
         let steps = (duration / prepared.dt).ceil() as usize;
+        let measured =
+            crate::explicit::scene::measure_step_cost(prepared, CALIBRATION_STEPS.min(steps)) * 1e9;
+        let rate = measured.max(ESTIMATE_MIN_NS_PER_ELEMENT_STEP);
         CostEstimate {
             elements,
             steps,
-            wall_s: elements as f64 * steps as f64 * ESTIMATE_NS_PER_ELEMENT_STEP * 1e-9,
+            ns_per_element_step: rate,
+            wall_s: elements as f64 * steps as f64 * rate * 1e-9,
         }
     }
 
@@ -217,14 +228,15 @@ impl CostEstimate {
         self.wall_s > ESTIMATE_LIMIT_S
     }
 
-    /// In words, with what it would take to shorten it.
+    /// In words, with the rate it assumed.
     pub fn describe(&self) -> String {
         format!(
-            "{} elements × {} steps ≈ {} on 2 cores (at {} ns per element-step)",
+            "{} elements × {} steps ≈ {} ({:.0} ns per element-step, timed on {} steps here)",
             self.elements,
             self.steps,
             duration_words(self.wall_s),
-            ESTIMATE_NS_PER_ELEMENT_STEP
+            self.ns_per_element_step,
+            CALIBRATION_STEPS.min(self.steps)
         )
     }
 }

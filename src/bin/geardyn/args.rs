@@ -253,8 +253,8 @@ pub struct CommonArgs {
     /// Output folder. Default: a fresh folder out/<command>-<case>-NNN.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
-    /// Run explicit scenes whose estimated wall time (elements × steps × 65 ns) is above
-    /// the 4-hour limit.
+    /// Run explicit scenes whose estimated wall time (elements × steps × the rate timed on
+    /// the scene) is above the 4-hour limit.
     #[arg(long)]
     pub force: bool,
     /// Change a value of the case before it is checked, e.g. fe.plane=stress,

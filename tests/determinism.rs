@@ -6,10 +6,11 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use assert_cmd::Command;
-use geardyn::report::is_timing_key;
+mod common;
 
-const DEFAULT: &str = include_str!("../data/cases/paper36.toml");
+use assert_cmd::Command;
+use common::coarse_case;
+use geardyn::report::is_timing_key;
 
 /// Every CSV and JSON file under `dir`, by path relative to it.
 fn outputs(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
@@ -72,13 +73,8 @@ fn csv_without_timings(bytes: &[u8]) -> String {
 /// JSON value by value, so a float must round-trip to the same bits).
 fn assert_deterministic(name: &str, args: &[&str]) {
     let dir = tempfile::tempdir().unwrap();
-    let case = dir.path().join("case.toml");
     // A coarse LTCA mesh keeps the five commands to about a minute in all.
-    std::fs::write(
-        &case,
-        DEFAULT.replace("fine_element_mm = 0.2", "fine_element_mm = 0.6"),
-    )
-    .unwrap();
+    let case = coarse_case(dir.path());
     let mut reference: Option<(usize, BTreeMap<PathBuf, Vec<u8>>)> = None;
     for threads in [1, 2, 8] {
         let out = dir.path().join(format!("{name}-{threads}"));

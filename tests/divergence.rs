@@ -1,17 +1,16 @@
 //! Divergence on the command line: a run whose response blows up stops with a message that names
 //! the cause and the remedy, exits non-zero, and leaves every result up to that point on disk.
 //! (The optimizer's failure path and the contact solve's are tested on synthetic inputs in
-//! tests/optimize.rs and src/ltca/contact.rs; the lumped integrator's in src/lumped.)
+//! tests/optimize.rs and src/ltca/contact.rs; the lumped integrator's in tests/lumped.rs.)
+
+mod common;
 
 use assert_cmd::Command;
-use std::path::Path;
+
+use common::{coarse_case, read_json};
 
 fn geardyn() -> Command {
     Command::cargo_bin("geardyn").unwrap()
-}
-
-fn read_json(path: &Path) -> serde_json::Value {
-    serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
 }
 
 /// An explicit step 2.5× the stable one: the energy balance catches the blow-up within a few
@@ -146,13 +145,7 @@ fn an_explicit_run_estimated_above_the_limit_is_refused_up_front() {
 #[test]
 fn a_diverging_candidate_sweep_keeps_the_optimization_and_fails_the_command() {
     let dir = tempfile::tempdir().unwrap();
-    let case = dir.path().join("case.toml");
-    std::fs::write(
-        &case,
-        include_str!("../data/cases/paper36.toml")
-            .replace("fine_element_mm = 0.2", "fine_element_mm = 0.6"),
-    )
-    .unwrap();
+    let case = coarse_case(dir.path());
     let out = dir.path().join("optimize");
     let output = geardyn()
         .arg("optimize")

@@ -8,28 +8,12 @@ use std::path::Path;
 use std::process::Command;
 use std::time::Duration;
 
-use common::{assert_no_partial_files, interrupt};
+use common::{assert_no_partial_files, coarse_case, interrupt, read_json};
 
 use geardyn::report::is_timing_key;
 
-const DEFAULT: &str = include_str!("../data/cases/paper36.toml");
-
 fn geardyn() -> Command {
     Command::new(assert_cmd::cargo::cargo_bin!("geardyn"))
-}
-
-fn read_json(path: &Path) -> serde_json::Value {
-    serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
-}
-
-fn coarse_case(dir: &Path) -> std::path::PathBuf {
-    let case = dir.join("case.toml");
-    std::fs::write(
-        &case,
-        DEFAULT.replace("fine_element_mm = 0.2", "fine_element_mm = 0.6"),
-    )
-    .unwrap();
-    case
 }
 
 #[test]

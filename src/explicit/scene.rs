@@ -477,15 +477,22 @@ pub struct CoupledStep {
     pub dt_critical_s: f64,
 }
 
-/// Wall time per element and step of `prepared` on this machine and thread count [s]: `steps`
-/// steps from the scene's initial state, timed (the first of them warm the caches and are
-/// included, so the figure errs high).
-pub fn measure_step_cost(prepared: &PreparedScene, steps: usize) -> f64 {
+/// The integrator of `prepared` and the scene's initial state, ready for its first step.
+fn start(prepared: &PreparedScene) -> (PairIntegrator<'_>, crate::explicit::pair::PairState) {
     let model = &prepared.model;
     let mut integrator = PairIntegrator::new(model, prepared.drive, prepared.dt, prepared.beta_k);
     integrator.mesh_damping = prepared.mesh_damping;
     let mut state = model.initial_state(&prepared.drive);
     integrator.initialize(&mut state);
+    (integrator, state)
+}
+
+/// Wall time per element and step of `prepared` on this machine and thread count [s]: `steps`
+/// steps from the scene's initial state, timed (the first of them warm the caches and are
+/// included, so the figure errs high).
+pub fn measure_step_cost(prepared: &PreparedScene, steps: usize) -> f64 {
+    let model = &prepared.model;
+    let (mut integrator, mut state) = start(prepared);
     let started = Instant::now();
     for _ in 0..steps {
         if integrator.step(&mut state).is_err() {
@@ -505,10 +512,7 @@ pub fn run(
     progress: &mut dyn FnMut(f64),
 ) -> RunOutcome {
     let model = &prepared.model;
-    let mut integrator = PairIntegrator::new(model, prepared.drive, prepared.dt, prepared.beta_k);
-    integrator.mesh_damping = prepared.mesh_damping;
-    let mut state = model.initial_state(&prepared.drive);
-    integrator.initialize(&mut state);
+    let (mut integrator, mut state) = start(prepared);
     let total_steps = (duration / prepared.dt).ceil() as usize;
     let every = ((output_interval / prepared.dt).round() as usize).max(1);
     let report_every = (total_steps / 200).max(1);

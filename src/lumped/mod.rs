@@ -278,8 +278,9 @@ impl MeshModel {
     pub fn has_diverged(&self, state: &State) -> bool {
         let reference = self.static_state();
         let finite = state.q.iter().chain(&state.v).all(|x| x.is_finite());
+        let mesh_bound = self.divergence_bound();
         let bound = |i: usize| match (i, &self.bearings) {
-            (0, _) | (_, None) => self.divergence_bound(),
+            (0, _) | (_, None) => mesh_bound,
             (i, Some(b)) => {
                 DIVERGENCE_DEFLECTIONS * (self.force / b.stiffness[i - 1]).abs().max(1e-6)
             }

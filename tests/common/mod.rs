@@ -1,4 +1,6 @@
 //! Helpers shared by the integration tests that drive the binary.
+// Each test crate includes this module and uses part of it.
+#![allow(dead_code)]
 
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};
@@ -77,4 +79,22 @@ pub fn assert_no_partial_files(dir: &std::path::Path) {
             assert!(!name.contains(".tmp"), "{} left behind", path.display());
         }
     }
+}
+
+/// The `summary.json` (or any JSON file) at `path`.
+pub fn read_json(path: &std::path::Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
+}
+
+/// The embedded case with 0.6 mm LTCA flanks (seconds instead of minutes), written to
+/// `dir/case.toml`.
+pub fn coarse_case(dir: &std::path::Path) -> std::path::PathBuf {
+    let case = dir.join("case.toml");
+    std::fs::write(
+        &case,
+        include_str!("../../data/cases/paper36.toml")
+            .replace("fine_element_mm = 0.2", "fine_element_mm = 0.6"),
+    )
+    .unwrap();
+    case
 }

@@ -38,7 +38,7 @@ fn ltca(c: &mut Criterion) {
         b.iter(|| {
             let triplets =
                 stiffness_triplets(&mesh.nodes, &mesh.elements, &d, gear.spec.face_width);
-            FactorizedStiffness::new(2 * mesh.nodes.len(), &triplets, &fixed).unwrap()
+            FactorizedStiffness::new(2 * mesh.nodes.len(), triplets, &fixed).unwrap()
         })
     });
     group.bench_function("setup_both_gears", |b| {

@@ -30,6 +30,7 @@ pub mod lumped;
 pub mod mesh;
 pub mod optimize;
 pub mod report;
+pub mod resources;
 pub mod samples;
 pub mod signal;
 pub mod stiffness;

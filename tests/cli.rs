@@ -469,6 +469,18 @@ fn sweep_writes_curves_and_summary() {
         .unwrap();
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("FROM:TO:N"));
+    // A slip of a few zeros is refused before a billion speeds are allocated.
+    let huge = geardyn()
+        .args(["sweep", "--rpm", "100:12000:1000000000", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!huge.status.success());
+    let message = String::from_utf8_lossy(&huge.stderr);
+    assert!(
+        message.contains("1000000000 speeds") && message.contains("split the range"),
+        "{message}"
+    );
 }
 
 #[test]

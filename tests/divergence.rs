@@ -139,6 +139,59 @@ fn an_explicit_run_estimated_above_the_limit_is_refused_up_front() {
     assert!(!out.join("history.csv").exists(), "refused before it ran");
 }
 
+/// Memory up front, against a limit set for the test (GEARDYN_MEMORY_LIMIT_MB; the machine's
+/// own is 80 % of its available memory): a mesh too large to build is refused on its counted
+/// size before it is meshed; a stiffness factor too large is refused after the symbolic
+/// analysis, before it is computed; --force builds it anyway.
+#[test]
+fn models_estimated_above_the_memory_limit_are_refused_up_front() {
+    let dir = tempfile::tempdir().unwrap();
+    let ltca = |limit_mb: &str, extra: &[&str]| {
+        let output = geardyn()
+            .env("GEARDYN_MEMORY_LIMIT_MB", limit_mb)
+            .args(["ltca", "--relief", "none", "--positions", "8", "--out"])
+            .arg(dir.path().join("ltca"))
+            .args(extra)
+            .output()
+            .unwrap();
+        (
+            output.status.code(),
+            String::from_utf8_lossy(&output.stderr).to_string(),
+        )
+    };
+    // Elements of 0.02 mm everywhere: about 49 GB of triplets, refused at once.
+    let (code, stderr) = ltca(
+        "2000",
+        &[
+            "--set",
+            "mesh.fine_element_mm=0.02",
+            "--set",
+            "mesh.coarse_element_mm=0.02",
+        ],
+    );
+    assert_eq!(code, Some(1));
+    for needed in [
+        "meshes at 0.02 / 0.02 mm",
+        "GB",
+        "limit of 2.0 GB",
+        "coarsen the mesh",
+        "--force",
+    ] {
+        assert!(stderr.contains(needed), "{needed:?} missing: {stderr}");
+    }
+    // The default mesh: its meshes fit in 35 MB, its factor (27 MB) and workspace do not.
+    let (code, stderr) = ltca("35", &[]);
+    assert_eq!(code, Some(1));
+    assert!(
+        stderr.contains("the Cholesky factor of a stiffness matrix of")
+            && stderr.contains("limit of 35 MB"),
+        "{stderr}"
+    );
+    let (code, stderr) = ltca("35", &["--force"]);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(dir.path().join("ltca/summary.json").exists());
+}
+
 /// The relief study with an undamped lumped model: the candidates' sweeps diverge near their
 /// resonances. The optimization still finishes and writes everything, each diverged sweep
 /// keeps its speeds before the divergence, and the command names them and exits non-zero.

@@ -94,7 +94,7 @@ fn cantilever() -> (ExplicitBody, Vec<bool>, State) {
             load[2 * i + 1] = 500.0 / tip;
         }
     }
-    let u = FactorizedStiffness::new(n, &triplets, &fixed_dofs)
+    let u = FactorizedStiffness::new(n, triplets.clone(), &fixed_dofs)
         .unwrap()
         .solve(&load);
     let x: Vec<f64> = nodes

@@ -170,3 +170,58 @@ fn no_element_below_the_teeth_sets_the_explicit_step() {
         );
     }
 }
+
+/// The counts the resource check reads before meshing are the mesh's own, exactly: over two
+/// pairs (the paper's and a shifted 19:53 pair with a small bore), both gears, fine teeth at the
+/// mesh, none and all, and element sizes from a coarse mesh to fine = coarse.
+#[test]
+fn mesh_size_counts_exactly_what_mesh_gear_builds() {
+    use geardyn::case::{Case, Override};
+    use geardyn::geometry::FlankModification;
+    use geardyn::mesh::{mesh_gear, mesh_size, MeshSpec};
+    let shifted = Case::load_with(
+        None,
+        &[
+            Override::set("gear1.teeth", 19),
+            Override::set("gear1.profile_shift", 0.3),
+            Override::set("gear2.teeth", 53),
+            Override::set("gear2.profile_shift", -0.2),
+            Override::set("gear1.bore_radius_mm", 8.0),
+        ],
+    )
+    .unwrap();
+    let mut checked = 0;
+    for case in [samples::paper36_case(), shifted] {
+        let teeth = geardyn::ltca::engaging_teeth(&case.pair);
+        for (g, gear) in case.pair.gears.iter().enumerate() {
+            let z = gear.teeth() as usize;
+            let modification = case.relief_variant("tip20-root10").unwrap().modifications[g];
+            for fine_teeth in [teeth[g].clone(), vec![], (0..z).collect()] {
+                for (fine_size, coarse_size) in
+                    [(1.0e-3, 3.0e-3), (0.4e-3, 1.5e-3), (0.6e-3, 0.6e-3)]
+                {
+                    if fine_teeth.len() == z && fine_size < coarse_size {
+                        continue; // a whole fine gear only at fine = coarse, to keep it short
+                    }
+                    let spec = MeshSpec {
+                        fine_size,
+                        coarse_size,
+                        fine_teeth: fine_teeth.clone(),
+                    };
+                    let mesh = mesh_gear(gear, &modification, &spec);
+                    let size = mesh_size(gear, &modification, &spec);
+                    assert_eq!(
+                        (size.nodes, size.elements),
+                        (mesh.nodes.len(), mesh.elements.len()),
+                        "z = {z}, {} fine teeth, sizes {fine_size} / {coarse_size} m",
+                        fine_teeth.len()
+                    );
+                    let none = mesh_size(gear, &FlankModification::none(), &spec);
+                    assert!(none.elements > 0);
+                    checked += 1;
+                }
+            }
+        }
+    }
+    assert!(checked >= 24, "{checked} meshes checked");
+}

@@ -179,6 +179,41 @@ fn a_diverging_response_stops_the_start_and_keeps_the_last_good_design() {
     assert!(matches!(start, Err(OptimizeError::NotFinite(_))));
 }
 
+/// A response finite everywhere but so steep that its finite differences overflow (the STE
+/// jumps to 1e308 µm once any tip relief is applied, as a solve that lost the contact could
+/// report): the linearization holds infinity, the step's QP refuses it inside the loop, and
+/// the start stops with `Stop::Failed`, naming the QP, with the start design kept as the best.
+#[test]
+fn a_qp_that_fails_inside_the_loop_stops_the_start_and_keeps_its_design() {
+    let overflowing = |design: &ReliefDesign| {
+        let mut response = synthetic(design)?;
+        if design.tip[0] > 0.0 {
+            for ste in &mut response.ste_um {
+                ste[0] = 1e308;
+            }
+        }
+        Ok(response)
+    };
+    let start = ReliefDesign::none(ReliefShape::Linear);
+    let optimum = robust::optimize(
+        &overflowing,
+        &start,
+        &synthetic_range(),
+        &limits(10e-6),
+        &Settings::default(),
+        &|_| {},
+    )
+    .unwrap();
+    assert_eq!(optimum.stop, robust::Stop::Failed);
+    let failure = optimum.failure.as_deref().unwrap();
+    assert!(
+        failure.starts_with("iteration 1, the step's QP") && failure.contains("NaN or infinity"),
+        "{failure}"
+    );
+    assert_eq!(optimum.best.design, start);
+    assert!(optimum.iterations.is_empty(), "no step was taken");
+}
+
 /// With the loaded contact ratio held at ≥ 1.5 the sums may total 2 µm at most (1.7 − 0.1 · 2):
 /// the best split makes both ends equally short of flat, u = w = ½, so C_a1 = 1.5 µm,
 /// C_a2 = 0.5 µm, s₀ = s₁ = 1.575 µm, objective ½(0.575 + 1.5 · 0.575) — the contact-ratio

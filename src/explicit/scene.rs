@@ -94,6 +94,7 @@ use crate::explicit::solver::critical_step;
 use crate::fe::{FeError, MassLumping};
 use crate::geometry::{FlankModification, GearPair};
 use crate::mesh::mesh_gear;
+use crate::resources::MemoryEstimate;
 use crate::stiffness::{MeshStiffness, PeriodicTable};
 
 /// An explicit FE scene, SI: one run of the meshing pair.
@@ -502,6 +503,43 @@ pub fn measure_step_cost(prepared: &PreparedScene, steps: usize) -> f64 {
     started.elapsed().as_secs_f64() / (steps.max(1) as f64 * model.elements().max(1) as f64)
 }
 
+/// Samples [`run`] records over `duration`: the initial state, one per output interval and the
+/// last step.
+pub fn recorded_samples(prepared: &PreparedScene, duration: f64, output_interval: f64) -> usize {
+    let total_steps = (duration / prepared.dt).ceil() as usize;
+    let every = ((output_interval / prepared.dt).round() as usize).max(1);
+    total_steps / every + 2
+}
+
+/// The memory [`run`] adds to the prepared scene [bytes]: the history, reserved up front for
+/// every sample (time, eight signals, the flank pairs' forces, the energies, the active contact
+/// count and the penetration), and per node of both bodies the integrator's arrays (position,
+/// velocity, acceleration, internal, contact and previous contact force on two DOFs, a search
+/// stamp and flag) and those of the coupled stable-step check (eight more per DOF:
+/// [`PairIntegrator::coupled_critical_step`]).
+pub fn run_memory(prepared: &PreparedScene, duration: f64, output_interval: f64) -> MemoryEstimate {
+    let samples = recorded_samples(prepared, duration, output_interval) as f64;
+    let pairs = prepared.model.flank_pairs.len();
+    let per_sample =
+        (9 + pairs) * 8 + std::mem::size_of::<PairEnergy>() + std::mem::size_of::<usize>() + 8;
+    let nodes: usize = prepared
+        .model
+        .bodies
+        .iter()
+        .map(|b| b.reference.len())
+        .sum();
+    let nodes = nodes as f64;
+    MemoryEstimate::part("history", samples * per_sample as f64)
+        .and(MemoryEstimate::part(
+            "integrator state",
+            nodes * (6.0 * 2.0 * 8.0 + 9.0),
+        ))
+        .and(MemoryEstimate::part(
+            "stable-step check",
+            nodes * 8.0 * 2.0 * 8.0,
+        ))
+}
+
 /// Integrates the scene for `duration` seconds; `progress` sees the fraction done (called about
 /// every 0.5 % of the run). On divergence, or on a stop request ([`crate::interrupt`]), the
 /// history up to the last recorded sample is kept.
@@ -516,9 +554,23 @@ pub fn run(
     let total_steps = (duration / prepared.dt).ceil() as usize;
     let every = ((output_interval / prepared.dt).round() as usize).max(1);
     let report_every = (total_steps / 200).max(1);
+    // Reserved for every sample: no doubling on growth, and the size run_memory announced.
+    let samples = recorded_samples(prepared, duration, output_interval);
+    let series = || Vec::with_capacity(samples);
     let mut history = History {
-        pair_forces: vec![Vec::new(); model.flank_pairs.len()],
-        ..History::default()
+        time: series(),
+        driver_rotation: series(),
+        dte: series(),
+        driven_speed: series(),
+        theoretical_speed: series(),
+        force_radial: series(),
+        force_circumferential: series(),
+        force_total: series(),
+        mesh_force: series(),
+        pair_forces: (0..model.flank_pairs.len()).map(|_| series()).collect(),
+        energy: Vec::with_capacity(samples),
+        active_contacts: Vec::with_capacity(samples),
+        max_penetration: series(),
     };
     let ratio = model.pair.gears[0].teeth() as f64 / model.pair.gears[1].teeth() as f64;
     let rb2 = model.pair.gears[1].base_radius;

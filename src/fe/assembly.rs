@@ -4,14 +4,15 @@
 //! reduced K is factorized once by sparse Cholesky (K = L Lᵀ, faer) and the factor is reused
 //! for every right-hand side.
 
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::Llt;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky};
 use faer::sparse::{SparseColMat, Triplet};
-use faer::{Mat, Side};
+use faer::{get_global_parallelism, Conj, Mat, MatMut, Side};
 use nalgebra::{Matrix3, Point2};
 use thiserror::Error;
 
 use super::q8;
+use crate::resources::MemoryEstimate;
 
 #[derive(Debug, Error, PartialEq)]
 pub enum FeError {
@@ -21,6 +22,8 @@ pub enum FeError {
     NotPositiveDefinite { reason: String },
     #[error("sparse matrix assembly failed: {0}")]
     Assembly(String),
+    #[error(transparent)]
+    TooLarge(#[from] crate::resources::TooLarge),
 }
 
 /// The element's node coordinates.
@@ -83,19 +86,24 @@ pub fn symmetric_product(triplets: &[(usize, usize, f64)], x: &[f64]) -> Vec<f64
     y
 }
 
-/// K with some DOFs fixed at zero, factorized.
-pub struct FactorizedStiffness {
+/// K with some DOFs fixed at zero, assembled, with the symbolic analysis of its Cholesky
+/// factor (faer: AMD ordering, simplicial or supernodal): what the numeric factorization will
+/// take is known here, before it runs.
+pub struct AssembledStiffness {
     dofs: usize,
     /// Reduced index of each global DOF (None: fixed).
     free_index: Vec<Option<usize>>,
-    llt: Llt<usize, f64>,
+    matrix: SparseColMat<usize, f64>,
+    symbolic: SymbolicCholesky<usize>,
 }
 
-impl FactorizedStiffness {
-    /// Removes `fixed` DOFs from the lower-triangle triplets of K and factorizes the rest.
+impl AssembledStiffness {
+    /// Removes `fixed` DOFs from the lower-triangle triplets of K, assembles the rest and
+    /// analyses its factor. The triplets are taken, reduced in their own storage and freed
+    /// here, so the factorization holds only K and L.
     pub fn new(
         dofs: usize,
-        triplets: &[(usize, usize, f64)],
+        triplets: Vec<(usize, usize, f64)>,
         fixed: &[usize],
     ) -> Result<Self, FeError> {
         let mut is_fixed = vec![false; dofs];
@@ -108,25 +116,129 @@ impl FactorizedStiffness {
                 n += 1;
             }
         }
+        // Same size and alignment: the collect reuses the triplets' allocation.
         let reduced: Vec<Triplet<usize, usize, f64>> = triplets
-            .iter()
-            .filter_map(|&(r, c, v)| match (free_index[r], free_index[c]) {
+            .into_iter()
+            .filter_map(|(r, c, v)| match (free_index[r], free_index[c]) {
                 (Some(r), Some(c)) => Some(Triplet::new(r, c, v)),
                 _ => None,
             })
             .collect();
         let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &reduced)
             .map_err(|e| FeError::Assembly(format!("{e:?}")))?;
-        let llt = matrix
-            .sp_cholesky(Side::Lower)
-            .map_err(|e| FeError::NotPositiveDefinite {
-                reason: format!("{e:?}"),
-            })?;
+        drop(reduced);
+        let symbolic = factorize_symbolic_cholesky(
+            matrix.symbolic(),
+            Side::Lower,
+            Default::default(),
+            Default::default(),
+        )
+        .map_err(|e| FeError::Assembly(format!("{e:?}")))?;
         Ok(Self {
             dofs,
             free_index,
-            llt,
+            matrix,
+            symbolic,
         })
+    }
+
+    /// Unknowns after the fixed DOFs are removed.
+    pub fn free_dofs(&self) -> usize {
+        self.matrix.nrows()
+    }
+
+    /// What the numeric factorization adds to K: L's values and faer's workspace [bytes].
+    pub fn factorization_memory(&self) -> MemoryEstimate {
+        let scratch = self
+            .symbolic
+            .factorize_numeric_llt_scratch::<f64>(get_global_parallelism(), Default::default());
+        MemoryEstimate::part("Cholesky factor", 8.0 * self.symbolic.len_val() as f64).and(
+            MemoryEstimate::part("factorization workspace", scratch.size_bytes() as f64),
+        )
+    }
+
+    /// Factorizes K = L Lᵀ, once [`Self::factorization_memory`] has passed the memory check
+    /// ([`crate::resources`]).
+    pub fn factorize(self) -> Result<FactorizedStiffness, FeError> {
+        let memory = self.factorization_memory();
+        crate::resources::check_memory(
+            &format!(
+                "the Cholesky factor of a stiffness matrix of {} unknowns",
+                self.free_dofs()
+            ),
+            &memory,
+            COARSEN,
+        )?;
+        let not_positive = |reason: String| FeError::NotPositiveDefinite { reason };
+        let mut values = Vec::new();
+        values
+            .try_reserve_exact(self.symbolic.len_val())
+            .map_err(|e| FeError::Assembly(format!("the factor does not fit in memory: {e}")))?;
+        values.resize(self.symbolic.len_val(), 0.0);
+        let par = get_global_parallelism();
+        let mut scratch = MemBuffer::try_new(
+            self.symbolic
+                .factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+        )
+        .map_err(|e| FeError::Assembly(format!("the workspace does not fit in memory: {e:?}")))?;
+        self.symbolic
+            .factorize_numeric_llt::<f64>(
+                &mut values,
+                self.matrix.as_ref(),
+                Side::Lower,
+                Default::default(),
+                par,
+                MemStack::new(&mut scratch),
+                Default::default(),
+            )
+            .map_err(|e| not_positive(format!("{e:?}")))?;
+        Ok(FactorizedStiffness {
+            dofs: self.dofs,
+            free_index: self.free_index,
+            symbolic: self.symbolic,
+            values,
+        })
+    }
+}
+
+/// What to change when a mesh or a stiffness factor is too large for the memory.
+pub const COARSEN: &str =
+    "coarsen the mesh (mesh.fine_element_mm, mesh.coarse_element_mm; for the \
+                       explicit FE fe.explicit_fine_element_mm, fe.explicit_coarse_element_mm)";
+
+/// K with some DOFs fixed at zero, factorized.
+pub struct FactorizedStiffness {
+    dofs: usize,
+    /// Reduced index of each global DOF (None: fixed).
+    free_index: Vec<Option<usize>>,
+    symbolic: SymbolicCholesky<usize>,
+    /// L's values in `symbolic`'s layout.
+    values: Vec<f64>,
+}
+
+impl FactorizedStiffness {
+    /// [`AssembledStiffness::new`], then [`AssembledStiffness::factorize`].
+    pub fn new(
+        dofs: usize,
+        triplets: Vec<(usize, usize, f64)>,
+        fixed: &[usize],
+    ) -> Result<Self, FeError> {
+        AssembledStiffness::new(dofs, triplets, fixed)?.factorize()
+    }
+
+    /// Solves K X = B in place for the reduced columns of `rhs`.
+    fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
+        let par = get_global_parallelism();
+        let mut scratch = MemBuffer::new(
+            self.symbolic
+                .solve_in_place_scratch::<f64>(rhs.ncols(), par),
+        );
+        LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
+            Conj::No,
+            rhs,
+            par,
+            MemStack::new(&mut scratch),
+        );
     }
 
     /// Number of unknowns after constraints.
@@ -145,7 +257,7 @@ impl FactorizedStiffness {
                 }
             }
         }
-        self.llt.solve_in_place(rhs.as_mut());
+        self.solve_in_place(rhs.as_mut());
         (0..loads.len())
             .map(|j| {
                 let mut u = vec![0.0; self.dofs];
@@ -178,7 +290,7 @@ impl FactorizedStiffness {
                     }
                 }
             }
-            self.llt.solve_in_place(rhs.as_mut());
+            self.solve_in_place(rhs.as_mut());
             for (k, (node, d)) in points.iter().enumerate() {
                 for j in 0..end - start {
                     let mut value = 0.0;

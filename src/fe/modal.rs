@@ -53,7 +53,7 @@ pub fn lowest_modes(
         .copied()
         .chain(mass.iter().map(|&(r, c, v)| (r, c, -shift * v)))
         .collect();
-    let factor = FactorizedStiffness::new(n, &shifted, &[])?;
+    let factor = FactorizedStiffness::new(n, shifted, &[])?;
     let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
 
     // A deterministic start vector with every component present.

@@ -43,7 +43,7 @@ pub enum LtcaError {
         "torque_nm = {torque} is invalid: the LTCA needs a load torque > 0 on the driven gear"
     )]
     Torque { torque: f64 },
-    #[error("positions = {positions} is invalid: use at least 4 positions per base pitch")]
+    #[error("positions = {positions} is invalid: use {MIN_POSITIONS} to {MAX_POSITIONS} positions per base pitch")]
     Positions { positions: usize },
     #[error(transparent)]
     Fe(#[from] FeError),
@@ -57,6 +57,12 @@ pub enum LtcaError {
     #[error("no tooth pair is in contact at position {position}: the geometry leaves a gap everywhere within the search window")]
     NoContact { position: usize },
 }
+
+/// The fewest positions per base pitch (a contact change needs a position on either side), and
+/// the most: a million positions take minutes of solves for steps far below the mesh's
+/// resolution, and a slip of a few zeros should not fill the memory with results.
+pub const MIN_POSITIONS: usize = 4;
+pub const MAX_POSITIONS: usize = 100_000;
 
 /// The two bodies and the geometry an LTCA runs on.
 pub struct LtcaModel {
@@ -406,7 +412,7 @@ impl LtcaModel {
         if let Some(&torque) = torques.iter().find(|t| !(**t > 0.0 && t.is_finite())) {
             return Err(LtcaError::Torque { torque });
         }
-        if positions < 4 {
+        if !(MIN_POSITIONS..=MAX_POSITIONS).contains(&positions) {
             return Err(LtcaError::Positions { positions });
         }
         let done = AtomicUsize::new(0);

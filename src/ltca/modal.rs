@@ -254,7 +254,7 @@ pub fn pair_modes(
     let mut torque_load = vec![0.0; n];
     torque_load[driven] = 1.0;
     let static_rotation =
-        FactorizedStiffness::new(n, &system.stiffness, &held)?.solve(&torque_load)[driven];
+        FactorizedStiffness::new(n, system.stiffness.clone(), &held)?.solve(&torque_load)[driven];
     let static_mesh_stiffness = 1.0 / (static_rotation * rb2 * rb2);
 
     // A shift well below the mesh mode: (2π·10 Hz)² under zero.

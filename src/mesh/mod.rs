@@ -96,14 +96,7 @@ pub fn mesh_gear(gear: &Gear, modification: &FlankModification, spec: &MeshSpec)
         spec.fine_teeth.iter().all(|&t| t < z),
         "fine tooth index out of range"
     );
-    let fine = SectorLayout::new(gear, modification, spec.fine_size, spec.coarse_size);
-    let coarse = SectorLayout::new(gear, modification, spec.coarse_size, spec.coarse_size);
-    let top_layer = if spec.fine_teeth.is_empty() {
-        spec.coarse_size
-    } else {
-        spec.fine_size
-    };
-    let layers = base_layers(gear, top_layer, spec.coarse_size, &coarse);
+    let (fine, coarse, layers) = sector_layouts(gear, modification, spec);
 
     let mut merger = NodeMerger::new(1e-9 * gear.tip_radius.max(1e-3) * 10.0);
     let mut elements = Vec::new();
@@ -165,6 +158,72 @@ pub fn mesh_gear(gear: &Gear, modification: &FlankModification, spec: &MeshSpec)
         bore_nodes,
         flanks,
         fine_teeth: spec.fine_teeth.clone(),
+    }
+}
+
+/// The layouts of a fine and of a coarse tooth sector, and the base layers all sectors share.
+fn sector_layouts(
+    gear: &Gear,
+    modification: &FlankModification,
+    spec: &MeshSpec,
+) -> (SectorLayout, SectorLayout, Vec<f64>) {
+    let fine = SectorLayout::new(gear, modification, spec.fine_size, spec.coarse_size);
+    let coarse = SectorLayout::new(gear, modification, spec.coarse_size, spec.coarse_size);
+    let top_layer = if spec.fine_teeth.is_empty() {
+        spec.coarse_size
+    } else {
+        spec.fine_size
+    };
+    let layers = base_layers(gear, top_layer, spec.coarse_size, &coarse);
+    (fine, coarse, layers)
+}
+
+/// Node and element counts of a mesh.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MeshSize {
+    pub nodes: usize,
+    pub elements: usize,
+}
+
+/// The counts [`mesh_gear`] would give, without building the mesh: one fine and one coarse
+/// sector are laid out and their elements counted, not stored, so the count of a mesh too large
+/// to build costs a fraction of a second (the resource check before a model is built).
+///
+/// The mesh is conforming (no hanging nodes: the transition units and the sectors' shared
+/// radial edges are built for it) and covers an annulus, so Euler's formula V − E + F = 0 holds
+/// for its corners V, edges E and elements F; with every edge cut once by a mid-side node and
+/// 4F = 2E − E_b (E_b: edges on the boundary),
+/// ```text
+/// nodes = V + E = 2E − F = 3F + E_b
+/// ```
+/// E_b per sector: both tooth sides, the tip, the root curve beside the tooth and the bore.
+///
+/// # Panics
+/// As [`mesh_gear`].
+#[track_caller]
+pub fn mesh_size(gear: &Gear, modification: &FlankModification, spec: &MeshSpec) -> MeshSize {
+    assert!(
+        spec.fine_size > 0.0 && spec.coarse_size >= spec.fine_size,
+        "mesh sizes"
+    );
+    let z = gear.teeth() as usize;
+    let fine_teeth = (0..z).filter(|t| spec.fine_teeth.contains(t)).count();
+    let (fine, coarse, layers) = sector_layouts(gear, modification, spec);
+    let sector = |layout: &SectorLayout| {
+        let (rows, cols) = (layout.tooth_rows() / 2, layout.tooth_cols() / 2);
+        let mut base = 0;
+        let bore_edges = layout.emit_base_elements(&layers, &mut |_| base += 1);
+        let root_edges = (layout.base_top.len() - layout.tooth_cols()) / 2;
+        let elements = rows * cols + base;
+        (elements, 2 * rows + cols + root_edges + bore_edges)
+    };
+    let (fine_elements, fine_boundary) = sector(&fine);
+    let (coarse_elements, coarse_boundary) = sector(&coarse);
+    let elements = fine_teeth * fine_elements + (z - fine_teeth) * coarse_elements;
+    let boundary = fine_teeth * fine_boundary + (z - fine_teeth) * coarse_boundary;
+    MeshSize {
+        nodes: 3 * elements + boundary,
+        elements,
     }
 }
 
@@ -392,9 +451,17 @@ impl SectorLayout {
     /// elements sharing an edge compute the same node; the slanted edges take the straight
     /// midpoint.
     fn base_elements(&self, layers: &[f64]) -> Vec<[Point2<f64>; 8]> {
+        let mut out = Vec::new();
+        self.emit_base_elements(layers, &mut |element| out.push(element));
+        out
+    }
+
+    /// [`Self::base_elements`] handed one by one to `emit` (a count needs no storage); returns
+    /// the number of element edges on the bore.
+    fn emit_base_elements(&self, layers: &[f64], emit: &mut dyn FnMut([Point2<f64>; 8])) -> usize {
         let columns = self.base_top.len() / 2;
         let mut active: Vec<usize> = (0..=columns).collect();
-        let mut out = Vec::new();
+        let mut out = Emit(emit);
         let depth = self.base_top[0].coords.norm() - self.bore_radius;
         let mid = |a: Point2<f64>, b: Point2<f64>| Point2::from((a.coords + b.coords) * 0.5);
         for (k, w) in layers.windows(2).enumerate() {
@@ -513,7 +580,16 @@ impl SectorLayout {
             }
             active = next;
         }
-        out
+        active.len() - 1
+    }
+}
+
+/// A sink that reads like the `Vec` the element loop once pushed to.
+struct Emit<'a>(&'a mut dyn FnMut([Point2<f64>; 8]));
+
+impl Emit<'_> {
+    fn push(&mut self, element: [Point2<f64>; 8]) {
+        (self.0)(element)
     }
 }
 

@@ -493,6 +493,11 @@ pub fn run(
 ) -> Result<FeStudy, StudyError> {
     let started = std::time::Instant::now();
     let settings: &FeSettings = &case.fe;
+    crate::resources::check_memory(
+        "the explicit run's history and state",
+        &crate::explicit::scene::run_memory(prepared, scene.duration, settings.output_interval),
+        "shorten the scene (--duration-s) or record it less often (fe.output_interval_us)",
+    )?;
     let outcome =
         crate::explicit::scene::run(prepared, scene.duration, settings.output_interval, progress);
     let history = outcome.history;

@@ -37,12 +37,37 @@ pub fn model_with_sizes(
         fine_teeth,
     };
     let specs = [spec(teeth[0].clone()), spec(teeth[1].clone())];
+    check_memory(case, modifications, &specs)?;
     Ok(LtcaModel::new(
         &case.pair,
         modifications,
         specs,
         case.ltca_material(),
     )?)
+}
+
+/// Refuses LTCA bodies whose meshes and stiffness triplets alone would not fit in memory
+/// ([`crate::resources`]), counted without meshing ([`crate::mesh::mesh_size`]); each factor
+/// is checked again before it is computed, on faer's symbolic analysis.
+pub fn check_memory(
+    case: &Case,
+    modifications: &[FlankModification; 2],
+    specs: &[crate::mesh::MeshSpec; 2],
+) -> Result<(), StudyError> {
+    let [first, second] = [0, 1].map(|g| {
+        let size = crate::mesh::mesh_size(&case.pair.gears[g], &modifications[g], &specs[g]);
+        crate::ltca::body::LtcaBody::assembly_memory(size)
+    });
+    crate::resources::check_memory(
+        &format!(
+            "the LTCA bodies' meshes at {} / {} mm elements",
+            specs[0].fine_size * 1e3,
+            specs[0].coarse_size * 1e3
+        ),
+        &first.or(second),
+        crate::fe::assembly::COARSEN,
+    )?;
+    Ok(())
 }
 
 /// The LTCA's mesh stiffness k(θ), e(θ) of `modifications` at `torque` over `positions`.

@@ -305,7 +305,7 @@ pub struct PropertyReport {
     /// on itself (a generator that made only broken cases would pass everything else).
     pub plausible_cases: usize,
     pub plausible_valid_share: f64,
-    /// The first failures of each kind (at most 20).
+    /// The first failures by sample index (at most 20).
     pub failures: Vec<Failure>,
     pub wall_s: f64,
 }
@@ -317,50 +317,90 @@ impl PropertyReport {
     }
 }
 
+/// Failures kept in the report, the first by index.
+const KEPT_FAILURES: usize = 20;
+
+/// Counts over a share of the samples; shares merge in any order to the same tally (the kept
+/// failures are the first by index), so memory stays flat in the number of cases.
+#[derive(Debug, Default)]
+struct Tally {
+    valid: usize,
+    rejected: usize,
+    unnamed: usize,
+    not_finite: usize,
+    panicked: usize,
+    plausible: usize,
+    plausible_valid: usize,
+    failures: Vec<Failure>,
+}
+
+impl Tally {
+    fn add(mut self, index: u64, changes: &Changes, outcome: Outcome) -> Self {
+        match &outcome {
+            Outcome::Valid => self.valid += 1,
+            Outcome::Rejected => self.rejected += 1,
+            Outcome::Unnamed(_) => self.unnamed += 1,
+            Outcome::NotFinite(_) => self.not_finite += 1,
+            Outcome::Panicked(_) => self.panicked += 1,
+        }
+        if changes.iter().all(|(_, c)| *c == Change::Plausible) {
+            self.plausible += 1;
+            self.plausible_valid += usize::from(outcome == Outcome::Valid);
+        }
+        if !matches!(outcome, Outcome::Valid | Outcome::Rejected)
+            && self.failures.len() < KEPT_FAILURES
+        {
+            self.failures.push(Failure {
+                index,
+                changes: changes.iter().map(|(o, _)| o.to_string()).collect(),
+                outcome,
+            });
+        }
+        self
+    }
+
+    fn merge(mut self, other: Tally) -> Self {
+        self.valid += other.valid;
+        self.rejected += other.rejected;
+        self.unnamed += other.unnamed;
+        self.not_finite += other.not_finite;
+        self.panicked += other.panicked;
+        self.plausible += other.plausible;
+        self.plausible_valid += other.plausible_valid;
+        self.failures.extend(other.failures);
+        self.failures.sort_by_key(|f| f.index);
+        self.failures.truncate(KEPT_FAILURES);
+        self
+    }
+}
+
 /// Runs `cases` samples from `seed` in parallel; `progress` sees the count done.
 pub fn run(cases: usize, seed: u64, progress: super::Progress) -> PropertyReport {
     let started = std::time::Instant::now();
     let done = std::sync::atomic::AtomicUsize::new(0);
-    let results: Vec<(u64, Changes, Outcome)> = (0..cases as u64)
+    let tally = (0..cases as u64)
         .into_par_iter()
-        .map(|index| {
+        .fold(Tally::default, |tally, index| {
             let changes = sample(seed, index);
             let outcome = check(&changes);
             let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             if n.is_multiple_of(1000) {
                 progress("generated cases", n, cases);
             }
-            (index, changes, outcome)
+            tally.add(index, &changes, outcome)
         })
-        .collect();
-    let count = |f: &dyn Fn(&Outcome) -> bool| results.iter().filter(|r| f(&r.2)).count();
-    let plausible: Vec<&Outcome> = results
-        .iter()
-        .filter(|r| r.1.iter().all(|(_, c)| *c == Change::Plausible))
-        .map(|r| &r.2)
-        .collect();
-    let plausible_valid = plausible.iter().filter(|o| ***o == Outcome::Valid).count();
-    let failures = results
-        .iter()
-        .filter(|r| !matches!(r.2, Outcome::Valid | Outcome::Rejected))
-        .take(20)
-        .map(|(index, changes, outcome)| Failure {
-            index: *index,
-            changes: changes.iter().map(|(o, _)| o.to_string()).collect(),
-            outcome: outcome.clone(),
-        })
-        .collect();
+        .reduce(Tally::default, Tally::merge);
     PropertyReport {
         seed,
         cases,
-        valid: count(&|o| *o == Outcome::Valid),
-        rejected: count(&|o| *o == Outcome::Rejected),
-        unnamed: count(&|o| matches!(o, Outcome::Unnamed(_))),
-        not_finite: count(&|o| matches!(o, Outcome::NotFinite(_))),
-        panicked: count(&|o| matches!(o, Outcome::Panicked(_))),
-        plausible_cases: plausible.len(),
-        plausible_valid_share: plausible_valid as f64 / plausible.len().max(1) as f64,
-        failures,
+        valid: tally.valid,
+        rejected: tally.rejected,
+        unnamed: tally.unnamed,
+        not_finite: tally.not_finite,
+        panicked: tally.panicked,
+        plausible_cases: tally.plausible,
+        plausible_valid_share: tally.plausible_valid as f64 / tally.plausible.max(1) as f64,
+        failures: tally.failures,
         wall_s: started.elapsed().as_secs_f64(),
     }
 }

@@ -253,8 +253,9 @@ pub struct CommonArgs {
     /// Output folder. Default: a fresh folder out/<command>-<case>-NNN.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
-    /// Run explicit scenes whose estimated wall time (elements × steps × the rate timed on
-    /// the scene) is above the 4-hour limit.
+    /// Run what is estimated above a limit anyway: an explicit scene's wall time (elements ×
+    /// steps × the rate timed on the scene) above 4 hours, a model's memory above 80 % of the
+    /// memory available (or GEARDYN_MEMORY_LIMIT_MB).
     #[arg(long)]
     pub force: bool,
     /// Change a value of the case before it is checked, e.g. fe.plane=stress,

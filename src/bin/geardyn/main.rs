@@ -33,7 +33,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     install_stop_handler();
     if cli.command.common().is_some_and(|c| c.force) {
-        progress::FORCE.store(true, std::sync::atomic::Ordering::Relaxed);
+        geardyn::resources::set_force(true);
     }
     let result = match cli.command {
         Command::Run {

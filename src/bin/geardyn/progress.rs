@@ -20,8 +20,14 @@ pub fn fe_run(case: &Case, scene: &Scene, dir: &Path) -> Result<study::fe::FeStu
     let prepared = study::fe::prepare(case, scene)?;
     print!("{}", report::fe::prepared_console(case, &prepared, scene));
     let cost = study::fe::CostEstimate::of(&prepared, scene.duration);
-    eprintln!("estimated: {}", cost.describe());
-    if cost.too_long() && !FORCE.load(std::sync::atomic::Ordering::Relaxed) {
+    let memory =
+        geardyn::explicit::scene::run_memory(&prepared, scene.duration, case.fe.output_interval);
+    eprintln!(
+        "estimated: {}; the run's history and state {}",
+        cost.describe(),
+        memory.describe()
+    );
+    if cost.too_long() && !geardyn::resources::forced() {
         anyhow::bail!(
             "the explicit run would take {}, above the {} limit: coarsen the mesh \
              (--fine-element-mm, --coarse-element-mm), shorten the scene (--duration-s), or \
@@ -94,9 +100,6 @@ pub fn fe_check_run(
         .map_err(|e| format!("{e:#}"))
         .and_then(|_| report::optimize::read_fe_check_run(dir))
 }
-
-/// `--force`: run explicit scenes whose estimated cost is above the limit.
-pub static FORCE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
 pub fn progress_bar(template: &str) -> ProgressBar {
     let bar = ProgressBar::new(0);

@@ -86,7 +86,7 @@ pub struct ContactLaw {
 }
 
 /// The friction history of one slave node.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FrictionState {
     /// Tangential force carried by the stick spring [N].
     pub tangential_force: f64,

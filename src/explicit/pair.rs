@@ -140,7 +140,7 @@ fn edge_shape(s: f64) -> [f64; 3] {
 }
 
 /// Friction history of a flank pair: per pass, one state per slave Gauss point.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 struct PairHistory {
     passes: [Vec<SlaveState>; 2],
     /// Every state is at its default (the pair was apart at the last step): a pair that stays
@@ -149,7 +149,7 @@ struct PairHistory {
 }
 
 /// Friction history of one slave Gauss point of a flank pair.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, serde::Serialize, serde::Deserialize)]
 struct SlaveState {
     friction: FrictionState,
 }
@@ -251,7 +251,7 @@ impl Drive {
 }
 
 /// The state of the pair.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PairState {
     pub time: f64,
     pub x: [Vec<f64>; 2],
@@ -263,7 +263,7 @@ pub struct PairState {
 }
 
 /// Energy account [J].
-#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PairEnergy {
     pub kinetic: f64,
     pub strain: f64,
@@ -294,9 +294,10 @@ impl PairEnergy {
 }
 
 /// Contact output of one step.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct ContactOutput {
     /// Resultant contact force on the driven gear (global frame) [N].
+    #[serde(with = "vector2_as_array")]
     pub force_on_driven: Vector2<f64>,
     /// Moment of the contact forces on the driven gear about its centre [N·m] (counter-clockwise
     /// positive; the load torque balances it in steady state).
@@ -868,7 +869,94 @@ pub struct PairIntegrator<'a> {
     old_bore_x: Vec<f64>,
 }
 
+/// A `Vector2` as `[x, y]` in a checkpoint.
+mod vector2_as_array {
+    use nalgebra::Vector2;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &Vector2<f64>, s: S) -> Result<S::Ok, S::Error> {
+        [v.x, v.y].serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vector2<f64>, D::Error> {
+        let [x, y] = <[f64; 2]>::deserialize(d)?;
+        Ok(Vector2::new(x, y))
+    }
+}
+
+/// The integrator's state between two steps, beside the pair's [`PairState`]: with both, a run
+/// goes on exactly as if it had not stopped. Scratch is not kept: the internal force array is
+/// zero between steps and the node stamps only compare with the stamp counter, which restarts
+/// with them.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct IntegratorCheckpoint {
+    energy: PairEnergy,
+    steps: usize,
+    last_contact: ContactOutput,
+    contact_force: [Vec<f64>; 2],
+    previous_contact: [Vec<f64>; 2],
+    history: Vec<PairHistory>,
+    driver_reaction: Vec<f64>,
+    old_reaction: Vec<f64>,
+    searched: [Vec<bool>; 2],
+    old_bore_x: Vec<f64>,
+}
+
 impl<'a> PairIntegrator<'a> {
+    /// What [`Self::restore`] needs to go on from here.
+    pub fn checkpoint(&self) -> IntegratorCheckpoint {
+        IntegratorCheckpoint {
+            energy: self.energy,
+            steps: self.steps,
+            last_contact: self.last_contact.clone(),
+            contact_force: self.contact_force.clone(),
+            previous_contact: self.previous_contact.clone(),
+            history: self.history.clone(),
+            driver_reaction: self.driver_reaction.clone(),
+            old_reaction: self.old_reaction.clone(),
+            searched: self.searched.clone(),
+            old_bore_x: self.old_bore_x.clone(),
+        }
+    }
+
+    /// Takes up `checkpoint` on a new integrator of the same model; refuses one whose arrays do
+    /// not fit the model (another mesh).
+    pub fn restore(&mut self, checkpoint: IntegratorCheckpoint) -> Result<(), String> {
+        let fits = (0..2).all(|g| {
+            checkpoint.contact_force[g].len() == self.contact_force[g].len()
+                && checkpoint.previous_contact[g].len() == self.previous_contact[g].len()
+                && checkpoint.searched[g].len() == self.searched[g].len()
+        }) && checkpoint.history.len() == self.history.len()
+            && checkpoint.old_bore_x.len() == self.old_bore_x.len()
+            && checkpoint.driver_reaction.len() == self.driver_reaction.len();
+        if !fits {
+            return Err("the checkpoint was made on another mesh".to_string());
+        }
+        let IntegratorCheckpoint {
+            energy,
+            steps,
+            last_contact,
+            contact_force,
+            previous_contact,
+            history,
+            driver_reaction,
+            old_reaction,
+            searched,
+            old_bore_x,
+        } = checkpoint;
+        self.energy = energy;
+        self.steps = steps;
+        self.last_contact = last_contact;
+        self.contact_force = contact_force;
+        self.previous_contact = previous_contact;
+        self.history = history;
+        self.driver_reaction = driver_reaction;
+        self.old_reaction = old_reaction;
+        self.searched = searched;
+        self.old_bore_x = old_bore_x;
+        Ok(())
+    }
+
     pub fn new(model: &'a ExplicitPair, drive: Drive, dt: f64, beta_k: f64) -> Self {
         let zeros = |g: usize| vec![0.0; 2 * model.meshes[g].nodes.len()];
         PairIntegrator {

@@ -89,7 +89,9 @@
 use std::time::Instant;
 
 use crate::explicit::body::ExplicitMaterial;
-use crate::explicit::pair::{Drive, ExplicitPair, PairEnergy, PairIntegrator, Ramp, Start};
+use crate::explicit::pair::{
+    Drive, ExplicitPair, IntegratorCheckpoint, PairEnergy, PairIntegrator, PairState, Ramp, Start,
+};
 use crate::explicit::solver::critical_step;
 use crate::fe::{FeError, MassLumping};
 use crate::geometry::{FlankModification, GearPair};
@@ -394,7 +396,7 @@ pub fn statistics_start(prepared: &PreparedScene, scene: &Scene) -> f64 {
 /// band attenuated; they lag `time` by half an interval. The
 /// energy terms, contact counts and the deepest penetration (the largest over the interval) are
 /// taken at `time`. The first sample is the initial state.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct History {
     pub time: Vec<f64>,
     /// Driver rotation θ₁ [rad].
@@ -421,8 +423,54 @@ pub struct History {
     pub max_penetration: Vec<f64>,
 }
 
+impl History {
+    /// An empty history with room for `samples` samples of `pairs` flank pairs.
+    pub fn with_capacity(samples: usize, pairs: usize) -> Self {
+        let series = || Vec::with_capacity(samples);
+        History {
+            time: series(),
+            driver_rotation: series(),
+            dte: series(),
+            driven_speed: series(),
+            theoretical_speed: series(),
+            force_radial: series(),
+            force_circumferential: series(),
+            force_total: series(),
+            mesh_force: series(),
+            pair_forces: (0..pairs).map(|_| series()).collect(),
+            energy: Vec::with_capacity(samples),
+            active_contacts: Vec::with_capacity(samples),
+            max_penetration: series(),
+        }
+    }
+
+    /// Room for `samples` samples in all (a resumed history read back at its length).
+    fn reserve_to(&mut self, samples: usize) {
+        let more = samples.saturating_sub(self.time.len());
+        for series in [
+            &mut self.time,
+            &mut self.driver_rotation,
+            &mut self.dte,
+            &mut self.driven_speed,
+            &mut self.theoretical_speed,
+            &mut self.force_radial,
+            &mut self.force_circumferential,
+            &mut self.force_total,
+            &mut self.mesh_force,
+            &mut self.max_penetration,
+        ]
+        .into_iter()
+        .chain(self.pair_forces.iter_mut())
+        {
+            series.reserve_exact(more);
+        }
+        self.energy.reserve_exact(more);
+        self.active_contacts.reserve_exact(more);
+    }
+}
+
 /// Sums of the averaged signals over the steps of one output interval.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 struct IntervalSums {
     steps: usize,
     /// Driver rotation, DTE, driven speed, theoretical speed, radial, circumferential and
@@ -460,13 +508,35 @@ pub struct RunOutcome {
     /// The pair's stable step where the contact was, at [`COUPLED_CHECKS`] instants spread over
     /// the run (those with points in contact).
     pub coupled_steps: Vec<CoupledStep>,
+    /// Where an interrupted run can go on from ([`run`]'s `resume`).
+    pub checkpoint: Option<Box<RunCheckpoint>>,
+}
+
+/// An interrupted run between two steps: the pair's and the integrator's state, the history
+/// and the open output interval. [`run`] goes on from it to the same history, bit for bit, as
+/// the run that was not interrupted (tests/interrupt.rs).
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct RunCheckpoint {
+    /// The step, step count and output stride it was made with: another scene is refused.
+    pub dt: f64,
+    pub total_steps: usize,
+    pub every: usize,
+    /// The step the run goes on with.
+    pub next_step: usize,
+    /// Wall time spent before the interruption [s].
+    pub wall_s: f64,
+    state: PairState,
+    integrator: IntegratorCheckpoint,
+    history: History,
+    sums: IntervalSums,
+    coupled_steps: Vec<CoupledStep>,
 }
 
 /// How many times a run measures the stable step of the pair in its current contact state.
 pub const COUPLED_CHECKS: usize = 8;
 
 /// [`PairIntegrator::coupled_critical_step`] at one instant of a run.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CoupledStep {
     pub time_s: f64,
     /// Gauss points in contact.
@@ -540,37 +610,56 @@ pub fn run_memory(prepared: &PreparedScene, duration: f64, output_interval: f64)
         ))
 }
 
-/// Integrates the scene for `duration` seconds; `progress` sees the fraction done (called about
+/// Integrates the scene for `duration` seconds, from its start or from `resume` (a checkpoint
+/// of an interrupted run of the same scene); `progress` sees the fraction done (called about
 /// every 0.5 % of the run). On divergence, or on a stop request ([`crate::interrupt`]), the
-/// history up to the last recorded sample is kept.
+/// history up to the last recorded sample is kept; a stop request also leaves a checkpoint.
 pub fn run(
     prepared: &PreparedScene,
     duration: f64,
     output_interval: f64,
+    resume: Option<RunCheckpoint>,
     progress: &mut dyn FnMut(f64),
-) -> RunOutcome {
+) -> Result<RunOutcome, FeError> {
     let model = &prepared.model;
-    let (mut integrator, mut state) = start(prepared);
     let total_steps = (duration / prepared.dt).ceil() as usize;
     let every = ((output_interval / prepared.dt).round() as usize).max(1);
     let report_every = (total_steps / 200).max(1);
     // Reserved for every sample: no doubling on growth, and the size run_memory announced.
     let samples = recorded_samples(prepared, duration, output_interval);
-    let series = || Vec::with_capacity(samples);
-    let mut history = History {
-        time: series(),
-        driver_rotation: series(),
-        dte: series(),
-        driven_speed: series(),
-        theoretical_speed: series(),
-        force_radial: series(),
-        force_circumferential: series(),
-        force_total: series(),
-        mesh_force: series(),
-        pair_forces: (0..model.flank_pairs.len()).map(|_| series()).collect(),
-        energy: Vec::with_capacity(samples),
-        active_contacts: Vec::with_capacity(samples),
-        max_penetration: series(),
+    let (mut integrator, mut state, mut history, first_step, wall_before, resumed) = match resume {
+        None => {
+            let (integrator, state) = start(prepared);
+            let history = History::with_capacity(samples, model.flank_pairs.len());
+            (integrator, state, history, 1, 0.0, None)
+        }
+        Some(checkpoint) => {
+            if checkpoint.dt != prepared.dt
+                || checkpoint.total_steps != total_steps
+                || checkpoint.every != every
+            {
+                return Err(FeError::Assembly(format!(
+                    "the checkpoint was made with a step of {:e} s, {} steps and a sample every                      {} steps, this scene has {:e} s, {total_steps} and {every}: it belongs to                      another scene or case",
+                    checkpoint.dt, checkpoint.total_steps, checkpoint.every, prepared.dt
+                )));
+            }
+            let mut integrator =
+                PairIntegrator::new(model, prepared.drive, prepared.dt, prepared.beta_k);
+            integrator.mesh_damping = prepared.mesh_damping;
+            integrator
+                .restore(checkpoint.integrator)
+                .map_err(FeError::Assembly)?;
+            let mut history = checkpoint.history;
+            history.reserve_to(samples);
+            (
+                integrator,
+                checkpoint.state,
+                history,
+                checkpoint.next_step,
+                checkpoint.wall_s,
+                Some((checkpoint.sums, checkpoint.coupled_steps)),
+            )
+        }
     };
     let ratio = model.pair.gears[0].teeth() as f64 / model.pair.gears[1].teeth() as f64;
     let rb2 = model.pair.gears[1].base_radius;
@@ -615,22 +704,27 @@ pub fn run(
         history.active_contacts.push(integrator.last_contact.active);
         history.max_penetration.push(sums.max_penetration);
     };
-    let mut sums = IntervalSums::default();
-    sums.add(
-        signals(&integrator, &state),
-        &integrator.last_contact.pair_forces,
-        integrator.last_contact.max_penetration,
-    );
-    record(&integrator, &state, &sums);
-    sums = IntervalSums::default();
+    let (mut sums, mut coupled_steps) = match resumed {
+        Some(open) => open,
+        None => {
+            let mut sums = IntervalSums::default();
+            sums.add(
+                signals(&integrator, &state),
+                &integrator.last_contact.pair_forces,
+                integrator.last_contact.max_penetration,
+            );
+            record(&integrator, &state, &sums);
+            (IntervalSums::default(), Vec::new())
+        }
+    };
     // The damping reduction of the step, as `prepare` applied it.
     let damping_reduction = prepared.dt_critical
         / prepared.dt_bodies[0]
             .min(prepared.dt_bodies[1])
             .min(prepared.dt_contact);
     let check_every = (total_steps / COUPLED_CHECKS).max(1);
-    let mut coupled_steps = Vec::new();
-    for step in 1..=total_steps {
+    let mut stopped_before = None;
+    for step in first_step..=total_steps {
         if crate::interrupt::stop_requested() {
             interrupted = Some(format!(
                 "interrupted at t = {:.6e} s (step {} of {total_steps}); the results up to t = {:.6e} s are kept",
@@ -638,6 +732,7 @@ pub fn run(
                 step - 1,
                 history.time.last().copied().unwrap_or(0.0)
             ));
+            stopped_before = Some(step);
             break;
         }
         let recording = step % every == 0 || step == total_steps;
@@ -696,15 +791,31 @@ pub fn run(
             progress(step as f64 / total_steps as f64);
         }
     }
-    RunOutcome {
+    let wall_s = wall_before + started.elapsed().as_secs_f64();
+    let checkpoint = stopped_before.map(|next_step| {
+        Box::new(RunCheckpoint {
+            dt: prepared.dt,
+            total_steps,
+            every,
+            next_step,
+            wall_s,
+            state,
+            integrator: integrator.checkpoint(),
+            history: history.clone(),
+            sums,
+            coupled_steps: coupled_steps.clone(),
+        })
+    });
+    Ok(RunOutcome {
         history,
         steps: integrator.steps,
-        wall_s: started.elapsed().as_secs_f64(),
+        wall_s,
         diverged,
         interrupted,
         final_energy: integrator.energy,
         coupled_steps,
-    }
+        checkpoint,
+    })
 }
 
 /// Bins per base pitch of the stiffness from the DTE, centred on the LTCA's 64 positions.

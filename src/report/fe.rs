@@ -243,7 +243,42 @@ pub fn write(out: OutputDir, case: &Case, study: &FeStudy) -> Result<(), ReportE
         &study.pair_names,
         study.summary.impact_d1_max_n.is_some(),
     )?;
+    match &study.checkpoint {
+        Some(checkpoint) => {
+            let text = serde_json::to_vec(checkpoint).map_err(std::io::Error::other);
+            text.and_then(|bytes| super::write_atomic(&out.path(CHECKPOINT), &bytes))
+                .map_err(io(CHECKPOINT))?
+        }
+        None => out.remove(CHECKPOINT)?,
+    }
     out.json("summary.json", &study.summary)
+}
+
+/// An interrupted run's state (compact JSON, every f64 exact), where `fe --resume` and
+/// `run --resume` go on from; removed when the run finishes.
+pub const CHECKPOINT: &str = "checkpoint.json";
+
+/// The checkpoint in `dir`, if there is one.
+pub fn read_checkpoint(
+    dir: &Path,
+) -> Result<Option<crate::explicit::scene::RunCheckpoint>, ReportError> {
+    let path = dir.join(CHECKPOINT);
+    let bytes = match std::fs::read(&path) {
+        Ok(bytes) => bytes,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(source) => {
+            return Err(ReportError::Io {
+                path: path.display().to_string(),
+                source,
+            })
+        }
+    };
+    serde_json::from_slice(&bytes)
+        .map(Some)
+        .map_err(|e| ReportError::Io {
+            path: path.display().to_string(),
+            source: std::io::Error::other(e),
+        })
 }
 
 /// The prepared scene's line for the terminal: model size and time step.

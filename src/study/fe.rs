@@ -480,15 +480,19 @@ pub struct FeStudy {
     /// rotation from the pitch-point position (the same-mesh LTCA's), as the analysis used it.
     pub unloaded_te: PeriodicTable,
     pub summary: FeSummary,
+    /// Where an interrupted run goes on from (`geardyn fe --resume`, `run --resume`).
+    pub checkpoint: Option<Box<crate::explicit::scene::RunCheckpoint>>,
 }
 
-/// Runs a prepared scene and analyses it; `progress` sees the fraction done. A diverged or
-/// interrupted run is a result too (`summary.diverged` or `summary.interrupted` says why), so
-/// its partial histories can be written.
+/// Runs a prepared scene, from its start or from the checkpoint of an interrupted run of it,
+/// and analyses it; `progress` sees the fraction done. A diverged or interrupted run is a
+/// result too (`summary.diverged` or `summary.interrupted` says why), so its partial histories
+/// can be written; an interrupted one carries its checkpoint.
 pub fn run(
     case: &Case,
     scene: &Scene,
     prepared: &PreparedScene,
+    resume: Option<crate::explicit::scene::RunCheckpoint>,
     progress: &mut dyn FnMut(f64),
 ) -> Result<FeStudy, StudyError> {
     let started = std::time::Instant::now();
@@ -498,8 +502,13 @@ pub fn run(
         &crate::explicit::scene::run_memory(prepared, scene.duration, settings.output_interval),
         "shorten the scene (--duration-s) or record it less often (fe.output_interval_us)",
     )?;
-    let outcome =
-        crate::explicit::scene::run(prepared, scene.duration, settings.output_interval, progress);
+    let outcome = crate::explicit::scene::run(
+        prepared,
+        scene.duration,
+        settings.output_interval,
+        resume,
+        progress,
+    )?;
     let history = outcome.history;
     let stats_start = statistics_start(prepared, scene);
     let (fine_mm, coarse_mm) = (settings.fine_size * 1e3, settings.coarse_size * 1e3);
@@ -657,6 +666,7 @@ pub fn run(
         stiffness_comparison: [stiffness_same, stiffness_case],
         unloaded_te,
         summary,
+        checkpoint: outcome.checkpoint,
     })
 }
 

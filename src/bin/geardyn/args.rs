@@ -115,6 +115,10 @@ pub enum Command {
         common: CommonArgs,
         #[command(flatten)]
         options: FeShorthands,
+        /// Go on with the interrupted run in --out DIR (same case, --set and flags) from its
+        /// checkpoint.json; the result is the uninterrupted run's.
+        #[arg(long)]
+        resume: bool,
     },
     /// FE versus lumped: the mesh-mode frequency by every method (lumped sqrt(k/m) with k from
     /// the LTCA and the FE DTE, Floquet, FE modal analysis of the meshed pair) for both boundary

@@ -57,7 +57,11 @@ fn main() -> ExitCode {
             resume,
         } => sweep(&common, rpm, &model, run_up_s, resume),
         Command::Stability { common, rpm, model } => stability(&common, &rpm, &model),
-        Command::Fe { common, options } => fe(&common, &options),
+        Command::Fe {
+            common,
+            options,
+            resume,
+        } => fe(&common, &options, resume),
         Command::Validate {
             study: ValidationStudy::Quick,
             common,
@@ -210,13 +214,17 @@ fn ltca(
     Ok(())
 }
 
-fn fe(args: &CommonArgs, options: &FeShorthands) -> Result<()> {
+fn fe(args: &CommonArgs, options: &FeShorthands, resume: bool) -> Result<()> {
+    anyhow::ensure!(
+        !resume || args.out.is_some(),
+        "--resume needs --out DIR, the interrupted run's folder"
+    );
     let base = load(args, Vec::new())?;
     let (overrides, scene_name) = study::fe::overrides(&base, options)?;
     let case = load(args, overrides)?;
     let scene = study::fe::scene(&case, &scene_name)?;
     let dir = output_dir(args, &format!("fe-{}", scene.name), &case)?;
-    fe_run(&case, scene, &dir)?;
+    fe_run(&case, scene, &dir, resume)?;
     println!("wrote {}", dir.display());
     Ok(())
 }
@@ -246,7 +254,12 @@ fn compare(
         Some(file) => file.to_path_buf(),
         None => {
             let out = dir.join("fe-stiffness");
-            fe_run(&case, study::fe::scene(&case, cmp::STIFFNESS_SCENE)?, &out)?;
+            fe_run(
+                &case,
+                study::fe::scene(&case, cmp::STIFFNESS_SCENE)?,
+                &out,
+                false,
+            )?;
             out.join("stiffness.csv")
         }
     };
@@ -287,7 +300,7 @@ fn accuracy_chart(
             let (overrides, name) = study::accuracy::chart_run(mm, scaled);
             let at_level = load(args, overrides)?;
             let scene = study::fe::scene(&at_level, study::compare::STIFFNESS_SCENE)?;
-            fe_run(&at_level, scene, &dir.join(&name))?;
+            fe_run(&at_level, scene, &dir.join(&name), false)?;
             folders.push(dir.join(name));
         }
     }

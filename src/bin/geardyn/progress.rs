@@ -13,9 +13,33 @@ use geardyn::study;
 
 /// Prepares and runs an explicit scene with progress (a bar, or a line every 10 % without a
 /// terminal) and writes it to `dir`; a diverged or interrupted run is written too, then reported
-/// as an error.
-pub fn fe_run(case: &Case, scene: &Scene, dir: &Path) -> Result<study::fe::FeStudy> {
+/// as an error. With `resume` it goes on from the checkpoint an interrupted run of the same
+/// case left in `dir`.
+pub fn fe_run(case: &Case, scene: &Scene, dir: &Path, resume: bool) -> Result<study::fe::FeStudy> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let checkpoint = if resume {
+        let same_case = std::fs::read_to_string(dir.join("case.toml"))
+            .is_ok_and(|text| case.is_same_case(&text));
+        anyhow::ensure!(
+            same_case,
+            "{} holds no run of this case (its case.toml differs or is missing): resume with \
+             the same case file and --set as the interrupted run",
+            dir.display()
+        );
+        let checkpoint = report::fe::read_checkpoint(dir)?.with_context(|| {
+            format!(
+                "{} holds no checkpoint: its run was not interrupted, or it finished",
+                dir.display()
+            )
+        })?;
+        eprintln!(
+            "resuming at step {} of {} ({:.0} s of wall time before)",
+            checkpoint.next_step, checkpoint.total_steps, checkpoint.wall_s
+        );
+        Some(checkpoint)
+    } else {
+        None
+    };
     eprintln!("{}", report::fe::scene_line(scene));
     let prepared = study::fe::prepare(case, scene)?;
     print!("{}", report::fe::prepared_console(case, &prepared, scene));
@@ -42,7 +66,7 @@ pub fn fe_run(case: &Case, scene: &Scene, dir: &Path) -> Result<study::fe::FeStu
     let plain_log = bar.is_hidden();
     let started = std::time::Instant::now();
     let mut logged = 0;
-    let result = study::fe::run(case, scene, &prepared, &mut |f| {
+    let result = study::fe::run(case, scene, &prepared, checkpoint, &mut |f| {
         bar.set_position((f * 1000.0) as u64);
         let tenth = (f * 10.0).floor() as usize;
         if plain_log && tenth > logged {
@@ -57,13 +81,15 @@ pub fn fe_run(case: &Case, scene: &Scene, dir: &Path) -> Result<study::fe::FeStu
     })?;
     bar.finish_and_clear();
     report::fe::write(OutputDir(dir), case, &result)?;
-    if let Some(message) = result
-        .summary
-        .diverged
-        .as_ref()
-        .or(result.summary.interrupted.as_ref())
-    {
+    if let Some(message) = result.summary.diverged.as_ref() {
         anyhow::bail!("{message}; partial results in {}", dir.display());
+    }
+    if let Some(message) = result.summary.interrupted.as_ref() {
+        anyhow::bail!(
+            "{message}; partial results in {dir}; go on with `geardyn fe ... --resume --out {dir}` \
+             (the same case and flags), or `geardyn run --resume` for a run's stage",
+            dir = dir.display()
+        );
     }
     print!("{}", report::fe::console(&result));
     Ok(result)
@@ -71,15 +97,20 @@ pub fn fe_run(case: &Case, scene: &Scene, dir: &Path) -> Result<study::fe::FeStu
 
 /// Runs scene `scene` of `case` into `dir`, unless `dir` holds a finished run of the same
 /// effective case (its case.toml, compared as TOML values: comments and `--set` headers aside),
-/// so an interrupted chain resumes. summary.json is written last, so a run is finished when it
-/// is there; it is removed before a new run, so a stale one is never taken for the new case's.
+/// so an interrupted chain resumes; an interrupted run of the same case goes on from its
+/// checkpoint. summary.json is written last, so a run is finished when it is there and has no
+/// checkpoint; it is removed before a new run, so a stale one is never taken for the new case's.
 pub fn fe_run_reusing(case: &Case, scene: &str, dir: &Path) -> Result<()> {
     let same_case =
         std::fs::read_to_string(dir.join("case.toml")).is_ok_and(|text| case.is_same_case(&text));
-    let finished = report::compare::read_fe_run(dir).is_ok();
+    let interrupted = dir.join(report::fe::CHECKPOINT).exists();
+    let finished = !interrupted && report::compare::read_fe_run(dir).is_ok();
     if same_case && finished {
         eprintln!("reusing the finished run in {}", dir.display());
         return Ok(());
+    }
+    if same_case && interrupted {
+        return fe_run(case, study::fe::scene(case, scene)?, dir, true).map(|_| ());
     }
     match std::fs::remove_file(dir.join("summary.json")) {
         Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
@@ -87,7 +118,7 @@ pub fn fe_run_reusing(case: &Case, scene: &str, dir: &Path) -> Result<()> {
         }
         _ => {}
     }
-    fe_run(case, study::fe::scene(case, scene)?, dir).map(|_| ())
+    fe_run(case, study::fe::scene(case, scene)?, dir, false).map(|_| ())
 }
 
 /// One scene of the relief cross-check into `dir` ([`fe_run_reusing`]), read back.

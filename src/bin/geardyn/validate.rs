@@ -87,7 +87,7 @@ pub fn validate_mass_scaling(args: &CommonArgs, scene: &str) -> Result<()> {
     let mut runs = Vec::new();
     for (case, name) in [(&scaled, "scaled"), (&unscaled, "unscaled")] {
         let out = dir.join(name);
-        runs.push(fe_run(case, study::fe::scene(case, scene)?, &out)?);
+        runs.push(fe_run(case, study::fe::scene(case, scene)?, &out, false)?);
         study::validate::check_scaled(&runs[0])?;
     }
     let result = study::validate::mass_scaling(scaled.name(), &scaled.pair, &runs[0], &runs[1])?;

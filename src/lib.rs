@@ -13,6 +13,7 @@
 //! * [`report`] — atomic file output, JSON summaries, tables and drawings.
 //! * [`samples`] — canonical cases reused by tests, benches and docs.
 //! * [`interrupt`] — the stop request (SIGINT/SIGTERM) the long loops poll.
+//! * [`resources`] — the memory limit the models check their estimates against, and `--force`.
 
 // Input checks are written `!(x > limit)` on purpose: a NaN must fail them.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

@@ -1,20 +1,21 @@
-//! Resources up front: the memory a model will take, checked against what the machine has before
-//! the model is built, and `--force`, which lets a run go past the limits (memory here, the
-//! explicit run's wall time in [`crate::study::fe::CostEstimate`]).
+//! Resources up front: the memory a model will take, checked against a limit before the model
+//! is built, and `--force`, which lets a run go past the limits (memory here, the explicit
+//! run's wall time in [`crate::study::fe::CostEstimate`]).
 //!
 //! The estimates count the large arrays a model is about to allocate, from their sizes, before
-//! it does: a gear mesh and its stiffness triplets from the element and node counts
+//! it does: a gear mesh, its stiffness triplets and K from the element and node counts
 //! ([`crate::mesh::mesh_size`], without meshing), a sparse Cholesky factor from faer's own
 //! symbolic analysis ([`crate::fe::assembly::AssembledStiffness`]), an explicit run's history
 //! from its samples. They leave out the allocator's slack, the thread stacks and the small
 //! arrays; `tests/memory.rs` holds them against the heap a counting allocator sees.
 //!
-//! The limit is [`LIMIT_SHARE`] of the memory available at the check (Linux: `MemAvailable`,
-//! and the cgroup's `memory.max` less its `memory.current` where that is lower, as in a
-//! container or a batch job), or `GEARDYN_MEMORY_LIMIT_MB` where set, the most one model may
-//! take. Where neither can be read there is no memory check.
+//! Like the stop request ([`crate::interrupt`]), the limit is the process's: the binary reads
+//! the machine once at its start ([`machine_limit`]) and sets it ([`set_memory_limit`]); the
+//! kernels compare their estimates with it and do no IO. Without a limit set (the library in
+//! tests, benches, another program) nothing is refused.
 
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::RwLock;
 
 use thiserror::Error;
 
@@ -25,7 +26,12 @@ pub const LIMIT_SHARE: f64 = 0.8;
 /// The environment variable that sets the memory limit [MB] instead of the machine's.
 pub const LIMIT_VARIABLE: &str = "GEARDYN_MEMORY_LIMIT_MB";
 
+/// Estimates from this size up are announced before the model is built [bytes].
+pub const ANNOUNCE_BYTES: f64 = 1e9;
+
 static FORCE: AtomicBool = AtomicBool::new(false);
+static LIMIT: RwLock<Option<MemoryLimit>> = RwLock::new(None);
+static ANNOUNCER: RwLock<Option<fn(&str)>> = RwLock::new(None);
 
 /// `--force`: run what is above a limit anyway.
 pub fn set_force(force: bool) {
@@ -35,6 +41,22 @@ pub fn set_force(force: bool) {
 /// Whether `--force` was given.
 pub fn forced() -> bool {
     FORCE.load(Ordering::Relaxed)
+}
+
+/// Sets the process's memory limit (None: no check).
+pub fn set_memory_limit(limit: Option<MemoryLimit>) {
+    *LIMIT.write().unwrap_or_else(|e| e.into_inner()) = limit;
+}
+
+/// The process's memory limit, as set.
+pub fn memory_limit() -> Option<MemoryLimit> {
+    LIMIT.read().unwrap_or_else(|e| e.into_inner()).clone()
+}
+
+/// Where estimates of [`ANNOUNCE_BYTES`] and more that pass the check are told (the binary:
+/// its console).
+pub fn set_announcer(announce: fn(&str)) {
+    *ANNOUNCER.write().unwrap_or_else(|e| e.into_inner()) = Some(announce);
 }
 
 /// The memory a model takes at its peak: named parts [bytes].
@@ -104,27 +126,92 @@ pub struct MemoryLimit {
     pub source: String,
 }
 
-/// The memory limit now: read at every check (a fraction of a millisecond), so what the
-/// process already holds — the first gear body while the second is factorized — is not
-/// available to the next model.
-pub fn memory_limit() -> Option<MemoryLimit> {
-    let variable = std::env::var(LIMIT_VARIABLE).ok();
-    let read = |path: &str| std::fs::read_to_string(path).ok();
+/// One level of the process's memory cgroup, as read: its limit, its use and its statistics.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct CgroupLevel {
+    /// cgroup v2 `memory.max` ("max": none) or v1 `memory.limit_in_bytes`.
+    pub limit: Option<String>,
+    /// v2 `memory.current` or v1 `memory.usage_in_bytes`.
+    pub usage: Option<String>,
+    /// `memory.stat`: its page cache (v2 `file`, v1 `total_cache`), which the kernel reclaims
+    /// before it refuses memory, is not counted as used.
+    pub stat: Option<String>,
+}
+
+impl CgroupLevel {
+    /// limit − (usage − page cache) [bytes], where the level has a limit.
+    fn headroom(&self) -> Option<f64> {
+        let number = |text: &Option<String>| text.as_deref()?.trim().parse::<f64>().ok();
+        // v1 writes "no limit" as a number near 2⁶³.
+        let limit = number(&self.limit).filter(|l| *l < 1e18)?;
+        let cache = self.stat.as_deref().and_then(|stat| {
+            stat.lines().find_map(|line| {
+                let (key, value) = line.split_once(' ')?;
+                matches!(key, "file" | "total_cache")
+                    .then(|| value.trim().parse::<f64>().ok())
+                    .flatten()
+            })
+        });
+        let used = (number(&self.usage)? - cache.unwrap_or(0.0)).max(0.0);
+        Some((limit - used).max(0.0))
+    }
+}
+
+/// The machine's limit for this process, read now: `GEARDYN_MEMORY_LIMIT_MB` where set, else
+/// [`LIMIT_SHARE`] of the lesser of /proc/meminfo's `MemAvailable` and the headroom of every
+/// level of the process's memory cgroup (v2, or v1's memory controller), from its own group up
+/// to the root — a container's or a batch job's limit. Linux only; elsewhere None.
+pub fn machine_limit() -> Option<MemoryLimit> {
+    let read = |path: String| std::fs::read_to_string(path).ok();
+    let mut levels = Vec::new();
+    if let Some(cgroups) = read("/proc/self/cgroup".into()) {
+        let v2 = cgroups.lines().find_map(|l| l.strip_prefix("0::"));
+        let v1 = cgroups.lines().find_map(|l| {
+            let (_, rest) = l.split_once(':')?;
+            let (controllers, path) = rest.split_once(':')?;
+            controllers
+                .split(',')
+                .any(|c| c == "memory")
+                .then_some(path)
+        });
+        let (root, path, files) = match (v1, v2) {
+            (Some(path), _) => (
+                "/sys/fs/cgroup/memory",
+                path,
+                ["memory.limit_in_bytes", "memory.usage_in_bytes"],
+            ),
+            (None, Some(path)) => ("/sys/fs/cgroup", path, ["memory.max", "memory.current"]),
+            (None, None) => ("", "", ["", ""]),
+        };
+        if !root.is_empty() {
+            let path = path.trim_end().trim_end_matches('/');
+            let mut dir = std::path::PathBuf::from(format!("{root}{path}"));
+            loop {
+                let file = |name: &str| read(dir.join(name).display().to_string());
+                levels.push(CgroupLevel {
+                    limit: file(files[0]),
+                    usage: file(files[1]),
+                    stat: file("memory.stat"),
+                });
+                if dir.as_os_str().len() <= root.len() || !dir.pop() {
+                    break;
+                }
+            }
+        }
+    }
     limit_from(
-        variable.as_deref(),
-        read("/proc/meminfo").as_deref(),
-        read("/sys/fs/cgroup/memory.max").as_deref(),
-        read("/sys/fs/cgroup/memory.current").as_deref(),
+        std::env::var(LIMIT_VARIABLE).ok().as_deref(),
+        read("/proc/meminfo".into()).as_deref(),
+        &levels,
     )
 }
 
-/// The limit from the variable's value, else [`LIMIT_SHARE`] of the available memory: the
-/// lesser of /proc/meminfo's MemAvailable and the cgroup's memory.max − memory.current.
+/// The limit from the variable's value, else [`LIMIT_SHARE`] of the least of /proc/meminfo's
+/// `MemAvailable` and the cgroup levels' headroom.
 pub fn limit_from(
     variable: Option<&str>,
     meminfo: Option<&str>,
-    cgroup_max: Option<&str>,
-    cgroup_current: Option<&str>,
+    cgroup: &[CgroupLevel],
 ) -> Option<MemoryLimit> {
     if let Some(mb) = variable.and_then(|v| v.trim().parse::<f64>().ok()) {
         return Some(MemoryLimit {
@@ -144,19 +231,14 @@ pub fn limit_from(
             })
             .map(|kb| kb * 1024.0)
     });
-    let cgroup = match (cgroup_max, cgroup_current) {
-        (Some(max), Some(current)) => max
-            .trim()
-            .parse::<f64>()
-            .ok()
-            .zip(current.trim().parse::<f64>().ok())
-            .map(|(max, current)| (max - current).max(0.0)),
-        _ => None,
-    };
-    let (bytes, what) = match (available, cgroup) {
-        (Some(a), Some(c)) if c < a => (c, "the cgroup's memory.max less its use"),
+    let headroom = cgroup
+        .iter()
+        .filter_map(CgroupLevel::headroom)
+        .reduce(f64::min);
+    let (bytes, what) = match (available, headroom) {
+        (Some(a), Some(c)) if c < a => (c, "the cgroup's limit less its use"),
         (Some(a), _) => (a, "MemAvailable"),
-        (None, Some(c)) => (c, "the cgroup's memory.max less its use"),
+        (None, Some(c)) => (c, "the cgroup's limit less its use"),
         (None, None) => return None,
     };
     Some(MemoryLimit {
@@ -185,19 +267,22 @@ pub struct TooLarge {
     pub remedy: String,
 }
 
-/// Estimates from this size up are announced on the console before the model is built [bytes].
-pub const ANNOUNCE_BYTES: f64 = 1e9;
-
-/// Refuses `estimate` above the process's limit unless `--force`; announces it on stderr from
-/// [`ANNOUNCE_BYTES`] up, with the limit.
+/// Refuses `estimate` above the process's limit unless `--force`; hands an estimate of
+/// [`ANNOUNCE_BYTES`] or more that passes to the announcer, with the limit.
 pub fn check_memory(what: &str, estimate: &MemoryEstimate, remedy: &str) -> Result<(), TooLarge> {
     let limit = memory_limit();
     let checked = check_memory_against(limit.clone(), what, estimate, remedy);
-    if checked.is_ok() && estimate.total() >= ANNOUNCE_BYTES {
-        let against = limit.map_or("no limit known".to_string(), |l| {
-            format!("limit {}: {}", bytes_words(l.bytes), l.source)
-        });
-        eprintln!("{what}: memory {} ({against})", estimate.describe());
+    let announcer = *ANNOUNCER.read().unwrap_or_else(|e| e.into_inner());
+    if let (Ok(()), Some(announce)) = (&checked, announcer) {
+        if estimate.total() >= ANNOUNCE_BYTES {
+            let against = limit.map_or("no limit set".to_string(), |l| {
+                format!("limit {}: {}", bytes_words(l.bytes), l.source)
+            });
+            announce(&format!(
+                "{what}: memory {} ({against})",
+                estimate.describe()
+            ));
+        }
     }
     checked
 }
@@ -227,32 +312,52 @@ mod tests {
     const MEMINFO: &str =
         "MemTotal:       24000000 kB\nMemFree:         1000000 kB\nMemAvailable:   20000000 kB\n";
 
+    fn level(limit: &str, usage: &str, stat: &str) -> CgroupLevel {
+        CgroupLevel {
+            limit: Some(limit.into()),
+            usage: Some(usage.into()),
+            stat: Some(stat.into()),
+        }
+    }
+
     #[test]
-    fn the_limit_is_a_share_of_the_lesser_available_memory() {
-        let machine = limit_from(None, Some(MEMINFO), Some("max\n"), Some("5000\n")).unwrap();
+    fn the_limit_is_a_share_of_the_least_headroom() {
+        let unlimited = [level("max\n", "5000\n", "anon 4000\nfile 1000\n")];
+        let machine = limit_from(None, Some(MEMINFO), &unlimited).unwrap();
         assert_eq!(machine.bytes, 0.8 * 20_000_000.0 * 1024.0);
         assert!(
             machine.source.contains("MemAvailable"),
             "{}",
             machine.source
         );
-        let job = limit_from(
-            None,
-            Some(MEMINFO),
-            Some("4000000000\n"),
-            Some("1000000000\n"),
-        )
-        .unwrap();
-        assert_eq!(job.bytes, 0.8 * 3e9);
-        assert!(job.source.contains("cgroup"), "{}", job.source);
-        let set = limit_from(Some("250"), Some(MEMINFO), None, None).unwrap();
+        // A 4 GB job using 3 GB, 2.5 GB of it page cache (a build's files): 3.5 GB of headroom,
+        // not 1 GB. Its parent, unlimited; v1 writes that as a number near 2⁶³.
+        let job = [
+            level(
+                "4000000000\n",
+                "3000000000\n",
+                "anon 500000000\nfile 2500000000\n",
+            ),
+            level("9223372036854771712\n", "1\n", "total_cache 0\n"),
+        ];
+        let limited = limit_from(None, Some(MEMINFO), &job).unwrap();
+        assert_eq!(limited.bytes, 0.8 * 3.5e9);
+        assert!(limited.source.contains("cgroup"), "{}", limited.source);
+        // The tighter of two levels: a parent with 2 GB left.
+        let nested = [
+            job[0].clone(),
+            level("6000000000\n", "4000000000\n", "file 0\n"),
+        ];
+        assert_eq!(
+            limit_from(None, Some(MEMINFO), &nested).unwrap().bytes,
+            0.8 * 2e9
+        );
+        let set = limit_from(Some("250"), Some(MEMINFO), &job).unwrap();
         assert_eq!(set.bytes, 250e6);
-        assert_eq!(limit_from(None, None, None, None), None);
+        assert_eq!(limit_from(None, None, &[]), None);
         // An unreadable variable falls back to the machine.
         assert_eq!(
-            limit_from(Some("lots"), Some(MEMINFO), None, None)
-                .unwrap()
-                .bytes,
+            limit_from(Some("lots"), Some(MEMINFO), &[]).unwrap().bytes,
             machine.bytes
         );
     }
@@ -261,7 +366,7 @@ mod tests {
     fn an_estimate_above_the_limit_is_refused_with_its_parts_and_the_remedy() {
         let estimate = MemoryEstimate::part("factor", 3e9).and(MemoryEstimate::part("mesh", 1e8));
         assert_eq!(estimate.total(), 3.1e9);
-        let limit = limit_from(Some("2000"), None, None, None);
+        let limit = limit_from(Some("2000"), None, &[]);
         let error = check_memory_against(limit.clone(), "the LTCA bodies", &estimate, "coarsen")
             .unwrap_err()
             .to_string();

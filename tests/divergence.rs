@@ -171,7 +171,7 @@ fn models_estimated_above_the_memory_limit_are_refused_up_front() {
     );
     assert_eq!(code, Some(1));
     for needed in [
-        "meshes at 0.02 / 0.02 mm",
+        "stiffness matrices at 0.02 / 0.02 mm",
         "GB",
         "limit of 2.0 GB",
         "coarsen the mesh",
@@ -179,15 +179,27 @@ fn models_estimated_above_the_memory_limit_are_refused_up_front() {
     ] {
         assert!(stderr.contains(needed), "{needed:?} missing: {stderr}");
     }
-    // The default mesh: its meshes fit in 35 MB, its factor (27 MB) and workspace do not.
-    let (code, stderr) = ltca("35", &[]);
+    // 0.2 mm everywhere: its meshes, triplets and K (718 MB) fit in 850 MB, a factor and its
+    // workspace (993 MB) do not — refused after the symbolic analysis, before it is computed.
+    let (code, stderr) = ltca(
+        "850",
+        &[
+            "--set",
+            "mesh.fine_element_mm=0.2",
+            "--set",
+            "mesh.coarse_element_mm=0.2",
+        ],
+    );
     assert_eq!(code, Some(1));
     assert!(
         stderr.contains("the Cholesky factor of a stiffness matrix of")
-            && stderr.contains("limit of 35 MB"),
+            && stderr.contains("limit of 850 MB"),
         "{stderr}"
     );
-    let (code, stderr) = ltca("35", &["--force"]);
+    // The default mesh under 30 MB is refused, and runs with --force.
+    let (code, _) = ltca("30", &[]);
+    assert_eq!(code, Some(1));
+    let (code, stderr) = ltca("30", &["--force"]);
     assert_eq!(code, Some(0), "{stderr}");
     assert!(dir.path().join("ltca/summary.json").exists());
 }

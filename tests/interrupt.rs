@@ -48,79 +48,97 @@ fn an_interrupted_fe_run_keeps_its_history_and_says_where_it_stopped() {
     assert_no_partial_files(&out);
 }
 
-/// SIGTERM 1.5 s into the time loop of a short 3000 rpm scene (about 14 s of loop on the
-/// coarse pair): the run leaves its checkpoint, `fe --resume` goes on from it, and every CSV
-/// and the summary (timings aside) equal the uninterrupted run's, byte for byte.
+/// SIGTERM 1.5 s into the time loop of a 1 ms scene (about 14 s of loop on the coarse pair):
+/// the run leaves its checkpoint, `fe --resume` goes on from it, and every CSV and the summary
+/// (timings aside) equal the uninterrupted run's, byte for byte. Two scenes: 3000 rpm without
+/// relief or friction, and 60 rpm with the paper's relief and μ = 0.15 (the friction history
+/// crosses the checkpoint). A checkpoint is refused by another case and by another scene of
+/// the same case file and flags.
 #[test]
 fn an_interrupted_fe_run_resumes_to_the_uninterrupted_result() {
     let dir = tempfile::tempdir().unwrap();
     let case = coarse_case(dir.path());
-    let fe = |out: &Path| {
+    // The scenes shortened in the case itself, so two scenes share one effective case.
+    let fe = |scene: &str, out: &Path| {
         let mut command = geardyn();
-        command
-            .args(["fe", "--scene", "high-unmodified", "--duration-s", "0.001"])
-            .arg(&case)
-            .arg("--out")
-            .arg(out);
+        command.args(["fe", "--scene", scene]).arg(&case);
+        for shortened in ["high-unmodified", "high-modified", "low-modified-friction"] {
+            command
+                .arg("--set")
+                .arg(format!("scene[{shortened}].duration_s=0.001"))
+                .arg("--set")
+                .arg(format!("scene[{shortened}].ramp_s=0.0003"));
+        }
+        command.arg("--out").arg(out);
         command
     };
-    let parted = dir.path().join("parted");
-    let (code, stderr) = interrupt(
-        &mut fe(&parted),
-        " steps",
-        false,
-        Duration::from_millis(1500),
-    );
-    assert_eq!(code, 130, "{stderr}");
-    assert!(stderr.contains("--resume --out"), "{stderr}");
-    assert!(parted.join("checkpoint.json").exists());
-    assert_no_partial_files(&parted);
-    // Another case is refused; the same one goes on.
-    let other = geardyn()
-        .args(["fe", "--scene", "high-unmodified", "--duration-s", "0.001"])
-        .args(["--set", "fe.step_factor=0.8", "--resume", "--out"])
-        .arg(&parted)
-        .arg(&case)
-        .output()
-        .unwrap();
-    assert!(!other.status.success());
-    assert!(String::from_utf8_lossy(&other.stderr).contains("no run of this case"));
-    let resumed = fe(&parted).arg("--resume").output().unwrap();
-    let resumed_err = String::from_utf8_lossy(&resumed.stderr);
-    assert!(resumed.status.success(), "{resumed_err}");
-    assert!(resumed_err.contains("resuming at step"), "{resumed_err}");
-    assert!(
-        !parted.join("checkpoint.json").exists(),
-        "removed once finished"
-    );
-
-    let whole = dir.path().join("whole");
-    assert!(fe(&whole).output().unwrap().status.success());
-    for file in [
-        "history.csv",
-        "dte_spectrum.csv",
-        "stiffness.csv",
-        "stiffness_vs_ltca.csv",
-    ] {
-        assert_eq!(
-            std::fs::read(whole.join(file)).unwrap(),
-            std::fs::read(parted.join(file)).unwrap(),
-            "{file}: the resumed run differs from the uninterrupted one"
+    for scene in ["high-unmodified", "low-modified-friction"] {
+        let parted = dir.path().join(format!("{scene}-parted"));
+        let (code, stderr) = interrupt(
+            &mut fe(scene, &parted),
+            " steps",
+            false,
+            Duration::from_millis(1500),
         );
-    }
-    fn strip(v: &mut serde_json::Value) {
-        if let Some(object) = v.as_object_mut() {
-            object.retain(|k, _| !is_timing_key(k));
-            object.values_mut().for_each(strip);
+        assert_eq!(code, 130, "{stderr}");
+        assert!(stderr.contains("--resume --out"), "{stderr}");
+        assert!(parted.join("checkpoint.json").exists());
+        assert_no_partial_files(&parted);
+        if scene == "high-unmodified" {
+            // The same case file and flags, another scene: the relief differs.
+            let other = fe("high-modified", &parted)
+                .arg("--resume")
+                .output()
+                .unwrap();
+            assert!(!other.status.success());
+            let stderr = String::from_utf8_lossy(&other.stderr);
+            assert!(stderr.contains("made on another scene"), "{stderr}");
+        } else {
+            let other = fe(scene, &parted)
+                .args(["--set", "fe.step_factor=0.8", "--resume"])
+                .output()
+                .unwrap();
+            assert!(!other.status.success());
+            let stderr = String::from_utf8_lossy(&other.stderr);
+            assert!(stderr.contains("no run of this case"), "{stderr}");
         }
+        let resumed = fe(scene, &parted).arg("--resume").output().unwrap();
+        let resumed_err = String::from_utf8_lossy(&resumed.stderr);
+        assert!(resumed.status.success(), "{resumed_err}");
+        assert!(resumed_err.contains("resuming at step"), "{resumed_err}");
+        assert!(
+            !parted.join("checkpoint.json").exists(),
+            "removed once finished"
+        );
+
+        let whole = dir.path().join(format!("{scene}-whole"));
+        assert!(fe(scene, &whole).output().unwrap().status.success());
+        for file in [
+            "history.csv",
+            "dte_spectrum.csv",
+            "stiffness.csv",
+            "stiffness_vs_ltca.csv",
+        ] {
+            assert_eq!(
+                std::fs::read(whole.join(file)).unwrap(),
+                std::fs::read(parted.join(file)).unwrap(),
+                "{scene} {file}: the resumed run differs from the uninterrupted one"
+            );
+        }
+        fn strip(v: &mut serde_json::Value) {
+            if let Some(object) = v.as_object_mut() {
+                object.retain(|k, _| !is_timing_key(k));
+                object.values_mut().for_each(strip);
+            }
+        }
+        let (mut a, mut b) = (
+            read_json(&whole.join("summary.json")),
+            read_json(&parted.join("summary.json")),
+        );
+        strip(&mut a);
+        strip(&mut b);
+        assert_eq!(a, b, "{scene}");
     }
-    let (mut a, mut b) = (
-        read_json(&whole.join("summary.json")),
-        read_json(&parted.join("summary.json")),
-    );
-    strip(&mut a);
-    strip(&mut b);
-    assert_eq!(a, b);
 }
 
 #[test]

@@ -4,10 +4,9 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use geardyn::fe::assembly::{stiffness_triplets, AssembledStiffness};
+use geardyn::fe::assembly::{assembly_memory, stiffness_triplets, AssembledStiffness};
 use geardyn::fe::elasticity_matrix;
 use geardyn::geometry::FlankModification;
-use geardyn::ltca::body::LtcaBody;
 use geardyn::mesh::{mesh_gear, mesh_size, MeshSpec};
 use geardyn::samples;
 
@@ -53,17 +52,18 @@ fn peak_of<T>(f: impl FnOnce() -> T) -> (T, f64) {
 }
 
 /// An LTCA body's two checked allocations against the heap on four meshes, from a coarse one
-/// to fine = coarse: the mesh and triplets counted before meshing
-/// ([`LtcaBody::assembly_memory`]) against the peak of meshing, computing the triplets and
-/// assembling K; the factor and its workspace from the symbolic analysis
-/// ([`AssembledStiffness::factorization_memory`]) against the peak of the numeric
-/// factorization.
+/// to fine = coarse: the mesh, triplets and K counted before meshing ([`assembly_memory`])
+/// against the peak of meshing, computing the triplets and assembling K; the factor and its
+/// workspace from the symbolic analysis ([`AssembledStiffness::factorization_memory`]) against
+/// the peak of the numeric factorization.
 ///
 /// The factor's estimate is the sizes of its two allocations, L's values and the workspace:
-/// within 2 %. The count before meshing leaves out K and the symbolic analysis, so it is a
-/// lower bound of the assembly's peak: at least 60 % of it (72 % measured on every mesh here).
-/// The first mesh is built twice: the first time also allocates the matrix products'
-/// per-thread packing buffers (64 MiB, once per process), which are not the body's.
+/// within 2 %. The count before meshing leaves out the symbolic analysis and faer's small work
+/// arrays, so it is a lower bound of the assembly's peak: at least 90 % of it (97 % measured
+/// on every mesh here). The first mesh is built twice: the first time also allocates the matrix
+/// products' per-thread packing buffers (64 MiB, once per process), which are not the body's.
+/// The factorizations run on this thread (faer's workspace depends on the thread count; the
+/// estimate asks faer for it at the count in use, so this holds on any).
 #[test]
 fn ltca_body_memory_estimates_against_the_heap() {
     let _alone = MEASURING.lock().unwrap();
@@ -94,7 +94,7 @@ fn ltca_body_memory_estimates_against_the_heap() {
             coarse_size,
             fine_teeth: teeth.clone(),
         };
-        let counted = LtcaBody::assembly_memory(mesh_size(gear, &none, &spec)).total();
+        let counted = assembly_memory(mesh_size(gear, &none, &spec)).total();
         let (assembled, assembly_peak) = peak_of(|| {
             let mesh = mesh_gear(gear, &none, &spec);
             let triplets =
@@ -128,7 +128,7 @@ fn ltca_body_memory_estimates_against_the_heap() {
     }
     assert!(
         rows.iter()
-            .all(|&(assembly, factor)| (0.6..=1.0).contains(&assembly)
+            .all(|&(assembly, factor)| (0.9..=1.0).contains(&assembly)
                 && (0.98..1.02).contains(&factor)),
         "estimate / heap peak (assembly, factor): {rows:?}"
     );
@@ -136,8 +136,8 @@ fn ltca_body_memory_estimates_against_the_heap() {
 
 /// The explicit run's estimate (history reserved for every sample, the integrator's arrays)
 /// against the heap peak of the run, on the coarse pair: once with a sample every step, where
-/// the history is most of it, once with one every 20 µs, where the state is. Within −20 % /
-/// +25 %: the history's size is exact, the integrator's and the stable-step check's arrays are
+/// the history is most of it, once with one every 20 µs, where the state is. Within −10 % /
+/// +5 %: the history's size is exact, the integrator's and the stable-step check's arrays are
 /// counted per node; the contact search's small work arrays are left out (−1 % and −4 %
 /// measured).
 #[test]
@@ -172,7 +172,7 @@ fn explicit_run_memory_estimate_against_the_heap() {
         ratios.push(estimate.total() / peak);
     }
     assert!(
-        ratios.iter().all(|r| (0.8..1.25).contains(r)),
+        ratios.iter().all(|r| (0.9..1.05).contains(r)),
         "estimate / heap peak: {ratios:?}"
     );
 }

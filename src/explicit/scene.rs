@@ -512,24 +512,66 @@ pub struct RunOutcome {
     pub checkpoint: Option<Box<RunCheckpoint>>,
 }
 
-/// An interrupted run between two steps: the pair's and the integrator's state, the history
-/// and the open output interval. [`run`] goes on from it to the same history, bit for bit, as
-/// the run that was not interrupted (tests/interrupt.rs).
+/// An interrupted run between two steps: the pair's and the integrator's state and the open
+/// output interval; with the history recorded so far (kept apart: the run's result holds it),
+/// [`run`] goes on from it to the same history, bit for bit, as the run that was not
+/// interrupted (tests/interrupt.rs).
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct RunCheckpoint {
-    /// The step, step count and output stride it was made with: another scene is refused.
-    pub dt: f64,
+    /// [`scene_fingerprint`] of the scene it was made on: another scene is refused.
+    pub fingerprint: u64,
     pub total_steps: usize,
-    pub every: usize,
     /// The step the run goes on with.
     pub next_step: usize,
     /// Wall time spent before the interruption [s].
     pub wall_s: f64,
     state: PairState,
     integrator: IntegratorCheckpoint,
-    history: History,
     sums: IntervalSums,
     coupled_steps: Vec<CoupledStep>,
+}
+
+/// A fingerprint of everything a run's steps depend on: the step, the step count and output
+/// stride, the drive, the damping, the friction, and every body's reference nodes, masses and
+/// flank penalties (FNV-1a over their bits). Two scenes that differ in any of them — another
+/// relief, friction coefficient, speed, mesh or duration — differ here.
+pub fn scene_fingerprint(prepared: &PreparedScene, duration: f64, output_interval: f64) -> u64 {
+    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |bytes: &[u8]| {
+        for b in bytes {
+            hash = (hash ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    let model = &prepared.model;
+    let total_steps = (duration / prepared.dt).ceil() as u64;
+    let every = ((output_interval / prepared.dt).round() as u64).max(1);
+    for x in [
+        prepared.dt,
+        prepared.beta_k,
+        prepared.mesh_damping,
+        model.friction,
+    ] {
+        eat(&x.to_bits().to_le_bytes());
+    }
+    eat(&total_steps.to_le_bytes());
+    eat(&every.to_le_bytes());
+    // Debug prints every f64 in its shortest exact form.
+    eat(format!("{:?}", prepared.drive).as_bytes());
+    for body in &model.bodies {
+        for p in &body.reference {
+            eat(&p.x.to_bits().to_le_bytes());
+            eat(&p.y.to_bits().to_le_bytes());
+        }
+        for m in &body.mass {
+            eat(&m.to_bits().to_le_bytes());
+        }
+    }
+    for flank in &model.flanks {
+        for k in flank.penalty.iter().chain(&flank.line_penalty) {
+            eat(&k.to_bits().to_le_bytes());
+        }
+    }
+    hash
 }
 
 /// How many times a run measures the stable step of the pair in its current contact state.
@@ -618,7 +660,7 @@ pub fn run(
     prepared: &PreparedScene,
     duration: f64,
     output_interval: f64,
-    resume: Option<RunCheckpoint>,
+    resume: Option<(RunCheckpoint, History)>,
     progress: &mut dyn FnMut(f64),
 ) -> Result<RunOutcome, FeError> {
     let model = &prepared.model;
@@ -633,23 +675,33 @@ pub fn run(
             let history = History::with_capacity(samples, model.flank_pairs.len());
             (integrator, state, history, 1, 0.0, None)
         }
-        Some(checkpoint) => {
-            if checkpoint.dt != prepared.dt
-                || checkpoint.total_steps != total_steps
-                || checkpoint.every != every
-            {
-                return Err(FeError::Assembly(format!(
-                    "the checkpoint was made with a step of {:e} s, {} steps and a sample every                      {} steps, this scene has {:e} s, {total_steps} and {every}: it belongs to                      another scene or case",
-                    checkpoint.dt, checkpoint.total_steps, checkpoint.every, prepared.dt
-                )));
+        Some((checkpoint, mut history)) => {
+            if checkpoint.fingerprint != scene_fingerprint(prepared, duration, output_interval) {
+                return Err(FeError::Resume(
+                    "it was made on another scene (its step, duration, drive, damping, friction \
+                     or mesh differ): resume with the scene, case file, --set and flags of the \
+                     interrupted run"
+                        .to_string(),
+                ));
+            }
+            let fits = checkpoint
+                .state
+                .x
+                .iter()
+                .zip(&model.bodies)
+                .all(|(x, body)| x.len() == 2 * body.reference.len())
+                && history.pair_forces.len() == model.flank_pairs.len();
+            if !fits {
+                return Err(FeError::Resume(
+                    "its state does not fit this mesh".to_string(),
+                ));
             }
             let mut integrator =
                 PairIntegrator::new(model, prepared.drive, prepared.dt, prepared.beta_k);
             integrator.mesh_damping = prepared.mesh_damping;
             integrator
                 .restore(checkpoint.integrator)
-                .map_err(FeError::Assembly)?;
-            let mut history = checkpoint.history;
+                .map_err(FeError::Resume)?;
             history.reserve_to(samples);
             (
                 integrator,
@@ -794,14 +846,12 @@ pub fn run(
     let wall_s = wall_before + started.elapsed().as_secs_f64();
     let checkpoint = stopped_before.map(|next_step| {
         Box::new(RunCheckpoint {
-            dt: prepared.dt,
+            fingerprint: scene_fingerprint(prepared, duration, output_interval),
             total_steps,
-            every,
             next_step,
             wall_s,
             state,
             integrator: integrator.checkpoint(),
-            history: history.clone(),
             sums,
             coupled_steps: coupled_steps.clone(),
         })

@@ -24,6 +24,9 @@ pub enum FeError {
     Assembly(String),
     #[error(transparent)]
     TooLarge(#[from] crate::resources::TooLarge),
+    /// A checkpoint that does not belong to the scene it was to resume.
+    #[error("cannot resume from the checkpoint: {0}")]
+    Resume(String),
 }
 
 /// The element's node coordinates.
@@ -52,6 +55,31 @@ pub fn stiffness_triplets(
     element_triplets(nodes, elements, |xe| q8::stiffness(xe, d, thickness))
 }
 
+/// Stored lower-triangle entries of one Q8 element matrix: 16 DOFs, 16·17/2.
+pub const Q8_TRIPLETS: usize = 136;
+
+/// The memory of assembling K on a Q8 mesh of `size`, known from the counts alone (so a mesh
+/// too large to build is refused before it is built) [bytes]:
+/// * the mesh: two coordinates per node, eight indices and a flag per element;
+/// * the triplets, 24 bytes each, with faer's 8-byte sort index;
+/// * K's lower triangle in CSC, 16 bytes per entry. Two nodes share an entry block when they
+///   share an element: 28 node pairs per element, less the 3 of every interior edge, which two
+///   elements share; with E_int = 2F − E_b/2 and E_b = N − 3F ([`crate::mesh::mesh_size`]) that
+///   is 22F + 1.5 E_b = 17.5F + 1.5N pairs of 4 entries, and 3 entries per node.
+///
+/// The symbolic analysis and faer's small work arrays are left out; the factor is checked on
+/// its own, before it is computed ([`AssembledStiffness::factorize`]).
+pub fn assembly_memory(size: crate::mesh::MeshSize) -> MemoryEstimate {
+    let (nodes, elements) = (size.nodes as f64, size.elements as f64);
+    let entries = 4.0 * (17.5 * elements + 1.5 * nodes) + 3.0 * nodes;
+    MemoryEstimate::part("mesh", nodes * 16.0 + elements * 65.0)
+        .and(MemoryEstimate::part(
+            "stiffness triplets",
+            elements * Q8_TRIPLETS as f64 * (24.0 + 8.0),
+        ))
+        .and(MemoryEstimate::part("K", entries * 16.0))
+}
+
 /// Triplets (lower triangle, row ≥ col) of Σ_e M_e for the element matrices `matrix` gives
 /// (DOF order u₀, v₀, u₁, v₁, …).
 pub fn element_triplets(
@@ -59,7 +87,7 @@ pub fn element_triplets(
     elements: &[[usize; 8]],
     matrix: impl Fn(&[Point2<f64>; 8]) -> q8::ElementMatrix,
 ) -> Vec<(usize, usize, f64)> {
-    let mut triplets = Vec::with_capacity(elements.len() * 136);
+    let mut triplets = Vec::with_capacity(elements.len() * Q8_TRIPLETS);
     for e in elements {
         let k = matrix(&element_nodes(nodes, e));
         let dofs: [usize; 16] = std::array::from_fn(|a| 2 * e[a / 2] + a % 2);
@@ -116,7 +144,9 @@ impl AssembledStiffness {
                 n += 1;
             }
         }
-        // Same size and alignment: the collect reuses the triplets' allocation.
+        // Same size and alignment: std's collect reuses the triplets' allocation here (an
+        // optimization std does not promise; without it the reduced copy lives only until K
+        // is assembled).
         let reduced: Vec<Triplet<usize, usize, f64>> = triplets
             .into_iter()
             .filter_map(|(r, c, v)| match (free_index[r], free_index[c]) {

@@ -14,8 +14,7 @@ use nalgebra::{DMatrix, Point2, Rotation2, Vector2};
 use crate::fe::assembly::{check_elements, stiffness_triplets, FactorizedStiffness, FeError};
 use crate::fe::{elasticity_matrix, PlaneState};
 use crate::geometry::{FlankModification, Gear, Side};
-use crate::mesh::{mesh_gear, GearMesh, MeshSize, MeshSpec};
-use crate::resources::MemoryEstimate;
+use crate::mesh::{mesh_gear, GearMesh, MeshSpec};
 
 /// One candidate node on an engaging flank.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -51,31 +50,7 @@ pub struct BodyMaterial {
     pub plane: PlaneState,
 }
 
-/// Stored lower-triangle entries of one Q8 element's stiffness: 16 DOFs, 16·17/2.
-const TRIPLETS_PER_ELEMENT: f64 = 136.0;
-/// A triplet (row, column, value) [bytes].
-const TRIPLET_BYTES: f64 = 24.0;
-/// A node (two coordinates) and an element (eight node indices and its fine flag) [bytes].
-const NODE_BYTES: f64 = 16.0;
-const ELEMENT_BYTES: f64 = 65.0;
-
 impl LtcaBody {
-    /// The mesh of `size` and the triplets of its K with faer's sort index (8 bytes each): the
-    /// first allocations of [`LtcaBody::new`], known from the counts alone, so a mesh too large
-    /// to build is refused before it is built. The factor's own check follows, before it is
-    /// computed ([`crate::fe::assembly::AssembledStiffness::factorize`]).
-    pub fn assembly_memory(size: MeshSize) -> MemoryEstimate {
-        let elements = size.elements as f64;
-        MemoryEstimate::part(
-            "mesh",
-            size.nodes as f64 * NODE_BYTES + elements * ELEMENT_BYTES,
-        )
-        .and(MemoryEstimate::part(
-            "stiffness triplets",
-            elements * TRIPLETS_PER_ELEMENT * (TRIPLET_BYTES + 8.0),
-        ))
-    }
-
     /// Meshes `gear` (the `loaded_side` flank of `spec.fine_teeth` are the contact candidates),
     /// factorizes K with the bore fixed and condenses the compliance onto the candidates.
     pub fn new(

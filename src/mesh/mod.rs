@@ -202,11 +202,15 @@ pub struct MeshSize {
 /// As [`mesh_gear`].
 #[track_caller]
 pub fn mesh_size(gear: &Gear, modification: &FlankModification, spec: &MeshSpec) -> MeshSize {
+    let z = gear.teeth() as usize;
     assert!(
         spec.fine_size > 0.0 && spec.coarse_size >= spec.fine_size,
         "mesh sizes"
     );
-    let z = gear.teeth() as usize;
+    assert!(
+        spec.fine_teeth.iter().all(|&t| t < z),
+        "fine tooth index out of range"
+    );
     let fine_teeth = (0..z).filter(|t| spec.fine_teeth.contains(t)).count();
     let (fine, coarse, layers) = sector_layouts(gear, modification, spec);
     let sector = |layout: &SectorLayout| {

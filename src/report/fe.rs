@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use crate::case::Case;
-use crate::explicit::scene::{History, PreparedScene, Scene};
+use crate::explicit::scene::{History, PreparedScene, RunCheckpoint, Scene};
 use crate::geometry::GearPair;
 use crate::report::plot::{save_chart, LinePlot, PlotError};
 use crate::report::{stiffness_csv, OutputDir, ReportError};
@@ -245,9 +245,7 @@ pub fn write(out: OutputDir, case: &Case, study: &FeStudy) -> Result<(), ReportE
     )?;
     match &study.checkpoint {
         Some(checkpoint) => {
-            let text = serde_json::to_vec(checkpoint).map_err(std::io::Error::other);
-            text.and_then(|bytes| super::write_atomic(&out.path(CHECKPOINT), &bytes))
-                .map_err(io(CHECKPOINT))?
+            write_checkpoint(&out.path(CHECKPOINT), checkpoint, history).map_err(io(CHECKPOINT))?
         }
         None => out.remove(CHECKPOINT)?,
     }
@@ -258,10 +256,47 @@ pub fn write(out: OutputDir, case: &Case, study: &FeStudy) -> Result<(), ReportE
 /// `run --resume` go on from; removed when the run finishes.
 pub const CHECKPOINT: &str = "checkpoint.json";
 
-/// The checkpoint in `dir`, if there is one.
-pub fn read_checkpoint(
-    dir: &Path,
-) -> Result<Option<crate::explicit::scene::RunCheckpoint>, ReportError> {
+/// checkpoint.json: the run's checkpoint and its history so far.
+#[derive(serde::Serialize)]
+struct CheckpointFile<'a> {
+    checkpoint: &'a RunCheckpoint,
+    history: &'a History,
+}
+
+#[derive(serde::Deserialize)]
+struct CheckpointRead {
+    checkpoint: RunCheckpoint,
+    history: History,
+}
+
+/// Streams the checkpoint to a temporary file and renames it (no second copy of the history in
+/// memory).
+fn write_checkpoint(
+    path: &Path,
+    checkpoint: &RunCheckpoint,
+    history: &History,
+) -> std::io::Result<()> {
+    let tmp = super::temporary_sibling(path);
+    {
+        let mut file = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
+        serde_json::to_writer(
+            &mut file,
+            &CheckpointFile {
+                checkpoint,
+                history,
+            },
+        )
+        .map_err(std::io::Error::other)?;
+        std::io::Write::flush(&mut file)?;
+        file.get_ref().sync_all()?;
+    }
+    std::fs::rename(&tmp, path).inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })
+}
+
+/// The checkpoint in `dir` and the history recorded before it, if there is one.
+pub fn read_checkpoint(dir: &Path) -> Result<Option<(RunCheckpoint, History)>, ReportError> {
     let path = dir.join(CHECKPOINT);
     let bytes = match std::fs::read(&path) {
         Ok(bytes) => bytes,
@@ -273,8 +308,8 @@ pub fn read_checkpoint(
             })
         }
     };
-    serde_json::from_slice(&bytes)
-        .map(Some)
+    serde_json::from_slice::<CheckpointRead>(&bytes)
+        .map(|read| Some((read.checkpoint, read.history)))
         .map_err(|e| ReportError::Io {
             path: path.display().to_string(),
             source: std::io::Error::other(e),

@@ -492,7 +492,7 @@ pub fn run(
     case: &Case,
     scene: &Scene,
     prepared: &PreparedScene,
-    resume: Option<crate::explicit::scene::RunCheckpoint>,
+    resume: Option<(crate::explicit::scene::RunCheckpoint, History)>,
     progress: &mut dyn FnMut(f64),
 ) -> Result<FeStudy, StudyError> {
     let started = std::time::Instant::now();

@@ -46,7 +46,7 @@ pub fn model_with_sizes(
     )?)
 }
 
-/// Refuses LTCA bodies whose meshes and stiffness triplets alone would not fit in memory
+/// Refuses LTCA bodies whose meshes, stiffness triplets and K would not fit in memory
 /// ([`crate::resources`]), counted without meshing ([`crate::mesh::mesh_size`]); each factor
 /// is checked again before it is computed, on faer's symbolic analysis.
 pub fn check_memory(
@@ -56,11 +56,11 @@ pub fn check_memory(
 ) -> Result<(), StudyError> {
     let [first, second] = [0, 1].map(|g| {
         let size = crate::mesh::mesh_size(&case.pair.gears[g], &modifications[g], &specs[g]);
-        crate::ltca::body::LtcaBody::assembly_memory(size)
+        crate::fe::assembly::assembly_memory(size)
     });
     crate::resources::check_memory(
         &format!(
-            "the LTCA bodies' meshes at {} / {} mm elements",
+            "the LTCA bodies' meshes and stiffness matrices at {} / {} mm elements",
             specs[0].fine_size * 1e3,
             specs[0].coarse_size * 1e3
         ),

@@ -35,6 +35,8 @@ fn main() -> ExitCode {
     if cli.command.common().is_some_and(|c| c.force) {
         geardyn::resources::set_force(true);
     }
+    geardyn::resources::set_memory_limit(geardyn::resources::machine_limit());
+    geardyn::resources::set_announcer(|message| eprintln!("{message}"));
     let result = match cli.command {
         Command::Run {
             common,

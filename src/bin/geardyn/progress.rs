@@ -34,7 +34,7 @@ pub fn fe_run(case: &Case, scene: &Scene, dir: &Path, resume: bool) -> Result<st
         })?;
         eprintln!(
             "resuming at step {} of {} ({:.0} s of wall time before)",
-            checkpoint.next_step, checkpoint.total_steps, checkpoint.wall_s
+            checkpoint.0.next_step, checkpoint.0.total_steps, checkpoint.0.wall_s
         );
         Some(checkpoint)
     } else {
@@ -43,7 +43,11 @@ pub fn fe_run(case: &Case, scene: &Scene, dir: &Path, resume: bool) -> Result<st
     eprintln!("{}", report::fe::scene_line(scene));
     let prepared = study::fe::prepare(case, scene)?;
     print!("{}", report::fe::prepared_console(case, &prepared, scene));
-    let cost = study::fe::CostEstimate::of(&prepared, scene.duration);
+    // A resumed run is estimated on the steps it has left.
+    let left = checkpoint.as_ref().map_or(1.0, |(c, _)| {
+        1.0 - c.next_step.saturating_sub(1) as f64 / c.total_steps.max(1) as f64
+    });
+    let cost = study::fe::CostEstimate::of(&prepared, scene.duration * left);
     let memory =
         geardyn::explicit::scene::run_memory(&prepared, scene.duration, case.fe.output_interval);
     eprintln!(

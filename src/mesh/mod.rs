@@ -88,14 +88,6 @@ const GROWTH: f64 = 1.5;
 #[track_caller]
 pub fn mesh_gear(gear: &Gear, modification: &FlankModification, spec: &MeshSpec) -> GearMesh {
     let z = gear.teeth() as usize;
-    assert!(
-        spec.fine_size > 0.0 && spec.coarse_size >= spec.fine_size,
-        "mesh sizes"
-    );
-    assert!(
-        spec.fine_teeth.iter().all(|&t| t < z),
-        "fine tooth index out of range"
-    );
     let (fine, coarse, layers) = sector_layouts(gear, modification, spec);
 
     let mut merger = NodeMerger::new(1e-9 * gear.tip_radius.max(1e-3) * 10.0);
@@ -162,11 +154,22 @@ pub fn mesh_gear(gear: &Gear, modification: &FlankModification, spec: &MeshSpec)
 }
 
 /// The layouts of a fine and of a coarse tooth sector, and the base layers all sectors share.
+/// Panics as [`mesh_gear`] says.
+#[track_caller]
 fn sector_layouts(
     gear: &Gear,
     modification: &FlankModification,
     spec: &MeshSpec,
 ) -> (SectorLayout, SectorLayout, Vec<f64>) {
+    let z = gear.teeth() as usize;
+    assert!(
+        spec.fine_size > 0.0 && spec.coarse_size >= spec.fine_size,
+        "mesh sizes"
+    );
+    assert!(
+        spec.fine_teeth.iter().all(|&t| t < z),
+        "fine tooth index out of range"
+    );
     let fine = SectorLayout::new(gear, modification, spec.fine_size, spec.coarse_size);
     let coarse = SectorLayout::new(gear, modification, spec.coarse_size, spec.coarse_size);
     let top_layer = if spec.fine_teeth.is_empty() {
@@ -203,14 +206,6 @@ pub struct MeshSize {
 #[track_caller]
 pub fn mesh_size(gear: &Gear, modification: &FlankModification, spec: &MeshSpec) -> MeshSize {
     let z = gear.teeth() as usize;
-    assert!(
-        spec.fine_size > 0.0 && spec.coarse_size >= spec.fine_size,
-        "mesh sizes"
-    );
-    assert!(
-        spec.fine_teeth.iter().all(|&t| t < z),
-        "fine tooth index out of range"
-    );
     let fine_teeth = (0..z).filter(|t| spec.fine_teeth.contains(t)).count();
     let (fine, coarse, layers) = sector_layouts(gear, modification, spec);
     let sector = |layout: &SectorLayout| {

@@ -27,6 +27,10 @@ pub fn steps_per_period(model: &MeshModel, driver_speed: f64) -> usize {
     let ratio = model.highest_frequency() / mesh_omega;
     STEPS_PER_PERIOD.max((32.0 * ratio).ceil() as usize)
 }
+/// A speed's steady state is reached when the state at period boundaries repeats to this
+/// fraction of the static deflection, within at most [`MAX_PERIODS`] mesh periods.
+pub const STEADY_TOLERANCE: f64 = 1e-7;
+pub const MAX_PERIODS: usize = 4000;
 /// Mesh harmonics reported.
 pub const HARMONICS: usize = 5;
 /// Strongest spectral peaks reported per speed.
@@ -98,12 +102,62 @@ impl std::fmt::Display for SweepDivergence {
                  Floquet multiplier {:.4}), so the growth comes from the contact: the teeth \
                  leave the drive flanks (and, at zero backlash, meet the back flanks with their own \
                  k(θ)), and that switching pumps energy in faster than the damping takes it out \
-                 (or a mesh harmonic meets an undamped mode). Raise the damping (lumped.damping_ratio \
-                 or --damping-ratio; 0.02-0.1 is usual for steel spur gears)",
+                 (or a mesh harmonic meets an undamped mode); the divergence does not move with \
+                 the step (`geardyn validate integrators`), it is the model's. Raise the damping \
+                 (lumped.damping_ratio or --damping-ratio; 0.02-0.1 is usual for steel spur \
+                 gears), which moves such a band up in speed, or give the pair backlash \
+                 (gear1.thickness_reduction_um, gear2.thickness_reduction_um), so the teeth \
+                 separate instead of loading their back flanks",
                 self.floquet_max_multiplier
             )
         }
     }
+}
+
+/// An up-sweep at `refinement` × the sweep's RK4 steps per period, reduced to what a step
+/// convergence check compares: the largest dynamic factor before any divergence, and where the
+/// response diverged.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct RefinedUpSweep {
+    pub refinement: usize,
+    pub max_dynamic_factor: f64,
+    pub max_dynamic_factor_rpm: f64,
+    /// Where the response diverged ([`MeshModel::has_diverged`]) and after how many periods.
+    pub diverged_rpm: Option<f64>,
+    pub diverged_periods: Option<usize>,
+}
+
+/// The up-sweep of [`sweep`] over `rpms` (each speed's periodic steady state, continued from the
+/// previous one's, from the static state) with `refinement` × [`steps_per_period`] RK4 steps.
+/// A result that stays put as the step halves is the model's, not the integrator's: the check
+/// `geardyn validate integrators` runs across the primary resonance, where the contact
+/// switches (RK4 straddles the kinks of the contact law there).
+pub fn refined_up_sweep(model: &MeshModel, rpms: &[f64], refinement: usize) -> RefinedUpSweep {
+    let mut state = model.static_state();
+    let mut out = RefinedUpSweep {
+        refinement,
+        max_dynamic_factor: 0.0,
+        max_dynamic_factor_rpm: f64::NAN,
+        diverged_rpm: None,
+        diverged_periods: None,
+    };
+    for &rpm in rpms {
+        let speed = rpm * 2.0 * std::f64::consts::PI / 60.0;
+        let steps = steps_per_period(model, speed) * refinement;
+        let s = steady_state(model, speed, steps, state, STEADY_TOLERANCE, MAX_PERIODS);
+        if s.diverged {
+            out.diverged_rpm = Some(rpm);
+            out.diverged_periods = Some(s.periods);
+            break;
+        }
+        let factor = s.mesh_force.iter().copied().fold(f64::MIN, f64::max) / model.force;
+        if factor > out.max_dynamic_factor {
+            out.max_dynamic_factor = factor;
+            out.max_dynamic_factor_rpm = rpm;
+        }
+        state = s.start;
+    }
+    out
 }
 
 fn analyse(
@@ -113,9 +167,8 @@ fn analyse(
     direction: &str,
 ) -> Result<(SweepPoint, State), SweepDivergence> {
     let speed = rpm * 2.0 * std::f64::consts::PI / 60.0;
-    let tolerance = 1e-7;
     let steps = steps_per_period(model, speed);
-    let s = steady_state(model, speed, steps, start, tolerance, 4000);
+    let s = steady_state(model, speed, steps, start, STEADY_TOLERANCE, MAX_PERIODS);
     if s.diverged {
         return Err(SweepDivergence {
             driver_speed_rpm: rpm,

@@ -665,16 +665,42 @@ fn sweep_with_bearing_translations() {
     );
 }
 
-/// `geardyn validate integrators` writes the failure table of the lumped model's schemes.
+/// `geardyn validate integrators` writes the failure table of the lumped model's schemes, and
+/// the case's model swept across the primary resonance at 1, 2, 4 and 8 × the sweep's steps.
+/// On the potential-energy k at zero backlash the sweep diverges above the resonance (the teeth
+/// switch between drive and back flanks): at the same speed, after the same number of periods
+/// (±1 %), and with the same largest dynamic factor before it (1e-3), at every step — the
+/// model's divergence, not the integrator's.
 #[test]
 fn validate_integrators_writes_the_failure_table() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("integrators");
     run_ok(
         geardyn()
-            .args(["validate", "integrators", "--stiffness", "iso", "--out"])
+            .args(["validate", "integrators", "--stiffness", "pe", "--out"])
             .arg(&out),
     );
+    let sweep = read_summary(&out)["resonance_sweep"]
+        .as_array()
+        .unwrap()
+        .clone();
+    assert_eq!(sweep.len(), 4);
+    let finest = &sweep[3];
+    for refined in &sweep {
+        assert_eq!(refined["diverged_rpm"], finest["diverged_rpm"], "{refined}");
+        let periods = |r: &serde_json::Value| r["diverged_periods"].as_f64().unwrap();
+        assert!(
+            (periods(refined) / periods(finest) - 1.0).abs() < 0.01,
+            "{refined}"
+        );
+        let factor = |r: &serde_json::Value| r["max_dynamic_factor"].as_f64().unwrap();
+        assert!(
+            (factor(refined) / factor(finest) - 1.0).abs() < 1e-3,
+            "{refined}"
+        );
+    }
+    assert!(finest["diverged_rpm"].as_f64().is_some());
+    assert!(out.join("resonance_sweep.csv").exists());
     let rows: Vec<csv::StringRecord> = csv::Reader::from_path(out.join("integrators.csv"))
         .unwrap()
         .records()

@@ -362,7 +362,54 @@ pub fn write_integrators(
     for row in &rows {
         markdown.push_str(&format!("| {} |\n", row.join(" | ")));
     }
+    markdown.push_str(&resonance_sweep_table(out, summary)?);
     out.bytes("integrators.md", markdown.as_bytes())?;
     out.json("summary.json", summary)?;
+    Ok(markdown)
+}
+
+/// `resonance_sweep.csv` and its Markdown: the case's model swept across the primary resonance
+/// at each step refinement, the largest dynamic factor against the finest step's.
+fn resonance_sweep_table(
+    out: OutputDir,
+    summary: &IntegratorSummary,
+) -> Result<String, ReportError> {
+    let header = [
+        "refinement",
+        "max_dynamic_factor",
+        "at_rpm",
+        "change_against_finest",
+        "diverged_rpm",
+        "diverged_after_periods",
+    ];
+    let finest = summary
+        .resonance_sweep
+        .last()
+        .map_or(f64::NAN, |r| r.max_dynamic_factor);
+    let rows: Vec<Vec<String>> = summary
+        .resonance_sweep
+        .iter()
+        .map(|r| {
+            vec![
+                format!("{}", r.refinement),
+                format!("{:.4}", r.max_dynamic_factor),
+                format!("{:.1}", r.max_dynamic_factor_rpm),
+                format!("{:+.2e}", r.max_dynamic_factor / finest - 1.0),
+                r.diverged_rpm.map_or("-".into(), |v| format!("{v:.1}")),
+                r.diverged_periods.map_or("-".into(), |v| v.to_string()),
+            ]
+        })
+        .collect();
+    out.csv("resonance_sweep.csv", &header, rows.clone())?;
+    let (from, to) = summary.resonance_sweep_rpm;
+    let mut markdown = format!(
+        "\nThe case's model swept up from {from:.0} to {to:.0} rpm across the primary resonance \
+         at 1, 2, 4 and 8 × the sweep's RK4 steps:\n\n| {} |\n|{}\n",
+        header.join(" | "),
+        "---|".repeat(header.len())
+    );
+    for row in &rows {
+        markdown.push_str(&format!("| {} |\n", row.join(" | ")));
+    }
     Ok(markdown)
 }

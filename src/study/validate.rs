@@ -4,7 +4,12 @@
 //! frequency-accuracy limits in ωh, predicted against observed, and the order of convergence
 //! with and without tooth separation — on the case's effective mass and mean mesh stiffness,
 //! with a cosine unloaded TE of 0.2 × the static deflection (stays in contact) and of 2 × with
-//! 100 µm backlash (separates every mesh period), f_mesh = 0.7 f_n.
+//! 100 µm backlash (separates every mesh period), f_mesh = 0.7 f_n. Then the case's own model
+//! (its k(θ), e(θ), zero backlash with the back flanks) swept up across the primary resonance,
+//! from 0.85 to 1.08 of the speed where f_mesh = f_n, at 1, 2, 4 and 8 × the sweep's RK4 steps:
+//! the sweep's largest dynamic factor, and any divergence, must not move as the step halves
+//! for them to be the model's rather than the integrator's (RK4 straddles the contact law's
+//! kinks there).
 //!
 //! **mass-scaling**: an explicit FE scene run twice, with the case's low-speed mass scaling and
 //! without it, compared on what a quasi-static analysis reads: over the common statistics window
@@ -23,6 +28,8 @@ use crate::explicit::scene::{
 use crate::geometry::GearPair;
 use crate::lumped::schemes::{self, SchemeReport};
 use crate::stiffness::{MeshStiffness, PeriodicTable};
+use crate::sweep::RefinedUpSweep;
+use rayon::prelude::*;
 
 use super::fe::FeStudy;
 use super::lumped::setup;
@@ -46,8 +53,18 @@ pub struct IntegratorSummary {
     pub periods: usize,
     pub errors: &'static str,
     pub schemes: Vec<SchemeReport>,
+    /// The case's own model swept up across the primary resonance at 1, 2, 4 and 8 × the
+    /// sweep's steps ([`crate::sweep::refined_up_sweep`]), from and to these speeds [rpm].
+    pub resonance_sweep_rpm: (f64, f64),
+    pub resonance_sweep: Vec<RefinedUpSweep>,
     pub wall_s: f64,
 }
+
+/// The step refinements of the resonance sweep.
+pub const REFINEMENTS: [usize; 4] = [1, 2, 4, 8];
+/// The resonance sweep's range, as fractions of the speed where f_mesh = f_n, and its speeds.
+pub const RESONANCE_RANGE: (f64, f64) = (0.85, 1.08);
+pub const RESONANCE_SPEEDS: usize = 116;
 
 /// Runs the integrator study on the case's lumped model (1 DOF).
 pub fn integrators(case: &Case) -> Result<IntegratorSummary, StudyError> {
@@ -78,6 +95,19 @@ pub fn integrators(case: &Case) -> Result<IntegratorSummary, StudyError> {
     let speed = MESH_OVER_NATURAL * smooth.natural_frequency() * period / std::f64::consts::TAU;
     let started = std::time::Instant::now();
     let table = schemes::failure_table(&smooth, &separating, speed, PERIODS);
+    // f_mesh = Ω₁/period = f_n.
+    let resonance_rpm = setup.natural_frequency_hz * period * 60.0 / std::f64::consts::TAU;
+    let (from, to) = (
+        RESONANCE_RANGE.0 * resonance_rpm,
+        RESONANCE_RANGE.1 * resonance_rpm,
+    );
+    let rpms: Vec<f64> = (0..RESONANCE_SPEEDS)
+        .map(|i| from + (to - from) * i as f64 / (RESONANCE_SPEEDS - 1) as f64)
+        .collect();
+    let resonance_sweep = REFINEMENTS
+        .par_iter()
+        .map(|&r| crate::sweep::refined_up_sweep(&setup.model, &rpms, r))
+        .collect();
     Ok(IntegratorSummary {
         case: case.name().to_string(),
         study: "integrators",
@@ -89,6 +119,8 @@ pub fn integrators(case: &Case) -> Result<IntegratorSummary, StudyError> {
         periods: PERIODS,
         errors: "end state after 20 mesh periods vs adaptive Dormand-Prince (tolerance 1e-11), in units of the static deflection, at 32 steps per natural period; orders are least-squares slopes over 16, 32, 64, 128 steps per natural period",
         schemes: table,
+        resonance_sweep_rpm: (from, to),
+        resonance_sweep,
         wall_s: started.elapsed().as_secs_f64(),
     })
 }

@@ -1095,14 +1095,20 @@ impl Case {
     /// contact) on the face width b: p₀ = √(F_n E* / (π b R)), 1/R = 1/ρ₁ + 1/ρ₂,
     /// E* = E / (2(1 − ν²)) (Johnson, *Contact Mechanics*, eq. 4.45).
     pub fn hertz_pressure_pitch(&self) -> f64 {
-        let pair = &self.pair;
         let torque = self
             .operating_points
             .iter()
             .map(|o| o.torque.abs())
             .chain(self.scenes.iter().map(|s| s.torque.abs()))
             .fold(0.0, f64::max);
-        let force = torque / pair.gears[1].base_radius;
+        self.hertz_pressure_at(torque / self.pair.gears[1].base_radius)
+    }
+
+    /// The Hertzian pressure at the pitch point under a normal mesh force `force` [N] carried
+    /// by one tooth pair across the face [Pa]: p = √(F E* / (π b ρ)), E* = E / (2(1 − ν²)),
+    /// 1/ρ = 1/ρ₁ + 1/ρ₂ with ρᵢ = r_wi sin α_w (Johnson, *Contact Mechanics*, §4.2).
+    pub fn hertz_pressure_at(&self, force: f64) -> f64 {
+        let pair = &self.pair;
         let width = pair.gears[0]
             .spec
             .face_width
@@ -1113,7 +1119,7 @@ impl Case {
         let radius = rho1 * rho2 / (rho1 + rho2);
         let nu = self.material.poisson_ratio;
         let e_star = self.material.youngs_modulus / (2.0 * (1.0 - nu * nu));
-        (force * e_star / (std::f64::consts::PI * width * radius)).sqrt()
+        (force.abs() * e_star / (std::f64::consts::PI * width * radius)).sqrt()
     }
 
     /// What the case asks that the models cannot answer faithfully, though it is valid input.

@@ -128,3 +128,46 @@ fn sweep_peaks_are_the_mesh_harmonics_of_a_periodic_response() {
         assert!((amplitude / p.harmonics[0] - 1.0).abs() < 1e-12, "{p:?}");
     }
 }
+
+/// The overload warning reads the sweep's largest dynamic factor as one tooth pair's force at the
+/// pitch point: p = p_static √DF. On the paper pair (0.622 GPa static) the 3 GPa limit sits at
+/// DF = (3 / 0.622)² = 23.3: a point at 20 passes, one at 30 (3.41 GPa) is named with its speed.
+#[test]
+fn a_dynamic_force_beyond_the_contact_strength_is_warned_about() {
+    use geardyn::study::sweep::overload_warning;
+    use geardyn::sweep::SweepPoint;
+    let case = geardyn::samples::paper36_case();
+    let force = 143.6 / case.pair.gears[1].base_radius;
+    let static_pressure = case.hertz_pressure_at(force);
+    assert!(
+        (static_pressure * 1e-9 - 0.622).abs() < 0.001,
+        "{static_pressure}"
+    );
+    let point = |rpm: f64, dynamic_factor: f64| SweepPoint {
+        driver_speed_rpm: rpm,
+        mesh_frequency_hz: 0.0,
+        dte_rms: 0.0,
+        dte_peak_to_peak: 0.0,
+        dynamic_factor,
+        separated: false,
+        harmonics: [0.0; geardyn::sweep::HARMONICS],
+        peaks: Vec::new(),
+        floquet: 0.5,
+        periods: 1,
+        converged: true,
+    };
+    let calm = [point(5000.0, 1.2), point(7000.0, 20.0)];
+    assert_eq!(overload_warning(&case, force, &calm, &calm), None);
+    let wild = [point(7000.0, 20.0), point(7500.0, 30.0)];
+    let warning = overload_warning(&case, force, &calm, &wild).unwrap();
+    let expected = static_pressure * 30f64.sqrt() * 1e-9;
+    assert!((expected - 3.41).abs() < 0.01);
+    for needed in [
+        "at 7500 rpm",
+        "30.0 ×",
+        &format!("{expected:.1} GPa"),
+        "linear contact law",
+    ] {
+        assert!(warning.contains(needed), "{needed:?} missing: {warning}");
+    }
+}

@@ -245,6 +245,9 @@ pub fn sweep_console(study: &SweepStudy) -> String {
         study.primary_rpm_expected,
         s.max_dynamic_factor
     ));
+    for warning in &s.warnings {
+        text.push_str(&format!("warning: {warning}\n"));
+    }
     text
 }
 

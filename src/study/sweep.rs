@@ -97,6 +97,8 @@ pub struct SweepSummary {
     pub total_wall_s: f64,
     pub strongest_peaks: Vec<SpectralLine>,
     pub model: String,
+    /// What the sweep's own response says the model cannot answer faithfully.
+    pub warnings: Vec<String>,
     /// Where the `--run-up-s` transient diverged, the cause and the remedy.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub run_up_diverged: Option<String>,
@@ -224,6 +226,9 @@ pub fn run(case: &Case, options: &SweepOptions) -> Result<SweepRun, StudyError> 
         .collect();
     strongest.sort_by(|a, b| b.amplitude_um.total_cmp(&a.amplitude_um));
     strongest.truncate(10);
+    let warnings = overload_warning(case, model.force, &up, &down)
+        .into_iter()
+        .collect();
     let summary = SweepSummary {
         case: case.name().to_string(),
         stiffness_source: model.mesh.source.clone(),
@@ -255,6 +260,7 @@ pub fn run(case: &Case, options: &SweepOptions) -> Result<SweepRun, StudyError> 
         total_wall_s: started.elapsed().as_secs_f64(),
         strongest_peaks: strongest,
         model: setup.model_note.clone(),
+        warnings,
         run_up_diverged,
     };
     Ok(SweepRun::Done(Box::new(SweepStudy {
@@ -266,4 +272,34 @@ pub fn run(case: &Case, options: &SweepOptions) -> Result<SweepRun, StudyError> 
         primary_rpm_expected,
         summary,
     })))
+}
+
+/// A warning where the largest dynamic mesh force of the sweep, carried by one tooth pair at the
+/// pitch point, gives a Hertzian pressure above [`crate::case::HERTZ_PRESSURE_LIMIT`]
+/// ([`Case::hertz_pressure_at`]): the flanks would yield there, and the lumped model's linear
+/// contact (and any response it gives near that speed) no longer describes the gears. The
+/// static load alone is the case's own warning.
+pub fn overload_warning(
+    case: &Case,
+    static_force: f64,
+    up: &[SweepPoint],
+    down: &[SweepPoint],
+) -> Option<String> {
+    let worst = up
+        .iter()
+        .chain(down)
+        .max_by(|a, b| a.dynamic_factor.total_cmp(&b.dynamic_factor))?;
+    let pressure = case.hertz_pressure_at(static_force * worst.dynamic_factor);
+    (pressure > crate::case::HERTZ_PRESSURE_LIMIT).then(|| {
+        format!(
+            "at {:.0} rpm the dynamic mesh force reaches {:.1} × the static one, a Hertzian \
+             pressure of {:.1} GPa at the pitch point, above any steel's contact strength: the \
+             flanks would yield, and the linear contact law of the lumped model no longer \
+             describes the teeth there; near that speed its numbers are the model's, not the \
+             gears' (more damping or backlash bounds the response)",
+            worst.driver_speed_rpm,
+            worst.dynamic_factor,
+            pressure * 1e-9
+        )
+    })
 }

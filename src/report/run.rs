@@ -571,22 +571,41 @@ fn sections(
             ("k(θ) from the DTE against the LTCA".into(), format!("{fe_run}/stiffness.png")),
         ],
     });
+    let mut sweep_text = vec![format!(
+        "Lumped model on the LTCA's k(θ): primary resonance {} rpm, max dynamic factor {}; on the FE's: {} rpm, {}. Largest Floquet multiplier {} (ζ = {}).",
+        show(number(sweep_ltca, &["primary_resonance_rpm"]), 0),
+        show(number(sweep_ltca, &["max_dynamic_factor"]), 2),
+        show(s.primary_resonance_rpm_fe, 0),
+        show(s.max_dynamic_factor_fe, 2),
+        show(number(stability, &["max_multiplier"]), 3),
+        show(number(stability, &["damping_ratio"]), 3),
+    )];
+    // The sweep's own warnings (an overload beyond the contact law), as it wrote them.
+    if let Some(Value::Array(warnings)) = field(sweep_ltca, &["warnings"]) {
+        sweep_text.extend(
+            warnings
+                .iter()
+                .filter_map(Value::as_str)
+                .map(|w| format!("Warning (LTCA k): {w}.")),
+        );
+    }
     out.push(Section {
         title: "Speed sweeps and stability".into(),
-        text: vec![format!(
-            "Lumped model on the LTCA's k(θ): primary resonance {} rpm, max dynamic factor {}; on the FE's: {} rpm, {}. Largest Floquet multiplier {} (ζ = {}).",
-            show(number(sweep_ltca, &["primary_resonance_rpm"]), 0),
-            show(number(sweep_ltca, &["max_dynamic_factor"]), 2),
-            show(s.primary_resonance_rpm_fe, 0),
-            show(s.max_dynamic_factor_fe, 2),
-            show(number(stability, &["max_multiplier"]), 3),
-            show(number(stability, &["damping_ratio"]), 3),
-        )],
+        text: sweep_text,
         tables: Vec::new(),
         plots: vec![
-            ("Dynamic factor, LTCA k".into(), "sweep-ltca/dynamic_factor.png".into()),
-            ("Dynamic factor, FE k".into(), "sweep-fe/dynamic_factor.png".into()),
-            ("Waterfall, LTCA k".into(), "sweep-ltca/waterfall.png".into()),
+            (
+                "Dynamic factor, LTCA k".into(),
+                "sweep-ltca/dynamic_factor.png".into(),
+            ),
+            (
+                "Dynamic factor, FE k".into(),
+                "sweep-fe/dynamic_factor.png".into(),
+            ),
+            (
+                "Waterfall, LTCA k".into(),
+                "sweep-ltca/waterfall.png".into(),
+            ),
             ("Stability map".into(), "stability/stability.png".into()),
         ],
     });

@@ -1129,9 +1129,10 @@ impl Case {
         if pressure > HERTZ_PRESSURE_LIMIT {
             warnings.push(format!(
                 "the largest load gives a Hertzian pressure of {:.1} GPa at the pitch point, above \
-                 any steel's contact strength (case-hardened steels allow about 1.5 GPa, ISO \
-                 6336-5): the flanks would yield, and the linear-elastic, small-strain models here \
-                 no longer apply. Check the torque's unit (N·m) and the face width",
+                 3 GPa, twice the allowable contact stress of the strongest case-hardened gear \
+                 steels (about 1.5 GPa, ISO 6336-5): the flanks may yield, and the linear-elastic, \
+                 small-strain models here no longer apply. Check the torque's unit (N·m) and the \
+                 face width",
                 pressure * 1e-9
             ));
         }

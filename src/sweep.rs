@@ -73,6 +73,9 @@ pub struct SweepDivergence {
     pub floquet_max_multiplier: f64,
     /// The bound it passed [m].
     pub bound_m: f64,
+    /// The model's backlash [m] (zero: the back flanks engage as the drive flanks open).
+    #[serde(default)]
+    pub backlash_m: f64,
 }
 
 impl std::fmt::Display for SweepDivergence {
@@ -102,14 +105,22 @@ impl std::fmt::Display for SweepDivergence {
                  Floquet multiplier {:.4}), so the growth comes from the contact: the teeth \
                  leave the drive flanks (and, at zero backlash, meet the back flanks with their own \
                  k(θ)), and that switching pumps energy in faster than the damping takes it out \
-                 (or a mesh harmonic meets an undamped mode); the divergence does not move with \
-                 the step (`geardyn validate integrators`), it is the model's. Raise the damping \
-                 (lumped.damping_ratio or --damping-ratio; 0.02-0.1 is usual for steel spur \
-                 gears), which moves such a band up in speed, or give the pair backlash \
-                 (gear1.thickness_reduction_um, gear2.thickness_reduction_um), so the teeth \
-                 separate instead of loading their back flanks",
+                 (or a mesh harmonic meets an undamped mode). On the paper's pair such \
+                 divergences stay at the same speed when the step is cut 8-fold \
+                 (validation/lumped); `geardyn validate integrators` checks this case's. Raise \
+                 the damping (lumped.damping_ratio or --damping-ratio; 0.02-0.1 is usual for \
+                 steel spur gears)",
                 self.floquet_max_multiplier
-            )
+            )?;
+            if self.backlash_m <= 0.0 {
+                write!(
+                    f,
+                    ", or give the pair backlash (gear1.thickness_reduction_um, \
+                     gear2.thickness_reduction_um), so the teeth separate instead of loading \
+                     their back flanks"
+                )?;
+            }
+            Ok(())
         }
     }
 }
@@ -120,6 +131,12 @@ impl std::fmt::Display for SweepDivergence {
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct RefinedUpSweep {
     pub refinement: usize,
+    /// RK4 steps per mesh period at the first speed.
+    pub steps_per_period: usize,
+    /// Speeds that reached neither a steady state nor the divergence bound within
+    /// [`MAX_PERIODS`]: left out of the largest dynamic factor.
+    pub unsettled: usize,
+    /// The largest dynamic factor over the speeds that settled.
     pub max_dynamic_factor: f64,
     pub max_dynamic_factor_rpm: f64,
     /// Where the response diverged ([`MeshModel::has_diverged`]) and after how many periods.
@@ -136,6 +153,10 @@ pub fn refined_up_sweep(model: &MeshModel, rpms: &[f64], refinement: usize) -> R
     let mut state = model.static_state();
     let mut out = RefinedUpSweep {
         refinement,
+        steps_per_period: rpms.first().map_or(0, |&rpm| {
+            steps_per_period(model, rpm * 2.0 * std::f64::consts::PI / 60.0) * refinement
+        }),
+        unsettled: 0,
         max_dynamic_factor: 0.0,
         max_dynamic_factor_rpm: f64::NAN,
         diverged_rpm: None,
@@ -150,12 +171,16 @@ pub fn refined_up_sweep(model: &MeshModel, rpms: &[f64], refinement: usize) -> R
             out.diverged_periods = Some(s.periods);
             break;
         }
+        state = s.start;
+        if !s.converged {
+            out.unsettled += 1;
+            continue;
+        }
         let factor = s.mesh_force.iter().copied().fold(f64::MIN, f64::max) / model.force;
         if factor > out.max_dynamic_factor {
             out.max_dynamic_factor = factor;
             out.max_dynamic_factor_rpm = rpm;
         }
-        state = s.start;
     }
     out
 }
@@ -176,6 +201,7 @@ fn analyse(
             periods: s.periods,
             floquet_max_multiplier: floquet_max_multiplier(model, speed, steps),
             bound_m: model.divergence_bound(),
+            backlash_m: model.backlash.unwrap_or(0.0),
         });
     }
     let n = s.displacement.len() as f64;

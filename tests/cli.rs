@@ -667,10 +667,12 @@ fn sweep_with_bearing_translations() {
 
 /// `geardyn validate integrators` writes the failure table of the lumped model's schemes, and
 /// the case's model swept across the primary resonance at 1, 2, 4 and 8 × the sweep's steps.
-/// On the potential-energy k at zero backlash the sweep diverges above the resonance (the teeth
-/// switch between drive and back flanks): at the same speed, after the same number of periods
-/// (±1 %), and with the same largest dynamic factor before it (1e-3), at every step — the
-/// model's divergence, not the integrator's.
+/// On the potential-energy k at zero backlash the sweep diverges just above the resonance
+/// (7127.4 rpm, recorded in validation/lumped; the grid step there is 14 rpm): at every step
+/// the same speed, the same number of periods (±1 %; 0 measured) and the same largest dynamic
+/// factor before it (1e-3; 5e-5 measured) — the model's divergence, not the integrator's. The
+/// steps per period must double with each refinement, so a refinement that did nothing cannot
+/// pass.
 #[test]
 fn validate_integrators_writes_the_failure_table() {
     let dir = tempfile::tempdir().unwrap();
@@ -680,13 +682,20 @@ fn validate_integrators_writes_the_failure_table() {
             .args(["validate", "integrators", "--stiffness", "pe", "--out"])
             .arg(&out),
     );
-    let sweep = read_summary(&out)["resonance_sweep"]
-        .as_array()
-        .unwrap()
-        .clone();
+    let summary = read_summary(&out);
+    let sweep = summary["resonance_sweep"].as_array().unwrap().clone();
     assert_eq!(sweep.len(), 4);
     let finest = &sweep[3];
+    let diverged = finest["diverged_rpm"]
+        .as_f64()
+        .expect("the PE sweep diverges");
+    let range = &summary["resonance_sweep_rpm"];
+    assert!(range[0].as_f64().unwrap() < diverged && diverged < range[1].as_f64().unwrap());
+    assert!((diverged - 7127.4).abs() < 15.0, "{diverged}");
+    let steps = |r: &serde_json::Value| r["steps_per_period"].as_u64().unwrap();
     for refined in &sweep {
+        let refinement = refined["refinement"].as_u64().unwrap();
+        assert_eq!(steps(refined), refinement * steps(&sweep[0]), "{refined}");
         assert_eq!(refined["diverged_rpm"], finest["diverged_rpm"], "{refined}");
         let periods = |r: &serde_json::Value| r["diverged_periods"].as_f64().unwrap();
         assert!(
@@ -699,7 +708,6 @@ fn validate_integrators_writes_the_failure_table() {
             "{refined}"
         );
     }
-    assert!(finest["diverged_rpm"].as_f64().is_some());
     assert!(out.join("resonance_sweep.csv").exists());
     let rows: Vec<csv::StringRecord> = csv::Reader::from_path(out.join("integrators.csv"))
         .unwrap()

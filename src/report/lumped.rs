@@ -379,6 +379,8 @@ fn resonance_sweep_table(
 ) -> Result<String, ReportError> {
     let header = [
         "refinement",
+        "steps_per_period",
+        "unsettled_speeds",
         "max_dynamic_factor",
         "at_rpm",
         "change_against_finest",
@@ -395,6 +397,8 @@ fn resonance_sweep_table(
         .map(|r| {
             vec![
                 format!("{}", r.refinement),
+                format!("{}", r.steps_per_period),
+                format!("{}", r.unsettled),
                 format!("{:.4}", r.max_dynamic_factor),
                 format!("{:.1}", r.max_dynamic_factor_rpm),
                 format!("{:+.2e}", r.max_dynamic_factor / finest - 1.0),
@@ -405,9 +409,16 @@ fn resonance_sweep_table(
         .collect();
     out.csv("resonance_sweep.csv", &header, rows.clone())?;
     let (from, to) = summary.resonance_sweep_rpm;
+    let refinements: Vec<String> = summary
+        .resonance_sweep
+        .iter()
+        .map(|r| r.refinement.to_string())
+        .collect();
     let mut markdown = format!(
         "\nThe case's model swept up from {from:.0} to {to:.0} rpm across the primary resonance \
-         at 1, 2, 4 and 8 × the sweep's RK4 steps:\n\n| {} |\n|{}\n",
+         at {} × the sweep's RK4 steps (the largest dynamic factor over the speeds that \
+         settled):\n\n| {} |\n|{}\n",
+        refinements.join(", "),
         header.join(" | "),
         "---|".repeat(header.len())
     );

@@ -66,6 +66,8 @@ pub struct RunSummary {
     /// FE's k [Hz]: what their resonance speeds follow.
     pub natural_frequency_sweep_ltca_hz: Option<f64>,
     pub natural_frequency_sweep_fe_hz: Option<f64>,
+    /// The sweeps' own warnings (an overload beyond the contact law), "LTCA k: …", "FE k: …".
+    pub sweep_warnings: Vec<String>,
     pub max_floquet_multiplier: Option<f64>,
     pub tip_relief_um: Option<Value>,
     pub root_relief_um: Option<Value>,
@@ -240,6 +242,16 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
         max_dynamic_factor_fe: number(&sweep_fe, &["max_dynamic_factor"]),
         natural_frequency_sweep_ltca_hz: number(&sweep_ltca, &["natural_frequency_hz"]),
         natural_frequency_sweep_fe_hz: number(&sweep_fe, &["natural_frequency_hz"]),
+        sweep_warnings: [("LTCA k", &sweep_ltca), ("FE k", &sweep_fe)]
+            .into_iter()
+            .flat_map(|(source, summary)| match field(summary, &["warnings"]) {
+                Some(Value::Array(warnings)) => warnings
+                    .iter()
+                    .filter_map(|w| w.as_str().map(|w| format!("{source}: {w}")))
+                    .collect(),
+                _ => Vec::new(),
+            })
+            .collect(),
         max_floquet_multiplier: number(&stability, &["max_multiplier"]),
         tip_relief_um: field(&optimize, &["tip_relief_um"]),
         root_relief_um: field(&optimize, &["root_relief_um"]),
@@ -580,15 +592,7 @@ fn sections(
         show(number(stability, &["max_multiplier"]), 3),
         show(number(stability, &["damping_ratio"]), 3),
     )];
-    // The sweep's own warnings (an overload beyond the contact law), as it wrote them.
-    if let Some(Value::Array(warnings)) = field(sweep_ltca, &["warnings"]) {
-        sweep_text.extend(
-            warnings
-                .iter()
-                .filter_map(Value::as_str)
-                .map(|w| format!("Warning (LTCA k): {w}.")),
-        );
-    }
+    sweep_text.extend(s.sweep_warnings.iter().map(|w| format!("Warning, {w}.")));
     out.push(Section {
         title: "Speed sweeps and stability".into(),
         text: sweep_text,

@@ -254,6 +254,11 @@ pub fn model_on(case: &Case, mesh: MeshStiffness, torque: f64) -> (MeshModel, f6
     (model, damping_ratio)
 }
 
+/// The driver speed at which the mesh frequency equals `frequency_hz`: f_mesh = z₁ n / 60 [rpm].
+pub fn speed_for_mesh_frequency(case: &Case, frequency_hz: f64) -> f64 {
+    frequency_hz * 60.0 / case.pair.gears[0].teeth() as f64
+}
+
 /// Undamped natural frequencies of the lumped model at the mean mesh stiffness [Hz].
 pub fn mode_frequencies_hz(model: &MeshModel) -> Vec<f64> {
     model

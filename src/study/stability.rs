@@ -54,11 +54,13 @@ pub fn run(case: &Case, rpm: &RpmRange) -> Result<StabilityStudy, StudyError> {
             }
         }
     }
-    let z1 = case.pair.gears[0].teeth() as f64;
     let modes_hz = mode_frequencies_hz(model);
+    // Principal regions: f_mesh = 2 f_n / j.
     let theory: Vec<f64> = modes_hz
         .iter()
-        .flat_map(|f| (1..=3).map(move |j| 2.0 * f / j as f64 * 60.0 / z1))
+        .flat_map(|f| {
+            (1..=3).map(move |j| super::lumped::speed_for_mesh_frequency(case, 2.0 * f / j as f64))
+        })
         .collect();
     let summary = StabilitySummary {
         case: case.name().to_string(),

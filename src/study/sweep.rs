@@ -196,8 +196,8 @@ pub fn run(case: &Case, options: &SweepOptions) -> Result<SweepRun, StudyError> 
         });
     let rms: Vec<f64> = up.iter().map(|p| p.dte_rms).collect();
     let resonance_rpm = sweep::peaks(&rpms, &rms);
-    let z1 = case.pair.gears[0].teeth() as f64;
-    let primary_rpm_expected = setup.natural_frequency_hz * 60.0 / z1;
+    let primary_rpm_expected =
+        super::lumped::speed_for_mesh_frequency(case, setup.natural_frequency_hz);
     let primary = resonance_rpm.iter().copied().min_by(|a, b| {
         (a - primary_rpm_expected)
             .abs()
@@ -276,9 +276,11 @@ pub fn run(case: &Case, options: &SweepOptions) -> Result<SweepRun, StudyError> 
 
 /// A warning where the largest dynamic mesh force of the sweep, carried by one tooth pair at the
 /// pitch point, gives a Hertzian pressure above [`crate::case::HERTZ_PRESSURE_LIMIT`]
-/// ([`Case::hertz_pressure_at`]): the flanks would yield there, and the lumped model's linear
-/// contact (and any response it gives near that speed) no longer describes the gears. The
-/// static load alone is the case's own warning.
+/// ([`Case::hertz_pressure_at`]): the flanks may yield there, and the lumped model's linear
+/// contact (and any response it gives near that speed) no longer describes the gears. A nominal
+/// figure: the pitch point is in single-tooth contact on the paper pair (ε = 1.69), the lowest
+/// point of single contact has smaller radii of curvature, and a back-flank force is not in the
+/// dynamic factor. The static load alone is the case's own warning.
 pub fn overload_warning(
     case: &Case,
     static_force: f64,
@@ -292,11 +294,13 @@ pub fn overload_warning(
     let pressure = case.hertz_pressure_at(static_force * worst.dynamic_factor);
     (pressure > crate::case::HERTZ_PRESSURE_LIMIT).then(|| {
         format!(
-            "at {:.0} rpm the dynamic mesh force reaches {:.1} × the static one, a Hertzian \
-             pressure of {:.1} GPa at the pitch point, above any steel's contact strength: the \
-             flanks would yield, and the linear contact law of the lumped model no longer \
-             describes the teeth there; near that speed its numbers are the model's, not the \
-             gears' (more damping or backlash bounds the response)",
+            "at {:.0} rpm the dynamic mesh force reaches {:.1} × the static one, a nominal \
+             Hertzian pressure of {:.1} GPa (one tooth pair at the pitch point), above the 3 GPa \
+             limit the case check uses (twice the allowable contact stress of the strongest \
+             case-hardened gear steels, ISO 6336-5): the flanks may yield, and the linear \
+             contact law of the lumped model no longer describes the teeth there; near that \
+             speed its numbers are the model's, not the gears' (more damping or backlash bounds \
+             the response)",
             worst.driver_speed_rpm,
             worst.dynamic_factor,
             pressure * 1e-9

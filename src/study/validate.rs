@@ -5,7 +5,8 @@
 //! with and without tooth separation — on the case's effective mass and mean mesh stiffness,
 //! with a cosine unloaded TE of 0.2 × the static deflection (stays in contact) and of 2 × with
 //! 100 µm backlash (separates every mesh period), f_mesh = 0.7 f_n. Then the case's own model
-//! (its k(θ), e(θ), zero backlash with the back flanks) swept up across the primary resonance,
+//! (its k(θ), e(θ) and backlash; zero on the paper pair, where the back flanks engage as the
+//! drive flanks open) swept up across the primary resonance,
 //! from 0.85 to 1.08 of the speed where f_mesh = f_n, at 1, 2, 4 and 8 × the sweep's RK4 steps:
 //! the sweep's largest dynamic factor, and any divergence, must not move as the step halves
 //! for them to be the model's rather than the integrator's (RK4 straddles the contact law's
@@ -95,8 +96,7 @@ pub fn integrators(case: &Case) -> Result<IntegratorSummary, StudyError> {
     let speed = MESH_OVER_NATURAL * smooth.natural_frequency() * period / std::f64::consts::TAU;
     let started = std::time::Instant::now();
     let table = schemes::failure_table(&smooth, &separating, speed, PERIODS);
-    // f_mesh = Ω₁/period = f_n.
-    let resonance_rpm = setup.natural_frequency_hz * period * 60.0 / std::f64::consts::TAU;
+    let resonance_rpm = super::lumped::speed_for_mesh_frequency(case, setup.natural_frequency_hz);
     let (from, to) = (
         RESONANCE_RANGE.0 * resonance_rpm,
         RESONANCE_RANGE.1 * resonance_rpm,

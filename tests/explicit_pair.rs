@@ -45,7 +45,7 @@ fn prepared(case: &Case, rpm: f64, duration: f64, ramp: f64, penalty: f64) -> Pr
 fn pair_energy_balance_without_damping() {
     let case = coarse_case();
     let p = prepared(&case, 600.0, 2.0e-4, 1.0e-4, 1.0);
-    let outcome = run(&p, 2.0e-4, 5e-6, None, &mut |_| {}).unwrap();
+    let outcome = run(&p, 2.0e-4, 5e-6, None, None, &mut |_| {}).unwrap();
     assert!(outcome.diverged.is_none(), "{:?}", outcome.diverged);
     let h = &outcome.history;
     let work = h
@@ -77,10 +77,10 @@ fn step_above_the_critical_step_is_caught() {
     assert!(stable.dt_element_bound <= stable.dt_bodies[0] * (1.0 + 1e-6));
     let mut p = stable;
     p.dt = 0.95 * p.dt_critical;
-    let ok = run(&p, 5.0e-5, 1e-6, None, &mut |_| {}).unwrap();
+    let ok = run(&p, 5.0e-5, 1e-6, None, None, &mut |_| {}).unwrap();
     assert!(ok.diverged.is_none(), "{:?}", ok.diverged);
     p.dt = 1.3 * p.dt_critical;
-    let bad = run(&p, 5.0e-5, 1e-6, None, &mut |_| {}).unwrap();
+    let bad = run(&p, 5.0e-5, 1e-6, None, None, &mut |_| {}).unwrap();
     let message = bad
         .diverged
         .expect("a step 30 % above the critical one diverges");
@@ -295,7 +295,7 @@ fn a_tooth_entering_mesh_books_no_energy() {
     let (duration, ramp) = (0.8e-3, 0.5e-3);
     let mut p = prepared(&case, 300.0, duration, ramp, 1.0);
     p.drive.start_rotation = 0.012;
-    let outcome = run(&p, duration, 5e-6, None, &mut |_| {}).unwrap();
+    let outcome = run(&p, duration, 5e-6, None, None, &mut |_| {}).unwrap();
     assert!(outcome.diverged.is_none(), "{:?}", outcome.diverged);
     let h = &outcome.history;
     let entering = p

@@ -8,7 +8,7 @@ use std::path::Path;
 use std::process::Command;
 use std::time::Duration;
 
-use common::{assert_no_partial_files, coarse_case, interrupt, read_json};
+use common::{assert_no_partial_files, coarse_case, interrupt, read_json, signal_after};
 
 use geardyn::report::is_timing_key;
 
@@ -52,8 +52,9 @@ fn an_interrupted_fe_run_keeps_its_history_and_says_where_it_stopped() {
 /// the run leaves its checkpoint, `fe --resume` goes on from it, and every CSV and the summary
 /// (timings aside) equal the uninterrupted run's, byte for byte. Two scenes: 3000 rpm without
 /// relief or friction, and 60 rpm with the paper's relief and μ = 0.15 (the friction history
-/// crosses the checkpoint). A checkpoint is refused by another case and by another scene of
-/// the same case file and flags.
+/// crosses the checkpoint). At 3000 rpm a run killed outright (SIGKILL, 4 s into its loop) with
+/// `--checkpoint-every-s 1` goes on from the last checkpoint it kept, to the same bytes. A
+/// checkpoint is refused by another case and by another scene of the same case file and flags.
 #[test]
 fn an_interrupted_fe_run_resumes_to_the_uninterrupted_result() {
     let dir = tempfile::tempdir().unwrap();
@@ -111,20 +112,46 @@ fn an_interrupted_fe_run_resumes_to_the_uninterrupted_result() {
             "removed once finished"
         );
 
+        let mut resumed_runs = vec![parted];
+        if scene == "high-unmodified" {
+            // Killed outright 4 s into the loop, keeping a checkpoint every second: it goes on
+            // from the last one it kept.
+            let killed = dir.path().join(format!("{scene}-killed"));
+            let (code, _) = signal_after(
+                fe(scene, &killed).args(["--checkpoint-every-s", "1"]),
+                " steps",
+                false,
+                Duration::from_secs(4),
+                "KILL",
+            );
+            assert_eq!(code, -1, "killed by the signal");
+            assert!(killed.join("checkpoint.json").exists());
+            assert!(!killed.join("summary.json").exists());
+            let resumed = fe(scene, &killed).arg("--resume").output().unwrap();
+            let resumed_err = String::from_utf8_lossy(&resumed.stderr);
+            assert!(resumed.status.success(), "{resumed_err}");
+            assert!(resumed_err.contains("resuming at step"), "{resumed_err}");
+            resumed_runs.push(killed);
+        }
+
         let whole = dir.path().join(format!("{scene}-whole"));
         assert!(fe(scene, &whole).output().unwrap().status.success());
-        for file in [
-            "history.csv",
-            "dte_spectrum.csv",
-            "stiffness.csv",
-            "stiffness_vs_ltca.csv",
-        ] {
-            assert_eq!(
-                std::fs::read(whole.join(file)).unwrap(),
-                std::fs::read(parted.join(file)).unwrap(),
-                "{scene} {file}: the resumed run differs from the uninterrupted one"
-            );
+        for run in &resumed_runs {
+            for file in [
+                "history.csv",
+                "dte_spectrum.csv",
+                "stiffness.csv",
+                "stiffness_vs_ltca.csv",
+            ] {
+                assert_eq!(
+                    std::fs::read(whole.join(file)).unwrap(),
+                    std::fs::read(run.join(file)).unwrap(),
+                    "{scene} {file}: the resumed run {} differs from the uninterrupted one",
+                    run.display()
+                );
+            }
         }
+        let parted = &resumed_runs[0];
         fn strip(v: &mut serde_json::Value) {
             if let Some(object) = v.as_object_mut() {
                 object.retain(|k, _| !is_timing_key(k));

@@ -162,7 +162,7 @@ fn explicit_run_memory_estimate_against_the_heap() {
     for interval in [prepared.dt, 20e-6] {
         let estimate = run_memory(&prepared, duration, interval);
         let (outcome, peak) =
-            peak_of(|| run(&prepared, duration, interval, None, &mut |_| {}).unwrap());
+            peak_of(|| run(&prepared, duration, interval, None, None, &mut |_| {}).unwrap());
         assert!(outcome.diverged.is_none());
         eprintln!(
             "output every {interval:.2e} s: estimate {} against {:.2} MB",

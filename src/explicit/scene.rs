@@ -531,6 +531,17 @@ pub struct RunCheckpoint {
     coupled_steps: Vec<CoupledStep>,
 }
 
+/// Where a running scene keeps checkpoints as it goes: every `every_s` seconds of wall time
+/// (checked every [`KEEP_CHECK_STEPS`] steps) `keep` gets one, with the history so far, so a
+/// process killed outright (SIGKILL, a batch job's time limit) can go on from the last one.
+pub struct Keeping<'a> {
+    pub every_s: f64,
+    pub keep: &'a mut dyn FnMut(&RunCheckpoint, &History),
+}
+
+/// Steps between two looks at the clock for [`Keeping`].
+pub const KEEP_CHECK_STEPS: usize = 64;
+
 /// A fingerprint of everything a run's steps depend on: the step, the step count and output
 /// stride, the drive, the damping, the friction, and every body's reference nodes, masses and
 /// flank penalties (FNV-1a over their bits). Two scenes that differ in any of them — another
@@ -661,6 +672,7 @@ pub fn run(
     duration: f64,
     output_interval: f64,
     resume: Option<(RunCheckpoint, History)>,
+    mut keeping: Option<Keeping>,
     progress: &mut dyn FnMut(f64),
 ) -> Result<RunOutcome, FeError> {
     let model = &prepared.model;
@@ -735,9 +747,10 @@ pub fn run(
             -contact.moment_on_driven / rb2,
         ]
     };
-    let mut record = |integrator: &PairIntegrator,
-                      state: &crate::explicit::pair::PairState,
-                      sums: &IntervalSums| {
+    let record = |history: &mut History,
+                  integrator: &PairIntegrator,
+                  state: &crate::explicit::pair::PairState,
+                  sums: &IntervalSums| {
         let n = sums.steps as f64;
         let mean = |k: usize| sums.signals[k] / n;
         history.time.push(state.time);
@@ -765,7 +778,7 @@ pub fn run(
                 &integrator.last_contact.pair_forces,
                 integrator.last_contact.max_penetration,
             );
-            record(&integrator, &state, &sums);
+            record(&mut history, &integrator, &state, &sums);
             (IntervalSums::default(), Vec::new())
         }
     };
@@ -776,6 +789,8 @@ pub fn run(
             .min(prepared.dt_contact);
     let check_every = (total_steps / COUPLED_CHECKS).max(1);
     let mut stopped_before = None;
+    let fingerprint = scene_fingerprint(prepared, duration, output_interval);
+    let mut last_kept = Instant::now();
     for step in first_step..=total_steps {
         if crate::interrupt::stop_requested() {
             interrupted = Some(format!(
@@ -826,7 +841,7 @@ pub fn run(
             integrator.last_contact.max_penetration,
         );
         if recording {
-            record(&integrator, &state, &sums);
+            record(&mut history, &integrator, &state, &sums);
             sums = IntervalSums::default();
         }
         if step % check_every == 0 && integrator.last_contact.active > 0 {
@@ -842,11 +857,30 @@ pub fn run(
         if step % report_every == 0 {
             progress(step as f64 / total_steps as f64);
         }
+        if let Some(keeping) = keeping.as_mut() {
+            if step % KEEP_CHECK_STEPS == 0
+                && step < total_steps
+                && last_kept.elapsed().as_secs_f64() >= keeping.every_s
+            {
+                let checkpoint = RunCheckpoint {
+                    fingerprint,
+                    total_steps,
+                    next_step: step + 1,
+                    wall_s: wall_before + started.elapsed().as_secs_f64(),
+                    state: state.clone(),
+                    integrator: integrator.checkpoint(),
+                    sums: sums.clone(),
+                    coupled_steps: coupled_steps.clone(),
+                };
+                (keeping.keep)(&checkpoint, &history);
+                last_kept = Instant::now();
+            }
+        }
     }
     let wall_s = wall_before + started.elapsed().as_secs_f64();
     let checkpoint = stopped_before.map(|next_step| {
         Box::new(RunCheckpoint {
-            fingerprint: scene_fingerprint(prepared, duration, output_interval),
+            fingerprint,
             total_steps,
             next_step,
             wall_s,

@@ -270,8 +270,8 @@ struct CheckpointRead {
 }
 
 /// Streams the checkpoint to a temporary file and renames it (no second copy of the history in
-/// memory).
-fn write_checkpoint(
+/// memory): the stop request's, and those a run keeps as it goes.
+pub fn write_checkpoint(
     path: &Path,
     checkpoint: &RunCheckpoint,
     history: &History,

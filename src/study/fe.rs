@@ -485,7 +485,8 @@ pub struct FeStudy {
 }
 
 /// Runs a prepared scene, from its start or from the checkpoint of an interrupted run of it,
-/// and analyses it; `progress` sees the fraction done. A diverged or interrupted run is a
+/// keeping checkpoints as it goes where `keeping` says, and analyses it; `progress` sees the
+/// fraction done. A diverged or interrupted run is a
 /// result too (`summary.diverged` or `summary.interrupted` says why), so its partial histories
 /// can be written; an interrupted one carries its checkpoint.
 pub fn run(
@@ -493,6 +494,7 @@ pub fn run(
     scene: &Scene,
     prepared: &PreparedScene,
     resume: Option<(crate::explicit::scene::RunCheckpoint, History)>,
+    keeping: Option<crate::explicit::scene::Keeping>,
     progress: &mut dyn FnMut(f64),
 ) -> Result<FeStudy, StudyError> {
     let started = std::time::Instant::now();
@@ -507,6 +509,7 @@ pub fn run(
         scene.duration,
         settings.output_interval,
         resume,
+        keeping,
         progress,
     )?;
     let history = outcome.history;

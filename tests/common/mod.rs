@@ -15,6 +15,18 @@ pub fn interrupt(
     stderr: bool,
     delay: Duration,
 ) -> (i32, String) {
+    signal_after(command, marker, stderr, delay, "TERM")
+}
+
+/// [`interrupt`] with another signal (`"KILL"`: the process cannot react; its status code is
+/// then -1).
+pub fn signal_after(
+    command: &mut Command,
+    marker: &str,
+    stderr: bool,
+    delay: Duration,
+    signal: &str,
+) -> (i32, String) {
     let mut child: Child = command
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -54,7 +66,7 @@ pub fn interrupt(
     );
     std::thread::sleep(delay);
     let killed = Command::new("kill")
-        .args(["-TERM", &child.id().to_string()])
+        .args([&format!("-{signal}"), &child.id().to_string()])
         .status()
         .unwrap();
     assert!(killed.success());

@@ -262,6 +262,10 @@ pub struct CommonArgs {
     /// memory available (or GEARDYN_MEMORY_LIMIT_MB).
     #[arg(long)]
     pub force: bool,
+    /// Explicit runs keep a checkpoint.json this often [s of wall time], so a process killed
+    /// outright (SIGKILL, a batch job's limit) goes on from it with --resume.
+    #[arg(long, value_name = "SECONDS", default_value_t = 600.0, value_parser = positive_seconds)]
+    pub checkpoint_every_s: f64,
     /// Change a value of the case before it is checked, e.g. fe.plane=stress,
     /// mesh.fine_element_mm=0.05, scene[low-unmodified].duration_s=0.02 (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -358,5 +362,15 @@ impl OptimizeArgs {
             rpm: self.rpm.clone(),
             ..Default::default()
         }
+    }
+}
+
+/// A wall-time interval: a positive, finite number of seconds.
+fn positive_seconds(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(s) if s > 0.0 && s.is_finite() => Ok(s),
+        _ => Err(format!(
+            "{text:?} is not a positive number of seconds, e.g. 600"
+        )),
     }
 }

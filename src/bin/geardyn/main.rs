@@ -35,6 +35,9 @@ fn main() -> ExitCode {
     if cli.command.common().is_some_and(|c| c.force) {
         geardyn::resources::set_force(true);
     }
+    if let Some(common) = cli.command.common() {
+        progress::set_checkpoint_every(common.checkpoint_every_s);
+    }
     geardyn::resources::set_memory_limit(geardyn::resources::machine_limit());
     geardyn::resources::set_announcer(|message| eprintln!("{message}"));
     let result = match cli.command {

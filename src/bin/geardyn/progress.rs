@@ -70,19 +70,43 @@ pub fn fe_run(case: &Case, scene: &Scene, dir: &Path, resume: bool) -> Result<st
     let plain_log = bar.is_hidden();
     let started = std::time::Instant::now();
     let mut logged = 0;
-    let result = study::fe::run(case, scene, &prepared, checkpoint, &mut |f| {
-        bar.set_position((f * 1000.0) as u64);
-        let tenth = (f * 10.0).floor() as usize;
-        if plain_log && tenth > logged {
-            logged = tenth;
-            let elapsed = started.elapsed().as_secs_f64();
+    // Case first, so a process killed before its end leaves a folder `--resume` accepts.
+    OutputDir(dir).case(case)?;
+    let checkpoint_path = dir.join(report::fe::CHECKPOINT);
+    let mut keep = |checkpoint: &geardyn::explicit::scene::RunCheckpoint,
+                    history: &geardyn::explicit::scene::History| {
+        // A failed write loses only this checkpoint; the run goes on.
+        if let Err(e) = report::fe::write_checkpoint(&checkpoint_path, checkpoint, history) {
             eprintln!(
-                "explicit FE {:3.0} % after {elapsed:.0} s, about {:.0} s to go",
-                f * 100.0,
-                elapsed * (1.0 - f) / f.max(1e-9)
+                "could not keep a checkpoint in {}: {e}",
+                checkpoint_path.display()
             );
         }
-    })?;
+    };
+    let keeping = geardyn::explicit::scene::Keeping {
+        every_s: checkpoint_every(),
+        keep: &mut keep,
+    };
+    let result = study::fe::run(
+        case,
+        scene,
+        &prepared,
+        checkpoint,
+        Some(keeping),
+        &mut |f| {
+            bar.set_position((f * 1000.0) as u64);
+            let tenth = (f * 10.0).floor() as usize;
+            if plain_log && tenth > logged {
+                logged = tenth;
+                let elapsed = started.elapsed().as_secs_f64();
+                eprintln!(
+                    "explicit FE {:3.0} % after {elapsed:.0} s, about {:.0} s to go",
+                    f * 100.0,
+                    elapsed * (1.0 - f) / f.max(1e-9)
+                );
+            }
+        },
+    )?;
     bar.finish_and_clear();
     report::fe::write(OutputDir(dir), case, &result)?;
     if let Some(message) = result.summary.diverged.as_ref() {
@@ -134,6 +158,20 @@ pub fn fe_check_run(
     fe_run_reusing(case, scene, dir)
         .map_err(|e| format!("{e:#}"))
         .and_then(|_| report::optimize::read_fe_check_run(dir))
+}
+
+/// `--checkpoint-every-s`, as bits of an f64 (600 s until set).
+static CHECKPOINT_EVERY: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+pub fn set_checkpoint_every(seconds: f64) {
+    CHECKPOINT_EVERY.store(seconds.to_bits(), std::sync::atomic::Ordering::Relaxed);
+}
+
+fn checkpoint_every() -> f64 {
+    match f64::from_bits(CHECKPOINT_EVERY.load(std::sync::atomic::Ordering::Relaxed)) {
+        s if s > 0.0 => s,
+        _ => 600.0,
+    }
 }
 
 pub fn progress_bar(template: &str) -> ProgressBar {

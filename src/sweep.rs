@@ -176,7 +176,7 @@ pub fn refined_up_sweep(model: &MeshModel, rpms: &[f64], refinement: usize) -> R
             out.unsettled += 1;
             continue;
         }
-        let factor = s.mesh_force.iter().copied().fold(f64::MIN, f64::max) / model.force;
+        let factor = s.dynamic_factor(model.force);
         if factor > out.max_dynamic_factor {
             out.max_dynamic_factor = factor;
             out.max_dynamic_factor_rpm = rpm;
@@ -229,17 +229,12 @@ fn analyse(
         .into_iter()
         .map(|(line, amplitude)| (line as f64 / periods as f64 * mesh_hz, amplitude))
         .collect();
-    let max_force = s
-        .mesh_force
-        .iter()
-        .copied()
-        .fold(f64::NEG_INFINITY, f64::max);
     let point = SweepPoint {
         driver_speed_rpm: rpm,
         mesh_frequency_hz: mesh_hz,
         dte_rms: rms,
         dte_peak_to_peak: hi - lo,
-        dynamic_factor: max_force / model.force,
+        dynamic_factor: s.dynamic_factor(model.force),
         separated: s.separated,
         harmonics,
         peaks,

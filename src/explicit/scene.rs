@@ -554,8 +554,7 @@ pub fn scene_fingerprint(prepared: &PreparedScene, duration: f64, output_interva
         }
     };
     let model = &prepared.model;
-    let total_steps = (duration / prepared.dt).ceil() as u64;
-    let every = ((output_interval / prepared.dt).round() as u64).max(1);
+    let (total_steps, every) = step_counts(prepared, duration, output_interval);
     for x in [
         prepared.dt,
         prepared.beta_k,
@@ -564,8 +563,8 @@ pub fn scene_fingerprint(prepared: &PreparedScene, duration: f64, output_interva
     ] {
         eat(&x.to_bits().to_le_bytes());
     }
-    eat(&total_steps.to_le_bytes());
-    eat(&every.to_le_bytes());
+    eat(&(total_steps as u64).to_le_bytes());
+    eat(&(every as u64).to_le_bytes());
     // Debug prints every f64 in its shortest exact form.
     eat(format!("{:?}", prepared.drive).as_bytes());
     for body in &model.bodies {
@@ -626,11 +625,17 @@ pub fn measure_step_cost(prepared: &PreparedScene, steps: usize) -> f64 {
     started.elapsed().as_secs_f64() / (steps.max(1) as f64 * model.elements().max(1) as f64)
 }
 
+/// The steps [`run`] takes over `duration`, and how many steps one output interval holds.
+fn step_counts(prepared: &PreparedScene, duration: f64, output_interval: f64) -> (usize, usize) {
+    let total_steps = (duration / prepared.dt).ceil() as usize;
+    let every = ((output_interval / prepared.dt).round() as usize).max(1);
+    (total_steps, every)
+}
+
 /// Samples [`run`] records over `duration`: the initial state, one per output interval and the
 /// last step.
 pub fn recorded_samples(prepared: &PreparedScene, duration: f64, output_interval: f64) -> usize {
-    let total_steps = (duration / prepared.dt).ceil() as usize;
-    let every = ((output_interval / prepared.dt).round() as usize).max(1);
+    let (total_steps, every) = step_counts(prepared, duration, output_interval);
     total_steps / every + 2
 }
 
@@ -676,8 +681,7 @@ pub fn run(
     progress: &mut dyn FnMut(f64),
 ) -> Result<RunOutcome, FeError> {
     let model = &prepared.model;
-    let total_steps = (duration / prepared.dt).ceil() as usize;
-    let every = ((output_interval / prepared.dt).round() as usize).max(1);
+    let (total_steps, every) = step_counts(prepared, duration, output_interval);
     let report_every = (total_steps / 200).max(1);
     // Reserved for every sample: no doubling on growth, and the size run_memory announced.
     let samples = recorded_samples(prepared, duration, output_interval);
@@ -790,6 +794,22 @@ pub fn run(
     let check_every = (total_steps / COUPLED_CHECKS).max(1);
     let mut stopped_before = None;
     let fingerprint = scene_fingerprint(prepared, duration, output_interval);
+    // The one constructor of a checkpoint: the kept ones and the stop request's.
+    let checkpoint_at = |next_step: usize,
+                         wall_s: f64,
+                         state: &crate::explicit::pair::PairState,
+                         integrator: &PairIntegrator,
+                         sums: &IntervalSums,
+                         coupled_steps: &[CoupledStep]| RunCheckpoint {
+        fingerprint,
+        total_steps,
+        next_step,
+        wall_s,
+        state: state.clone(),
+        integrator: integrator.checkpoint(),
+        sums: sums.clone(),
+        coupled_steps: coupled_steps.to_vec(),
+    };
     let mut last_kept = Instant::now();
     for step in first_step..=total_steps {
         if crate::interrupt::stop_requested() {
@@ -862,16 +882,14 @@ pub fn run(
                 && step < total_steps
                 && last_kept.elapsed().as_secs_f64() >= keeping.every_s
             {
-                let checkpoint = RunCheckpoint {
-                    fingerprint,
-                    total_steps,
-                    next_step: step + 1,
-                    wall_s: wall_before + started.elapsed().as_secs_f64(),
-                    state: state.clone(),
-                    integrator: integrator.checkpoint(),
-                    sums: sums.clone(),
-                    coupled_steps: coupled_steps.clone(),
-                };
+                let checkpoint = checkpoint_at(
+                    step + 1,
+                    wall_before + started.elapsed().as_secs_f64(),
+                    &state,
+                    &integrator,
+                    &sums,
+                    &coupled_steps,
+                );
                 (keeping.keep)(&checkpoint, &history);
                 last_kept = Instant::now();
             }
@@ -879,16 +897,14 @@ pub fn run(
     }
     let wall_s = wall_before + started.elapsed().as_secs_f64();
     let checkpoint = stopped_before.map(|next_step| {
-        Box::new(RunCheckpoint {
-            fingerprint,
-            total_steps,
+        Box::new(checkpoint_at(
             next_step,
             wall_s,
-            state,
-            integrator: integrator.checkpoint(),
-            sums,
-            coupled_steps: coupled_steps.clone(),
-        })
+            &state,
+            &integrator,
+            &sums,
+            &coupled_steps,
+        ))
     });
     Ok(RunOutcome {
         history,

@@ -273,7 +273,7 @@ impl FactorizedStiffness {
 
     /// Number of unknowns after constraints.
     pub fn free_dofs(&self) -> usize {
-        self.free_index.iter().filter(|i| i.is_some()).count()
+        self.symbolic.nrows()
     }
 
     /// Displacements for the given load columns (global DOF order; fixed DOFs come out 0).

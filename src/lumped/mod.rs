@@ -380,6 +380,18 @@ pub struct SteadyState {
     pub diverged: bool,
 }
 
+impl SteadyState {
+    /// The largest elastic mesh force over the recorded period over `static_force`: the
+    /// dynamic factor.
+    pub fn dynamic_factor(&self, static_force: f64) -> f64 {
+        self.mesh_force
+            .iter()
+            .copied()
+            .fold(f64::NEG_INFINITY, f64::max)
+            / static_force
+    }
+}
+
 /// Integrates at driver speed Ω₁ (rad/s) from `initial` until the state at period boundaries
 /// repeats to `tolerance` (relative to the static deflection), at most `max_periods`.
 pub fn steady_state(

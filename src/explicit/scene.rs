@@ -94,6 +94,7 @@ use crate::explicit::pair::{
 };
 use crate::explicit::solver::critical_step;
 use crate::fe::{FeError, MassLumping};
+use crate::geometry::engagement::{self, ToothPair};
 use crate::geometry::{FlankModification, GearPair};
 use crate::mesh::mesh_gear;
 use crate::resources::MemoryEstimate;
@@ -140,39 +141,35 @@ pub struct FeSettings {
     pub coarse_size: f64,
 }
 
-/// The teeth each gear needs fine and the tooth pairs in contact, for a driver rotation.
+/// The teeth each gear needs fine and the tooth pairs that can meet while the driver turns by
+/// `driver_rotation` from the pitch-point position: the pairs engaged over the window
+/// ([`engagement::engaged_pairs`] with its margin), ascending driver tooth; gear 2 also needs
+/// the back-flank partners, the teeth on either side of each drive-flank partner.
 pub fn scene_teeth(
     pair: &GearPair,
     driver_rotation: f64,
 ) -> ([Vec<usize>; 2], Vec<(usize, usize)>) {
-    let (z1, z2) = (
-        pair.gears[0].teeth() as usize,
-        pair.gears[1].teeth() as usize,
+    let engaged = engagement::engaged_pairs(
+        pair,
+        0.0,
+        driver_rotation.max(0.0),
+        engagement::ENGAGEMENT_MARGIN,
     );
-    let pitches = (driver_rotation / pair.gears[0].angular_pitch())
-        .ceil()
-        .max(0.0) as usize;
-    let mut teeth1: Vec<usize> = vec![1 % z1, 0];
-    for k in 1..=(pitches + 1) {
-        let t = (z1 - k % z1) % z1;
-        if !teeth1.contains(&t) {
-            teeth1.push(t);
-        }
-        if teeth1.len() == z1 {
-            break;
-        }
-    }
-    let tooth_pairs: Vec<(usize, usize)> =
-        teeth1.iter().map(|&t| (t, (z2 - t % z2) % z2)).collect();
-    let mut fine1 = teeth1.clone();
-    fine1.sort_unstable();
-    // Gear 2 also needs the back-flank partners: the teeth on either side of each partner.
-    let mut fine2: Vec<usize> = tooth_pairs
+    let mut tooth_pairs: Vec<(usize, usize)> = engaged.iter().map(|p| p.indices(pair)).collect();
+    // Over more than a revolution the same teeth meet again: once each.
+    let mut seen = std::collections::HashSet::new();
+    tooth_pairs.retain(|p| seen.insert(*p));
+    let with_neighbours: Vec<ToothPair> = engaged
         .iter()
-        .flat_map(|p| [p.1, (p.1 + 1) % z2, (p.1 + z2 - 1) % z2])
+        .flat_map(|p| {
+            [-1, 0, 1].map(|d| ToothPair {
+                driver: p.driver,
+                driven: p.driven + d,
+            })
+        })
         .collect();
-    fine2.sort_unstable();
-    fine2.dedup();
+    let [fine1, _] = engagement::teeth_of(pair, &engaged);
+    let [_, fine2] = engagement::teeth_of(pair, &with_neighbours);
     ([fine1, fine2], tooth_pairs)
 }
 

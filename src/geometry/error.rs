@@ -115,11 +115,11 @@ pub enum GeometryError {
     ContactRatioBelowOne { contact_ratio: f64 },
 
     #[error(
-        "contact ratio {contact_ratio:.4} is 2 or more (high-contact-ratio gearing): the single/double \
-         contact points (LPSTC, HPSTC) used throughout geardyn are not defined for it yet. Reduce \
-         gear1.addendum_coeff and gear2.addendum_coeff or increase tool.pressure_angle_deg"
+        "contact ratio {contact_ratio:.4} is {limit} or more: more than three tooth pairs would share \
+         the load, which geardyn does not model. Reduce gear1.addendum_coeff and gear2.addendum_coeff \
+         or increase tool.pressure_angle_deg"
     )]
-    ContactRatioTwoOrMore { contact_ratio: f64 },
+    ContactRatioTooHigh { contact_ratio: f64, limit: f64 },
 
     #[error("{parameter}: {reason}")]
     Relief { parameter: String, reason: String },

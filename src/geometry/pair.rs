@@ -15,6 +15,12 @@
 //! j_wt     = p_w − 2 r_w1 ψ1(r_w1) − 2 r_w2 ψ2(r_w2),   j_n = j_wt cos α_w     (backlash)
 //! ```
 //! Roll angles on a gear's own flank: ξ1 = s / r_b1 and ξ2 = (L − s) / r_b2.
+//!
+//! For ε_α < 2 B and D bound the single-contact zone. For a high contact ratio (2 ≤ ε_α < 3)
+//! a tooth alternates between n + 1 and n = ⌊ε_α⌋ pairs in contact; B and D are then the
+//! lowest and highest points of its zones of least (n-pair) contact, where a tooth carries the
+//! most load and where long relief starts, and [`GearPair::zone_boundaries`] lists every point
+//! where the number of pairs changes.
 
 use nalgebra::{Point2, Rotation2, Vector2};
 use std::f64::consts::{FRAC_PI_2, PI};
@@ -23,6 +29,10 @@ use super::error::{GearIndex, GeometryError};
 use super::gear::{BasicRack, Gear, GearSpec};
 use super::involute::{inverse_involute, involute};
 use super::relief::{FlankModification, FlankReliefSpec, ReliefSpec, ReliefStart, ReliefZone};
+
+/// The highest transverse contact ratio geardyn takes: up to three pairs share the load (tested
+/// to ε_α ≈ 2.5, validation/pairs); four would need deeper teeth than a spur rack cuts sound.
+pub const MAX_CONTACT_RATIO: f64 = 3.0;
 
 /// What defines a pair, in SI units.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -39,11 +49,12 @@ pub struct PairSpec {
 pub struct ContactPoints {
     /// Initial contact point (A): the tip of gear 2 meets the root of gear 1.
     pub icp: f64,
-    /// Lowest point of single tooth contact on gear 1 (B).
+    /// Lowest point of single tooth contact on gear 1 (B): E − ⌊ε_α⌋ p_b, the lowest point of
+    /// least contact for a high contact ratio.
     pub lpstc: f64,
     /// Pitch point (C).
     pub pitch: f64,
-    /// Highest point of single tooth contact on gear 1 (D).
+    /// Highest point of single tooth contact on gear 1 (D): A + ⌊ε_α⌋ p_b.
     pub hpstc: f64,
     /// Final contact point (E): the tip of gear 1 leaves.
     pub fcp: f64,
@@ -121,7 +132,7 @@ pub struct GearPair {
 
 impl GearPair {
     /// Builds and checks the pair: both gears generated, centre distance, tip clearance,
-    /// interference (involute and fillet), contact ratio in [1, 2).
+    /// interference (involute and fillet), contact ratio in [1, [`MAX_CONTACT_RATIO`]).
     pub fn new(spec: &PairSpec) -> Result<Self, GeometryError> {
         let g1 = Gear::generate(1, spec.gears[0], spec.rack)?;
         let g2 = Gear::generate(2, spec.gears[1], spec.rack)?;
@@ -212,14 +223,20 @@ impl GearPair {
         if !(contact_ratio >= 1.0) {
             return Err(GeometryError::ContactRatioBelowOne { contact_ratio });
         }
-        if contact_ratio >= 2.0 {
-            return Err(GeometryError::ContactRatioTwoOrMore { contact_ratio });
+        if contact_ratio >= MAX_CONTACT_RATIO {
+            return Err(GeometryError::ContactRatioTooHigh {
+                contact_ratio,
+                limit: MAX_CONTACT_RATIO,
+            });
         }
+        // The outermost zones of least contact: n = ⌊ε_α⌋ pairs between E − n p_b and A + n p_b
+        // (single contact for ε_α < 2).
+        let least = contact_ratio.floor();
         let contact_points = ContactPoints {
             icp,
-            lpstc: fcp - base_pitch,
+            lpstc: fcp - least * base_pitch,
             pitch: rb1 * alpha_w.tan(),
-            hpstc: icp + base_pitch,
+            hpstc: icp + least * base_pitch,
             fcp,
         };
 
@@ -242,6 +259,38 @@ impl GearPair {
             backlash_normal: backlash_circumferential * alpha_w.cos(),
             tip_clearance,
         })
+    }
+
+    /// The points of the path of contact where the number of tooth pairs in contact changes
+    /// (distances from T1 [m], ascending), with the number of pairs on the stretch that ends at
+    /// each: A + k p_b and E − k p_b for k = 1 … n, n = ⌊ε_α⌋, then E.
+    pub fn zone_boundaries(&self) -> Vec<(f64, usize)> {
+        let c = &self.contact_points;
+        let pb = self.base_pitch;
+        let n = self.contact_ratio.floor() as usize;
+        let mut points: Vec<f64> = (1..=n)
+            .flat_map(|k| [c.icp + k as f64 * pb, c.fcp - k as f64 * pb])
+            .filter(|s| *s > c.icp && *s < c.fcp)
+            .collect();
+        points.push(c.fcp);
+        points.sort_by(f64::total_cmp);
+        let pairs_at = |s: f64| {
+            (-(n as i64) - 1..=n as i64 + 1)
+                .filter(|k| {
+                    let t = s + *k as f64 * pb;
+                    t >= c.icp && t <= c.fcp
+                })
+                .count()
+        };
+        let mut previous = c.icp;
+        points
+            .into_iter()
+            .map(|s| {
+                let count = pairs_at(0.5 * (previous + s));
+                previous = s;
+                (s, count)
+            })
+            .collect()
     }
 
     /// Gear 1 or 2.

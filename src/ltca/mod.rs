@@ -32,6 +32,7 @@ use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use crate::fe::FeError;
+use crate::geometry::engagement::{self, ToothPair};
 use crate::geometry::{FlankModification, GearPair, OutlineResolution, Segment, Side};
 use crate::mesh::MeshSpec;
 use body::{BodyMaterial, LtcaBody};
@@ -54,6 +55,11 @@ pub enum LtcaError {
         #[source]
         source: ContactError,
     },
+    #[error("the LTCA is not periodic over one base pitch at torque {torque} N·m: the STE is {:.4} µrad at the first position and {:.4} µrad one base pitch later ({:.3e} apart, relative), and a tooth pair's force differs by {:.3e} of the load (tolerance {PERIODICITY_TOLERANCE:.0e}). The tooth pairs in contact are not the ones the geometry expects: report this case", periodicity.ste_first * 1e6, periodicity.ste_one_pitch_on * 1e6, periodicity.ste_relative_difference, periodicity.force_relative_difference)]
+    NotPeriodic {
+        torque: f64,
+        periodicity: Periodicity,
+    },
     #[error("no tooth pair is in contact at position {position}: the geometry leaves a gap everywhere within the search window")]
     NoContact { position: usize },
 }
@@ -73,22 +79,19 @@ pub struct LtcaModel {
     /// Gear 2's loaded-side profile (tooth-local): dense polyline from the tip centre down to the
     /// root, with the roll angle of flank points.
     profile: Vec<(Point2<f64>, Segment, Option<f64>)>,
-    /// Tooth pairs (gear-1 tooth, gear-2 tooth) that can engage.
+    /// The signed tooth pairs the model carries ([`engagement`]), by ascending driver tooth.
+    pub pairs: Vec<ToothPair>,
+    /// The same as (gear-1 tooth, gear-2 tooth) mesh indices: the columns of the results.
     pub tooth_pairs: Vec<(usize, usize)>,
     modifications: [FlankModification; 2],
     /// Stride of the coarse pass of the first-touch search (1: exhaustive).
     first_touch_stride: usize,
 }
 
-/// The teeth of each gear that engage while the driver turns one base pitch from the pitch-point
-/// position (tooth 0 of each gear at the pitch point): the leaving, the present and the entering
-/// tooth. Gear-1 tooth k meshes with gear-2 tooth (−k mod z₂).
+/// The teeth of each gear that engage over one base pitch of positions and the one after it
+/// ([`engagement::base_pitch_pairs`]): the ones an LTCA meshes fine.
 pub fn engaging_teeth(pair: &GearPair) -> [Vec<usize>; 2] {
-    let (z1, z2) = (
-        pair.gears[0].teeth() as usize,
-        pair.gears[1].teeth() as usize,
-    );
-    [vec![z1 - 1, 0, 1], vec![1, 0, z2 - 1]]
+    engagement::teeth_of(pair, &engagement::base_pitch_pairs(pair))
 }
 
 impl LtcaModel {
@@ -115,17 +118,21 @@ impl LtcaModel {
             Side::Left,
         )?;
         let profile = loaded_profile(pair, &modifications[1]);
-        let z2 = pair.gears[1].teeth() as usize;
-        let tooth_pairs = spec1
-            .fine_teeth
-            .iter()
-            .map(|&t1| (t1, (z2 - t1 % z2) % z2))
-            .filter(|(_, t2)| spec2.fine_teeth.contains(t2))
+        // The engaged pairs whose teeth are both meshed fine (a model built on fewer fine teeth,
+        // as some tests do, leaves the others out; the periodicity check then says so).
+        let pairs: Vec<ToothPair> = engagement::base_pitch_pairs(pair)
+            .into_iter()
+            .filter(|p| {
+                let (t1, t2) = p.indices(pair);
+                spec1.fine_teeth.contains(&t1) && spec2.fine_teeth.contains(&t2)
+            })
             .collect();
+        let tooth_pairs = pairs.iter().map(|p| p.indices(pair)).collect();
         Ok(LtcaModel {
             pair: pair.clone(),
             bodies: std::sync::Arc::new([body1, body2]),
             profile,
+            pairs,
             tooth_pairs,
             modifications: *modifications,
             first_touch_stride: FIRST_TOUCH_STRIDE,
@@ -141,6 +148,7 @@ impl LtcaModel {
             pair: self.pair.clone(),
             bodies: self.bodies.clone(),
             profile: loaded_profile(&self.pair, &modifications[1]),
+            pairs: self.pairs.clone(),
             tooth_pairs: self.tooth_pairs.clone(),
             modifications: *modifications,
             first_touch_stride: self.first_touch_stride,
@@ -384,10 +392,21 @@ impl LtcaModel {
         torque: f64,
         progress: &(dyn Fn(usize) + Sync),
     ) -> Result<Vec<PositionResult>, LtcaError> {
-        Ok(self
-            .cycles(positions, &[torque], progress)?
-            .pop()
-            .expect("one torque, one cycle"))
+        Ok(self.run_checked(positions, torque, progress)?.0)
+    }
+
+    /// [`LtcaModel::run`] with its periodicity check's numbers (a failed check is an error).
+    pub fn run_checked(
+        &self,
+        positions: usize,
+        torque: f64,
+        progress: &(dyn Fn(usize) + Sync),
+    ) -> Result<(Vec<PositionResult>, Periodicity), LtcaError> {
+        let (mut cycles, mut periodicity) = self.cycles(positions, &[torque], progress)?;
+        Ok((
+            cycles.pop().expect("one torque, one cycle"),
+            periodicity.pop().expect("one torque, one check"),
+        ))
     }
 
     /// One base pitch at each of `torques`: `[torque][position]`. The geometric contact search of
@@ -398,17 +417,19 @@ impl LtcaModel {
         positions: usize,
         torques: &[f64],
     ) -> Result<Vec<Vec<PositionResult>>, LtcaError> {
-        self.cycles(positions, torques, &|_| {})
+        Ok(self.cycles(positions, torques, &|_| {})?.0)
     }
 
     /// The cycles of [`LtcaModel::run`] and [`LtcaModel::run_torques`]: rayon over positions,
     /// each position's contact search solved for every torque; `progress` sees positions done.
+    /// Every cycle is checked for periodicity: the first position is solved again one base
+    /// pitch on ([`LtcaModel::periodicity`]); a cycle that fails it is an error.
     fn cycles(
         &self,
         positions: usize,
         torques: &[f64],
         progress: &(dyn Fn(usize) + Sync),
-    ) -> Result<Vec<Vec<PositionResult>>, LtcaError> {
+    ) -> Result<(Vec<Vec<PositionResult>>, Vec<Periodicity>), LtcaError> {
         if let Some(&torque) = torques.iter().find(|t| !(**t > 0.0 && t.is_finite())) {
             return Err(LtcaError::Torque { torque });
         }
@@ -416,7 +437,8 @@ impl LtcaModel {
             return Err(LtcaError::Positions { positions });
         }
         let done = AtomicUsize::new(0);
-        let by_position: Vec<Vec<PositionResult>> = (0..positions)
+        // Position N is position 0 one base pitch later: solved for the periodicity check only.
+        let mut by_position: Vec<Vec<PositionResult>> = (0..=positions)
             .into_par_iter()
             .map(|j| {
                 let geometry = self.position_geometry(j, positions)?;
@@ -424,7 +446,9 @@ impl LtcaModel {
                     .iter()
                     .map(|&torque| Ok(geometry.solve(self, torque)?.0))
                     .collect();
-                progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+                if j < positions {
+                    progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+                }
                 results
             })
             // Collected whole first, so a failure reports the first failing position whatever
@@ -432,6 +456,18 @@ impl LtcaModel {
             .collect::<Vec<Result<Vec<PositionResult>, LtcaError>>>()
             .into_iter()
             .collect::<Result<_, LtcaError>>()?;
+        let one_pitch_on = by_position.pop().expect("position N");
+        let mut checks = Vec::with_capacity(torques.len());
+        for ((first, later), &torque) in by_position[0].iter().zip(&one_pitch_on).zip(torques) {
+            let periodicity = self.periodicity(first, later);
+            if !periodicity.holds() {
+                return Err(LtcaError::NotPeriodic {
+                    torque,
+                    periodicity,
+                });
+            }
+            checks.push(periodicity);
+        }
         let mut cycles: Vec<Vec<PositionResult>> = torques
             .iter()
             .map(|_| Vec::with_capacity(positions))
@@ -441,7 +477,56 @@ impl LtcaModel {
                 cycle.push(result);
             }
         }
-        Ok(cycles)
+        Ok((cycles, checks))
+    }
+
+    /// The position one base pitch on against the first: the pair of signed driver tooth s − 1
+    /// one pitch on stands where pair s stood (a pair the model does not carry counts zero).
+    pub fn periodicity(&self, first: &PositionResult, later: &PositionResult) -> Periodicity {
+        let force = |results: &PositionResult, driver: i64| {
+            self.pairs
+                .iter()
+                .position(|p| p.driver == driver)
+                .map_or(0.0, |i| results.pair_forces[i])
+        };
+        let force_difference = self
+            .pairs
+            .iter()
+            .flat_map(|p| [p.driver, p.driver + 1])
+            .map(|s| (force(first, s) - force(later, s - 1)).abs())
+            .fold(0.0, f64::max);
+        Periodicity {
+            ste_first: first.ste,
+            ste_one_pitch_on: later.ste,
+            ste_relative_difference: (later.ste - first.ste).abs() / first.ste.abs(),
+            force_relative_difference: force_difference / first.total_force,
+        }
+    }
+}
+
+/// Relative tolerance of the periodicity check. The bodies are not rotationally periodic (fine
+/// elements on the engaged teeth only, the coarse teeth beyond), so the teeth loaded one pitch
+/// on sit in a slightly different mesh: 1e-5 of the STE at most over the matrix of pairs
+/// (validation/pairs). A missing or wrong partner moves either by tens of percent.
+pub const PERIODICITY_TOLERANCE: f64 = 1e-4;
+
+/// The LTCA's first position against the same position one base pitch later.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Periodicity {
+    /// Loaded STE φ at the first position and one pitch on [rad].
+    pub ste_first: f64,
+    pub ste_one_pitch_on: f64,
+    /// |φ(p) − φ(0)| / |φ(0)|.
+    pub ste_relative_difference: f64,
+    /// Largest difference of a tooth pair's force over the total load.
+    pub force_relative_difference: f64,
+}
+
+impl Periodicity {
+    /// Both differences within [`PERIODICITY_TOLERANCE`].
+    pub fn holds(&self) -> bool {
+        self.ste_relative_difference <= PERIODICITY_TOLERANCE
+            && self.force_relative_difference <= PERIODICITY_TOLERANCE
     }
 }
 
@@ -758,11 +843,10 @@ impl LtcaModel {
     /// relief that exceeds the deflection shortens it. NaN when the model's tooth pairs are not
     /// consecutive driver teeth in order (the engaging teeth always are).
     pub fn loaded_contact_ratio(&self, results: &[PositionResult]) -> f64 {
-        let z1 = self.pair.gears[0].teeth() as usize;
         let consecutive = self
-            .tooth_pairs
+            .pairs
             .windows(2)
-            .all(|w| w[1].0 == (w[0].0 + 1) % z1);
+            .all(|w| w[1].driver == w[0].driver + 1);
         if !consecutive || results.is_empty() {
             return f64::NAN;
         }

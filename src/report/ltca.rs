@@ -137,6 +137,16 @@ pub fn console(study: &LtcaStudy) -> String {
         "ISO 6336-1 method B: c_gamma_alpha*b = {:.4e} N/m, c'*b = {:.4e} N/m\n",
         study.iso.mean_n_per_m, study.iso.single_pair_n_per_m
     ));
+    let checks = &study.summary.self_checks;
+    let failed: Vec<&crate::study::checks::Check> = checks.iter().filter(|c| !c.passed).collect();
+    text.push_str(&format!(
+        "self-checks: {} of {} passed\n",
+        checks.len() - failed.len(),
+        checks.len()
+    ));
+    for check in failed {
+        text.push_str(&format!("  {}\n", check.line()));
+    }
     text
 }
 

@@ -201,9 +201,9 @@ pub fn potential_energy_table(
     let rb1 = pair.gears[0].base_radius;
     let period = pair.gears[0].angular_pitch();
     let stiffness = PeriodicTable::from_fn(period, positions, |rotation| {
-        let s0 = c.pitch + rb1 * rotation;
-        (-2..=2)
-            .map(|n| s0 + n as f64 * pair.base_pitch)
+        crate::geometry::engaged_pairs(pair, rotation, rotation, 0.0)
+            .iter()
+            .map(|p| rb1 * p.roll_angle(pair, rotation))
             .filter(|s| *s >= c.icp && *s <= c.fcp)
             .map(pair_stiffness)
             .sum()

@@ -6,9 +6,11 @@ use serde::Serialize;
 
 use crate::case::Case;
 use crate::geometry::FlankModification;
-use crate::ltca::{engaging_teeth, LtcaModel, PositionResult};
+use crate::geometry::engagement::{self, ENGAGEMENT_MARGIN};
+use crate::ltca::{engaging_teeth, LtcaModel, Periodicity, PositionResult, PERIODICITY_TOLERANCE};
 use crate::stiffness::{self, potential_energy, IsoStiffness, MeshStiffness};
 
+use super::checks::{Check, CheckKind};
 use super::{load_torque, Progress, StudyError};
 
 /// Both gear bodies of the case for the LTCA, meshed fine on the engaging teeth with the case's
@@ -107,6 +109,8 @@ pub struct VariantCycle {
     pub results: Vec<PositionResult>,
     pub mesh_stiffness: MeshStiffness,
     pub summary: VariantSummary,
+    /// The run's checks of its own answer ([`self_checks`]).
+    pub checks: Vec<Check>,
 }
 
 /// Headline numbers of one relief variant.
@@ -154,6 +158,11 @@ pub struct LtcaSummary {
     pub wall_s: f64,
     pub variants: Vec<VariantSummary>,
     pub model: &'static str,
+    /// Every variant's self-checks, the variant's name before each quantity.
+    pub self_checks: Vec<Check>,
+    /// The self-checks that failed (errors) and that flag a suspicious result (warnings).
+    pub self_check_errors: usize,
+    pub self_check_warnings: usize,
 }
 
 /// The study's result.
@@ -186,8 +195,17 @@ pub fn run(
         progress(&stage, 0, positions);
         let model = model(case, &variant.modifications)?;
         let cycle_started = std::time::Instant::now();
-        let results = model.run(positions, torque, &|done| progress(&stage, done, positions))?;
+        let (results, periodicity) =
+            model.run_checked(positions, torque, &|done| progress(&stage, done, positions))?;
         let cycle_s = cycle_started.elapsed().as_secs_f64();
+        let checks = self_checks(
+            &model,
+            &variant.modifications,
+            &results,
+            &periodicity,
+            positions,
+            torque,
+        )?;
         let [b1, b2] = &*model.bodies;
         let summary = variant_summary(
             &variant.name,
@@ -215,6 +233,7 @@ pub fn run(
             results,
             mesh_stiffness,
             summary,
+            checks,
         });
     }
     let pe = potential_energy::potential_energy_table(
@@ -226,6 +245,15 @@ pub fn run(
     );
     let iso = stiffness::iso_6336_method_b(&case.pair, torque, case.material.youngs_modulus);
     let first = &cycles[0].summary;
+    let self_checks: Vec<Check> = cycles
+        .iter()
+        .flat_map(|c| {
+            c.checks.iter().map(|check| Check {
+                quantity: format!("{}: {}", c.name, check.quantity),
+                ..check.clone()
+            })
+        })
+        .collect();
     let summary = LtcaSummary {
         case: case.name().to_string(),
         torque_nm: torque,
@@ -247,6 +275,12 @@ pub fn run(
         elements: first.elements[0] + first.elements[1],
         wall_s: started.elapsed().as_secs_f64(),
         variants: cycles.iter().map(|c| c.summary.clone()).collect(),
+        self_check_errors: self_checks.iter().filter(|c| c.is_error()).count(),
+        self_check_warnings: self_checks
+            .iter()
+            .filter(|c| !c.passed && c.warning_only)
+            .count(),
+        self_checks,
         model: "2D FE (Q8), bores held rigid; frictionless node-to-surface contact on the drive flanks; one base pitch",
     };
     Ok(LtcaStudy {
@@ -291,4 +325,144 @@ pub fn variant_summary(
         condensation_wall_s: times.1,
         cycle_wall_s: times.2,
     }
+}
+
+/// The load of the low-load check, over the design load: low enough that the contact hardly
+/// runs past the path's ends (the teeth deflect 1 % as far), high enough to stay far above the
+/// contact solve's round-off.
+pub const LOW_LOAD_FRACTION: f64 = 0.01;
+
+/// How close to a change in the number of pairs a position may be and still be counted by the
+/// low-load check [driver angular pitches]: the contact runs past each end of the path by the
+/// deflection over the separation rate, far less than this at 1 % of the load.
+pub const LOW_LOAD_SKIP: f64 = 0.03;
+
+/// Largest relative KKT residual of a contact solve: the active-set solve is exact up to
+/// round-off (1e-15 measured), so anything near this is a solve gone wrong.
+pub const KKT_TOLERANCE: f64 = 1e-9;
+
+/// Largest peak-to-peak unloaded TE of an unmodified pair [m]: the exact profiles are sampled
+/// as polylines of 2000 flank segments, whose chords sit a few nm inside the involute.
+pub const UNLOADED_TE_TOLERANCE: f64 = 0.01e-6;
+
+/// The checks an LTCA cycle makes of its own answer:
+/// * periodicity over one base pitch (the STE and every pair's force one pitch on equal the
+///   first position's; a failure is an error before this, from the kernel);
+/// * the contact solve's KKT residual (no penetration, no tension, Σ F a = T) at round-off;
+/// * no pair loaded farther than half the engagement margin beyond the path of contact (a
+///   warning: beyond the margin a pair would be missing from the model);
+/// * for an unmodified pair: Σ W r_b2 = T at every position to 1e-3 (an involute's forces act
+///   along the line of action, on the base radius); the unloaded TE is constant (zero but for a thickness reduction),
+///   and at 1 % of the load the number of loaded pairs at each position is the number the
+///   unloaded geometry puts on the path of contact (positions within 0.03 pitch of a change
+///   skipped).
+pub fn self_checks(
+    model: &LtcaModel,
+    modifications: &[FlankModification; 2],
+    results: &[PositionResult],
+    periodicity: &Periodicity,
+    positions: usize,
+    torque: f64,
+) -> Result<Vec<Check>, StudyError> {
+    let pair = &model.pair;
+    let rb2 = pair.gears[1].base_radius;
+    let mut checks = vec![
+        Check::new(
+            "ltca",
+            "STE one base pitch on against the first position, relative",
+            (periodicity.ste_relative_difference, 0.0),
+            "periodicity over one base pitch",
+            (CheckKind::Absolute, PERIODICITY_TOLERANCE),
+        ),
+        Check::new(
+            "ltca",
+            "largest tooth-pair force one base pitch on against the first position, over the load",
+            (periodicity.force_relative_difference, 0.0),
+            "periodicity over one base pitch",
+            (CheckKind::Absolute, PERIODICITY_TOLERANCE),
+        ),
+    ];
+    let worst_kkt = results.iter().map(|r| r.kkt_residual).fold(0.0, f64::max);
+    checks.push(Check::new(
+        "ltca",
+        "largest KKT residual of the contact solves (penetration, tension, torque balance Σ F a = T)",
+        (worst_kkt, 0.0),
+        "the contact conditions, relative to the gap and force scales",
+        (CheckKind::Absolute, KKT_TOLERANCE),
+    ));
+    let farthest = results
+        .iter()
+        .flat_map(|r| {
+            model
+                .pairs
+                .iter()
+                .zip(&r.pair_forces)
+                .filter(|(_, f)| **f > 0.0)
+                .map(|(p, _)| p.beyond_path(pair, r.driver_rotation).abs())
+        })
+        .fold(0.0, f64::max);
+    checks.push(
+        Check::new(
+            "ltca",
+            "farthest loaded pair beyond the path of contact [base pitches]",
+            (farthest, 0.0),
+            "half the engagement margin the model's pairs are chosen with",
+            (CheckKind::Absolute, 0.5 * ENGAGEMENT_MARGIN),
+        )
+        .warning(),
+    );
+    if *modifications == [FlankModification::none(); 2] {
+        // On unmodified involutes every contact normal is tangent to the base circle, so the
+        // forces balance the torque on the base radius; relief and tip corners bend the normals
+        // off it (by 0.3 % of the load at the paper's relief).
+        let worst_balance = results
+            .iter()
+            .map(|p| (p.total_force * rb2 / torque - 1.0).abs())
+            .fold(0.0, f64::max);
+        checks.push(Check::new(
+            "ltca",
+            "largest abs(Σ W r_b2 / T − 1) over the cycle",
+            (worst_balance, 0.0),
+            "torque balance along the line of action",
+            (CheckKind::Absolute, 1e-3),
+        ));
+        let te: Vec<f64> = results.iter().map(|r| r.unloaded_te * rb2).collect();
+        checks.push(Check::new(
+            "ltca",
+            "unloaded TE peak-to-peak of the unmodified pair [m]",
+            (crate::signal::peak_to_peak(&te), 0.0),
+            "conjugate involutes transmit uniform motion",
+            (CheckKind::Absolute, UNLOADED_TE_TOLERANCE),
+        ));
+        let low = model.run_torques(positions, &[LOW_LOAD_FRACTION * torque])?;
+        let [xi_a, xi_e] = engagement::path_roll_angles(pair);
+        let p1 = pair.gears[0].angular_pitch();
+        let mut counted = 0;
+        let mut mismatched = 0;
+        for r in &low[0] {
+            let near_a_change = model.pairs.iter().any(|p| {
+                let xi = p.roll_angle(pair, r.driver_rotation);
+                ((xi - xi_a).abs() / p1).min((xi - xi_e).abs() / p1) < LOW_LOAD_SKIP
+            });
+            if near_a_change {
+                continue;
+            }
+            counted += 1;
+            let loaded = r.pair_forces.iter().filter(|f| **f > 0.0).count();
+            if loaded != engagement::pairs_on_path(pair, r.driver_rotation) {
+                mismatched += 1;
+            }
+        }
+        checks.push(Check::new(
+            "ltca",
+            format!(
+                "positions whose loaded pairs at {:.0} % load differ from the pairs on the path (of {counted})",
+                LOW_LOAD_FRACTION * 100.0
+            ),
+            (mismatched as f64, 0.0),
+            "the unloaded geometry's path of contact",
+            (CheckKind::Absolute, 0.0),
+        ));
+    }
+    Ok(checks)
 }

@@ -7,6 +7,7 @@
 //! results and the binary prints.
 
 pub mod accuracy;
+pub mod checks;
 pub mod compare;
 pub mod fe;
 pub mod geometry;

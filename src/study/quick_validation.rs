@@ -26,55 +26,7 @@ pub const PAPER_CASE: &str = "paper36";
 /// The seed paper's transverse contact ratio (its Table 1).
 pub const PAPER_CONTACT_RATIO: f64 = 1.69;
 
-/// One check: a value against its reference within a tolerance.
-#[derive(Debug, Clone, Serialize)]
-pub struct Check {
-    pub study: &'static str,
-    pub quantity: String,
-    pub value: f64,
-    pub reference: f64,
-    pub reference_source: String,
-    /// |value − reference| (absolute) or |value / reference − 1| (relative) at most this; for a
-    /// ranking, value < reference.
-    pub tolerance: f64,
-    pub kind: CheckKind,
-    pub passed: bool,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum CheckKind {
-    Absolute,
-    Relative,
-    Below,
-}
-
-impl Check {
-    fn new(
-        study: &'static str,
-        quantity: impl Into<String>,
-        (value, reference): (f64, f64),
-        reference_source: impl Into<String>,
-        (kind, tolerance): (CheckKind, f64),
-    ) -> Self {
-        let passed = match kind {
-            CheckKind::Absolute => (value - reference).abs() <= tolerance,
-            CheckKind::Relative => (value / reference - 1.0).abs() <= tolerance,
-            // Below by at least the tolerance's share of the reference.
-            CheckKind::Below => value < reference * (1.0 - tolerance),
-        };
-        Check {
-            study,
-            quantity: quantity.into(),
-            value,
-            reference,
-            reference_source: reference_source.into(),
-            tolerance,
-            kind,
-            passed,
-        }
-    }
-}
+pub use super::checks::{Check, CheckKind};
 
 /// The quick set's result (`summary.json`).
 #[derive(Debug, Clone, Serialize)]
@@ -210,24 +162,4 @@ pub fn run(case: &Case, progress: Progress) -> Result<QuickValidation, StudyErro
         checks,
         wall_s: started.elapsed().as_secs_f64(),
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Each rule passes inside its tolerance and fails outside it.
-    #[test]
-    fn checks_pass_inside_and_fail_outside_their_tolerance() {
-        let check = |pair, rule| Check::new("t", "q", pair, "r", rule).passed;
-        assert!(check((1.694, 1.69), (CheckKind::Absolute, 0.005)));
-        assert!(!check((1.696, 1.69), (CheckKind::Absolute, 0.005)));
-        assert!(check((100.4, 100.0), (CheckKind::Relative, 0.005)));
-        assert!(!check((100.6, 100.0), (CheckKind::Relative, 0.005)));
-        assert!(!check((99.4, 100.0), (CheckKind::Relative, 0.005)));
-        assert!(check((0.8, 1.3), (CheckKind::Below, 0.0)));
-        assert!(!check((1.3, 1.3), (CheckKind::Below, 0.0)));
-        assert!(check((0.89, 1.0), (CheckKind::Below, 0.1)));
-        assert!(!check((0.91, 1.0), (CheckKind::Below, 0.1)));
-    }
 }

@@ -107,9 +107,10 @@ pub fn run(args: &CommonArgs, full: bool, resume: bool) -> Result<()> {
         if geardyn::interrupt::stop_requested() {
             let stages = study::run::STAGES;
             manifest.interrupted = Some(format!(
-                "interrupted in stage {reached}/{} ({}): {e:#}. `geardyn run --resume --out {}` continues it, taking the finished explicit FE runs as they are",
+                "interrupted in stage {reached}/{} ({}): {}. `geardyn run --resume --out {}` continues it, taking the finished explicit FE runs as they are",
                 stages.len(),
                 stages[reached.max(1) - 1],
+                super::error_text(e),
                 dir.display()
             ));
             OutputDir(&dir).json("run.json", &manifest)?;

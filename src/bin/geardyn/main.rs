@@ -29,6 +29,20 @@ use validate::{validate_integrators, validate_mass_scaling, validate_properties,
 /// The exit code of a run stopped on SIGINT or SIGTERM (128 + SIGINT, as shells report it).
 const EXIT_INTERRUPTED: u8 = 130;
 
+/// An error and its causes, each cause once: a cause whose text the message before it already
+/// carries (our errors print their source inline) is not repeated.
+pub fn error_text(error: &anyhow::Error) -> String {
+    let mut text = error.to_string();
+    for cause in error.chain().skip(1) {
+        let cause = cause.to_string();
+        if !text.contains(&cause) {
+            text.push_str(": ");
+            text.push_str(&cause);
+        }
+    }
+    text
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     install_stop_handler();
@@ -124,7 +138,7 @@ fn main() -> ExitCode {
             ExitCode::from(EXIT_INTERRUPTED)
         }
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", error_text(&e));
             if geardyn::interrupt::stop_requested() {
                 ExitCode::from(EXIT_INTERRUPTED)
             } else {
@@ -216,6 +230,19 @@ fn ltca(
     print!("{}", report::ltca::console(&result));
     report::ltca::write(OutputDir(&dir), &case, &result)?;
     println!("wrote {}", dir.display());
+    let errors: Vec<String> = result
+        .summary
+        .self_checks
+        .iter()
+        .filter(|c| c.is_error())
+        .map(|c| c.line())
+        .collect();
+    anyhow::ensure!(
+        errors.is_empty(),
+        "the LTCA's self-checks failed (its results are in {} for inspection, not for use):\n{}",
+        dir.display(),
+        errors.join("\n")
+    );
     Ok(())
 }
 

@@ -156,7 +156,7 @@ pub fn fe_check_run(
     dir: &Path,
 ) -> std::result::Result<study::optimize::FeCheckRun, String> {
     fe_run_reusing(case, scene, dir)
-        .map_err(|e| format!("{e:#}"))
+        .map_err(|e| super::error_text(&e))
         .and_then(|_| report::optimize::read_fe_check_run(dir))
 }
 

@@ -1139,6 +1139,49 @@ impl Case {
         warnings
     }
 
+    /// The same pair with driver and driven exchanged: gear sections, relief requests and the
+    /// lumped model's per-gear values swapped; every load torque transferred to the new driven
+    /// gear (T′ = T r_b1/r_b2, the same normal load) and every driver speed to the new driver
+    /// (n′ = n z₁/z₂, the same mesh frequency). The swap test of validation/pairs runs the LTCA
+    /// of both and compares their STE along the line of action.
+    pub fn swapped(&self) -> Result<Case, CaseError> {
+        let mut file = self.file.clone();
+        std::mem::swap(&mut file.gear1, &mut file.gear2);
+        let [rb1, rb2] = [0, 1].map(|g| self.pair.gears[g].base_radius);
+        let ratio = self.pair.gears[0].teeth() as f64 / self.pair.gears[1].teeth() as f64;
+        for point in &mut file.operating_points {
+            point.torque_nm *= rb1 / rb2;
+            point.speed_rpm *= ratio;
+        }
+        for scene in &mut file.scenes {
+            scene.torque_nm = scene.torque_nm.map(|t| t * rb1 / rb2);
+            scene.speed_rpm = scene.speed_rpm.map(|n| n * ratio);
+        }
+        for variant in &mut file.relief_variants {
+            std::mem::swap(&mut variant.gear1, &mut variant.gear2);
+        }
+        let lumped = &mut file.lumped;
+        for pair in [
+            lumped.inertia_kg_mm2.as_mut(),
+            Some(&mut lumped.bearing_stiffness_n_per_m),
+            lumped.gear_mass_kg.as_mut(),
+        ]
+        .into_iter()
+        .flatten()
+        {
+            pair.swap(0, 1);
+        }
+        file.name = format!("{}-swapped", file.name);
+        let text = toml::to_string(&file).map_err(|e| CaseError::Parse {
+            path: self.source.clone(),
+            message: e.to_string(),
+        })?;
+        Case::from_toml_str(
+            &text,
+            &format!("{} (driver and driven exchanged)", self.source),
+        )
+    }
+
     /// Whether a case file's `text` describes this effective case: compared as TOML values, so
     /// comments, layout and the `--set` header aside. Decides when a finished or interrupted
     /// run on disk may be reused or resumed.

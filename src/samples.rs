@@ -118,3 +118,187 @@ pub fn paper36_gear_mesh(fine_size: f64, coarse_size: f64) -> crate::mesh::GearM
     };
     crate::mesh::mesh_gear(gear, &modification, &spec)
 }
+
+/// One pair of the test matrix: the paper's case changed by `overrides` (`--set KEY=VALUE`
+/// strings), and what the pair stresses.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MatrixPair {
+    pub name: &'static str,
+    pub overrides: &'static [&'static str],
+    pub what: &'static str,
+}
+
+/// The pairs every fidelity is tested on besides the paper's 36/36 (issue 28): ratios and their
+/// inverse, shifts at their own centre distance and with backlash, a hunting tooth, extreme
+/// modules, a thin rim, 25°, and two high contact ratios. Loads and element sizes scale with
+/// the module (the tooth load per face width ∝ m, as for a fixed bending stress), so every row
+/// is meshed as finely per tooth as the paper's case. The 40/24 row is the 24/40 row with
+/// driver and driven exchanged and the torque transferred (T₂ = T · z₁/z₂ on the new driven
+/// gear), so both carry the same normal load.
+pub const PAIR_MATRIX: &[MatrixPair] = &[
+    MatrixPair {
+        name: "paper36",
+        overrides: &[],
+        what: "the seed paper's 36/36",
+    },
+    MatrixPair {
+        name: "24-40",
+        overrides: &["gear1.teeth=24", "gear2.teeth=40"],
+        what: "a ratio 5:3 (z1 not a multiple of z2)",
+    },
+    MatrixPair {
+        name: "40-24",
+        overrides: &[
+            "gear1.teeth=40",
+            "gear2.teeth=24",
+            "operating_point[0].torque_nm=86.16",
+            "operating_point[1].torque_nm=86.16",
+        ],
+        what: "24-40 with driver and driven exchanged, the same normal load",
+    },
+    MatrixPair {
+        name: "17-53-shift",
+        overrides: &[
+            "gear1.teeth=17",
+            "gear2.teeth=53",
+            "gear1.profile_shift=0.1",
+            "gear2.profile_shift=-0.1",
+        ],
+        what: "a pinion near its undercut limit (x_min 0.006) with a positive shift",
+    },
+    MatrixPair {
+        name: "31-32",
+        overrides: &["gear1.teeth=31", "gear2.teeth=32"],
+        what: "a hunting tooth pair",
+    },
+    MatrixPair {
+        name: "19-57-shift",
+        overrides: &[
+            "gear1.teeth=19",
+            "gear2.teeth=57",
+            "gear1.profile_shift=0.4",
+            "gear2.profile_shift=-0.2",
+        ],
+        what: "shifts +0.4/−0.2 at their own zero-backlash centre distance (121.464 mm)",
+    },
+    MatrixPair {
+        name: "19-57-backlash",
+        overrides: &[
+            "gear1.teeth=19",
+            "gear2.teeth=57",
+            "gear1.profile_shift=0.4",
+            "gear2.profile_shift=-0.2",
+            "pair.center_distance_mm=121.6",
+        ],
+        what: "the same at a centre distance 0.136 mm longer (backlash)",
+    },
+    MatrixPair {
+        name: "module-1",
+        overrides: &[
+            "tool.module_mm=1.0",
+            "gear1.teeth=30",
+            "gear2.teeth=45",
+            "gear1.face_width_mm=10.0",
+            "gear2.face_width_mm=10.0",
+            "gear1.bore_radius_mm=5.0",
+            "gear2.bore_radius_mm=8.0",
+            "operating_point[0].torque_nm=7.0",
+            "operating_point[1].torque_nm=7.0",
+            "mesh.fine_element_mm=0.063",
+            "mesh.coarse_element_mm=0.47",
+            "fe.explicit_fine_element_mm=0.31",
+            "fe.explicit_coarse_element_mm=0.94",
+            "relief_variant[tip20-root10].gear1.tip.amount_um=6.0",
+            "relief_variant[tip20-root10].gear2.tip.amount_um=6.0",
+            "relief_variant[tip20-root10].gear1.root.amount_um=3.0",
+            "relief_variant[tip20-root10].gear2.root.amount_um=3.0",
+        ],
+        what: "module 1 mm, 30/45",
+    },
+    MatrixPair {
+        name: "module-8",
+        overrides: &[
+            "tool.module_mm=8.0",
+            "gear1.teeth=24",
+            "gear2.teeth=36",
+            "gear1.face_width_mm=60.0",
+            "gear2.face_width_mm=60.0",
+            "gear1.bore_radius_mm=35.0",
+            "gear2.bore_radius_mm=55.0",
+            "operating_point[0].torque_nm=2140.0",
+            "operating_point[1].torque_nm=2140.0",
+            "mesh.fine_element_mm=0.5",
+            "mesh.coarse_element_mm=3.8",
+            "fe.explicit_fine_element_mm=2.5",
+            "fe.explicit_coarse_element_mm=7.5",
+            "relief_variant[tip20-root10].gear1.tip.amount_um=50.0",
+            "relief_variant[tip20-root10].gear2.tip.amount_um=50.0",
+            "relief_variant[tip20-root10].gear1.root.amount_um=25.0",
+            "relief_variant[tip20-root10].gear2.root.amount_um=25.0",
+        ],
+        what: "module 8 mm, 24/36",
+    },
+    MatrixPair {
+        name: "thin-rim",
+        overrides: &["gear2.bore_radius_mm=49.5"],
+        what: "the paper's pair with a driven rim 3.8 mm (1.2 m) thick below the root",
+    },
+    MatrixPair {
+        name: "alpha-25",
+        overrides: &[
+            "tool.pressure_angle_deg=25.0",
+            "tool.tip_radius_coeff=0.25",
+            "gear1.teeth=30",
+            "gear2.teeth=45",
+        ],
+        what: "25° pressure angle, 30/45",
+    },
+    MatrixPair {
+        name: "hcr-2.1",
+        overrides: &[
+            "tool.pressure_angle_deg=18.0",
+            "tool.dedendum_coeff=1.45",
+            "tool.tip_radius_coeff=0.25",
+            "gear1.addendum_coeff=1.2",
+            "gear2.addendum_coeff=1.2",
+            "gear1.teeth=32",
+            "gear2.teeth=48",
+        ],
+        what: "high contact ratio ε_α 2.12 (18°, addendum 1.2 m)",
+    },
+    MatrixPair {
+        name: "hcr-2.4",
+        overrides: &[
+            "tool.pressure_angle_deg=17.0",
+            "tool.dedendum_coeff=1.6",
+            "tool.tip_radius_coeff=0.2",
+            "gear1.addendum_coeff=1.35",
+            "gear2.addendum_coeff=1.35",
+            "gear1.profile_shift=0.15",
+            "gear2.profile_shift=-0.15",
+            "gear1.teeth=32",
+            "gear2.teeth=48",
+        ],
+        what: "high contact ratio ε_α 2.40 (17°, addendum 1.35 m, shifts ±0.15)",
+    },
+];
+
+impl MatrixPair {
+    /// The overrides as the case loader takes them.
+    pub fn parsed_overrides(&self) -> Vec<crate::case::Override> {
+        self.overrides
+            .iter()
+            .map(|o| o.parse().expect("the matrix's overrides are KEY=VALUE"))
+            .collect()
+    }
+
+    /// The pair's case (the paper's with the overrides), checked.
+    pub fn case(&self) -> Result<Case, crate::case::CaseError> {
+        Case::load_with(None, &self.parsed_overrides())
+    }
+}
+
+/// The matrix pair called `name`.
+pub fn matrix_pair(name: &str) -> Option<&'static MatrixPair> {
+    PAIR_MATRIX.iter().find(|p| p.name == name)
+}

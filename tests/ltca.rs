@@ -189,3 +189,151 @@ fn relief_as_a_gap_on_fixed_bodies_matches_the_remeshed_relief() {
     let (_, plain) = cycle("none");
     assert!((stats(plain).1 / b.1 - 1.0).abs() > 0.05);
 }
+
+/// A matrix pair's LTCA model (relief none) with 0.4 mm flank elements, run over 16 positions
+/// with its periodicity numbers.
+fn matrix_cycle(case: &Case) -> (LtcaModel, Vec<PositionResult>, geardyn::ltca::Periodicity) {
+    let m = model(case, "none");
+    let torque = case.operating_points[0].torque;
+    let (results, periodicity) = m.run_checked(POSITIONS, torque, &|_| {}).unwrap();
+    (m, results, periodicity)
+}
+
+/// The pair that exposed the old pairing (right only where z1 is a multiple of z2): 24/40.
+/// Four tooth pairs are carried — the −2 and the +1 within the margin, the entering −1, the present 0 — with
+/// their partners from the geometry; the cycle comes back to itself one base pitch on (the
+/// wrong partner made the STE 126 µrad at the first position and 1 044 µrad at the last); the
+/// run's own checks (KKT, balance, unloaded TE, loaded pairs at 1 % load against the path)
+/// pass; and the inverse pair 40/24 with the torque transferred gives the same STE along the
+/// line of action at the mirrored positions (mean within 0.5 %, each position within 2 %: the
+/// node-to-surface contact's jitter of about 1 % between neighbouring positions).
+#[test]
+fn an_unequal_pair_and_its_inverse_give_one_periodic_ste() {
+    let case = samples::matrix_pair("24-40").unwrap().case().unwrap();
+    let (m, results, periodicity) = matrix_cycle(&case);
+    assert_eq!(m.tooth_pairs, vec![(22, 2), (23, 1), (0, 0), (1, 39)]);
+    assert!(
+        periodicity.ste_relative_difference < 1e-4,
+        "{periodicity:?}"
+    );
+    assert!(
+        periodicity.force_relative_difference < 1e-4,
+        "{periodicity:?}"
+    );
+    // Over θ ∈ [0, p] from the pitch point, the present pair 0 and the entering −1 carry the
+    // load; the approach AC = 0.857 p_b and the recess CE = 0.800 p_b (ε_α = 1.66) are both
+    // shorter than a base pitch, so the −2 pair enters and the +1 pair leaves only within the
+    // margin and never touch.
+    let loaded: Vec<usize> = (0..4)
+        .filter(|&p| results.iter().any(|r| r.pair_forces[p] > 0.0))
+        .collect();
+    assert_eq!(loaded, vec![1, 2]);
+    let none = [geardyn::geometry::FlankModification::none(); 2];
+    let torque = case.operating_points[0].torque;
+    let checks =
+        geardyn::study::ltca::self_checks(&m, &none, &results, &periodicity, POSITIONS, torque)
+            .unwrap();
+    assert!(checks.len() >= 7);
+    for c in &checks {
+        assert!(c.passed, "{}", c.line());
+    }
+
+    let swapped_case = case.swapped().unwrap();
+    assert_eq!(swapped_case.pair.gears[0].teeth(), 40);
+    let (_, swapped, _) = matrix_cycle(&swapped_case);
+    let (mean, largest) = geardyn::study::pairs::swap_differences(
+        &results,
+        case.pair.gears[1].base_radius,
+        &swapped,
+        swapped_case.pair.gears[1].base_radius,
+    );
+    assert!(mean < 0.005, "swap: mean STE differs by {mean}");
+    assert!(largest < 0.02, "swap: an STE differs by {largest}");
+}
+
+/// Without the entering tooth meshed fine, the model cannot carry the pair that takes over one
+/// pitch on; the periodicity check says so instead of returning a cycle.
+#[test]
+fn the_periodicity_check_catches_a_missing_pair() {
+    let case = samples::matrix_pair("24-40").unwrap().case().unwrap();
+    let none = [geardyn::geometry::FlankModification::none(); 2];
+    let spec = |teeth: Vec<usize>| geardyn::mesh::MeshSpec {
+        fine_size: 0.4e-3,
+        coarse_size: case.file.mesh.coarse_element_mm * 1e-3,
+        fine_teeth: teeth,
+    };
+    let m = LtcaModel::new(
+        &case.pair,
+        &none,
+        [spec(vec![0, 1]), spec(vec![0, 39])],
+        case.ltca_material(),
+    )
+    .unwrap();
+    assert_eq!(m.tooth_pairs, vec![(0, 0), (1, 39)]);
+    match m.run(POSITIONS, case.operating_points[0].torque, &|_| {}) {
+        Err(LtcaError::NotPeriodic { periodicity, .. }) => {
+            assert!(periodicity.ste_relative_difference > 0.1, "{periodicity:?}");
+            let text = LtcaError::NotPeriodic {
+                torque: 1.0,
+                periodicity,
+            }
+            .to_string();
+            assert!(text.contains("not periodic over one base pitch"), "{text}");
+        }
+        other => panic!("expected NotPeriodic, got {:?}", other.map(|r| r.len())),
+    }
+}
+
+/// A high-contact-ratio pair (ε_α 2.40): two or three pairs carry the load at every position,
+/// three at some; the loaded contact ratio is above 2 and near ε_α; its self-checks pass.
+#[test]
+fn a_high_contact_ratio_pair_shares_the_load_among_two_and_three_pairs() {
+    let case = samples::matrix_pair("hcr-2.4").unwrap().case().unwrap();
+    assert!(case.pair.contact_ratio > 2.35 && case.pair.contact_ratio < 2.45);
+    let (m, results, periodicity) = matrix_cycle(&case);
+    let loaded: Vec<usize> = results
+        .iter()
+        .map(|r| r.pair_forces.iter().filter(|f| **f > 0.0).count())
+        .collect();
+    assert!(loaded.iter().all(|n| *n == 2 || *n == 3), "{loaded:?}");
+    assert!(loaded.contains(&3) && loaded.contains(&2), "{loaded:?}");
+    let eps = m.loaded_contact_ratio(&results);
+    assert!(eps > 2.3 && eps < 2.7, "loaded contact ratio {eps}");
+    let none = [geardyn::geometry::FlankModification::none(); 2];
+    let torque = case.operating_points[0].torque;
+    let checks =
+        geardyn::study::ltca::self_checks(&m, &none, &results, &periodicity, POSITIONS, torque)
+            .unwrap();
+    for c in &checks {
+        assert!(c.passed, "{}", c.line());
+    }
+}
+
+/// Every pair of the matrix is a valid case whose contact ratio and centre distance are the
+/// ones its description gives.
+#[test]
+fn every_matrix_pair_is_a_valid_case() {
+    for pair in samples::PAIR_MATRIX {
+        let case = pair.case().unwrap_or_else(|e| panic!("{}: {e}", pair.name));
+        assert!(case.pair.contact_ratio >= 1.0, "{}", pair.name);
+        let swapped = case.swapped().unwrap();
+        assert!((swapped.pair.contact_ratio - case.pair.contact_ratio).abs() < 1e-9);
+        assert!((swapped.pair.center_distance - case.pair.center_distance).abs() < 1e-12);
+    }
+    let eps = |name: &str| {
+        samples::matrix_pair(name)
+            .unwrap()
+            .case()
+            .unwrap()
+            .pair
+            .contact_ratio
+    };
+    assert!((eps("hcr-2.1") - 2.12).abs() < 0.01);
+    assert!((eps("hcr-2.4") - 2.40).abs() < 0.01);
+    let backlash = samples::matrix_pair("19-57-backlash")
+        .unwrap()
+        .case()
+        .unwrap()
+        .pair;
+    assert!(backlash.backlash_normal > 50e-6);
+}

@@ -117,12 +117,7 @@ pub fn engaged_pairs(pair: &GearPair, from: f64, to: f64, margin: f64) -> Vec<To
 /// The pairs an LTCA over one base pitch needs: positions θ ∈ [0, p₁] (the last one is the
 /// first one a pitch later, for the periodicity check), with [`ENGAGEMENT_MARGIN`].
 pub fn base_pitch_pairs(pair: &GearPair) -> Vec<ToothPair> {
-    engaged_pairs(
-        pair,
-        0.0,
-        pair.gears[0].angular_pitch(),
-        ENGAGEMENT_MARGIN,
-    )
+    engaged_pairs(pair, 0.0, pair.gears[0].angular_pitch(), ENGAGEMENT_MARGIN)
 }
 
 /// The teeth of each gear in `pairs` (unsigned, sorted, once each).
@@ -147,4 +142,165 @@ pub fn pairs_on_path(pair: &GearPair, driver_rotation: f64) -> usize {
         .iter()
         .filter(|p| p.beyond_path(pair, driver_rotation) == 0.0)
         .count()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::PairSpec;
+
+    fn pair(z1: u32, z2: u32, shifts: [f64; 2], addendum: f64, alpha_deg: f64) -> GearPair {
+        let (mut rack, mut g1, mut g2) = crate::samples::paper36_specs();
+        rack.pressure_angle = alpha_deg.to_radians();
+        if addendum > 1.0 {
+            rack.dedendum_coeff = addendum + 0.25;
+            rack.tip_radius_coeff = 0.2;
+        }
+        for (g, z, x) in [(&mut g1, z1, shifts[0]), (&mut g2, z2, shifts[1])] {
+            g.teeth = z;
+            g.profile_shift = x;
+            g.addendum_coeff = addendum;
+        }
+        GearPair::new(&PairSpec {
+            rack,
+            gears: [g1, g2],
+            center_distance: None,
+        })
+        .unwrap()
+    }
+
+    /// Pairs of every kind the matrix holds, as geometry only.
+    fn pairs() -> Vec<GearPair> {
+        vec![
+            crate::samples::paper36_pair(),
+            pair(24, 40, [0.0; 2], 1.0, 20.0),
+            pair(40, 24, [0.0; 2], 1.0, 20.0),
+            pair(31, 32, [0.0; 2], 1.0, 20.0),
+            pair(19, 57, [0.4, -0.2], 1.0, 20.0),
+            pair(32, 48, [0.0; 2], 1.2, 18.0),
+            pair(32, 48, [0.15, -0.15], 1.35, 17.0),
+        ]
+    }
+
+    /// The paper's pair over a base pitch and the position after it: the leaving tooth +1, the
+    /// present 0, the entering −1, and −2, which comes within the margin of the path's start
+    /// by the last position.
+    #[test]
+    fn the_paper_pair_engages_teeth_minus_two_to_one() {
+        let p = crate::samples::paper36_pair();
+        let drivers: Vec<i64> = base_pitch_pairs(&p).iter().map(|t| t.driver).collect();
+        assert_eq!(drivers, vec![-2, -1, 0, 1]);
+        let indices: Vec<(usize, usize)> =
+            base_pitch_pairs(&p).iter().map(|t| t.indices(&p)).collect();
+        assert_eq!(indices, vec![(34, 2), (35, 1), (0, 0), (1, 35)]);
+    }
+
+    /// The partner of a driver tooth is the driven tooth that the LTCA's and the explicit
+    /// scenes' kinematics (driver tooth t at placement + θ + t p₁, driven tooth u at
+    /// placement − (z₁/z₂)θ + u p₂) bring to the pitch point together: at θ = −s p₁ both stand
+    /// where tooth 0 stood at θ = 0, modulo a revolution. Unequal pairs included, over several
+    /// revolutions of the driver (hunting teeth meet new partners).
+    #[test]
+    fn partners_arrive_at_the_pitch_point_together() {
+        use std::f64::consts::TAU;
+        let wrapped = |a: f64| (a.rem_euclid(TAU)).min(TAU - a.rem_euclid(TAU));
+        for p in pairs() {
+            let [z1, z2] = [0, 1].map(|g| p.gears[g].teeth() as f64);
+            let [p1, p2] = [0, 1].map(|g| p.gears[g].angular_pitch());
+            for s in -3 * z1 as i64..3 {
+                let tooth = ToothPair::of_driver(s);
+                let (t1, t2) = tooth.indices(&p);
+                let theta = -(s as f64) * p1;
+                assert!(wrapped(theta + t1 as f64 * p1) < 1e-9, "{z1}/{z2} s {s}");
+                assert!(
+                    wrapped(-(z1 / z2) * theta + t2 as f64 * p2) < 1e-9,
+                    "{z1}/{z2} s {s}: driven tooth {t2}"
+                );
+                // And it is at the pitch point then.
+                let at_pitch =
+                    tooth.roll_angle(&p, theta) - p.roll_angle_at(1, p.contact_points.pitch);
+                assert!(at_pitch.abs() < 1e-9);
+            }
+        }
+    }
+
+    /// Averaged over a base pitch, the pairs on the path of contact number ε_α (the path is
+    /// ε_α base pitches long and a pair crosses it at one base pitch per pitch of rotation),
+    /// for ε_α below and above 2; and the count is always ⌊ε_α⌋ or ⌈ε_α⌉.
+    #[test]
+    fn pairs_on_the_path_average_the_contact_ratio() {
+        for p in pairs() {
+            let n = 20_000;
+            let p1 = p.gears[0].angular_pitch();
+            let counts: Vec<usize> = (0..n)
+                .map(|j| pairs_on_path(&p, (j as f64 + 0.5) / n as f64 * p1))
+                .collect();
+            let mean = counts.iter().sum::<usize>() as f64 / n as f64;
+            assert!(
+                (mean - p.contact_ratio).abs() < 2.0 / n as f64,
+                "{} vs {}",
+                mean,
+                p.contact_ratio
+            );
+            let (low, high) = (
+                p.contact_ratio.floor() as usize,
+                p.contact_ratio.ceil() as usize,
+            );
+            assert!(counts.iter().all(|c| *c == low || *c == high));
+        }
+    }
+
+    /// Every pair on the path anywhere in a window is among the window's engaged pairs, and
+    /// nothing beyond the margin is.
+    #[test]
+    fn a_window_holds_every_pair_on_its_path_and_no_more() {
+        for p in pairs() {
+            let p1 = p.gears[0].angular_pitch();
+            let (from, to) = (0.3 * p1, 3.7 * p1);
+            let engaged = engaged_pairs(&p, from, to, ENGAGEMENT_MARGIN);
+            for j in 0..=400 {
+                let theta = from + (to - from) * j as f64 / 400.0;
+                for s in -10..10 {
+                    let t = ToothPair::of_driver(s);
+                    if t.beyond_path(&p, theta) == 0.0 {
+                        assert!(engaged.contains(&t), "pair {s} at {theta}");
+                    }
+                }
+            }
+            for t in &engaged {
+                let nearest = [from, to]
+                    .iter()
+                    .map(|&th| t.beyond_path(&p, th).abs())
+                    .fold(f64::INFINITY, f64::min);
+                let inside = (from..=to).contains(&(-(t.driver as f64) * p1));
+                assert!(inside || nearest <= ENGAGEMENT_MARGIN + 1e-9, "{t:?}");
+            }
+        }
+    }
+
+    /// The zone boundaries split the path into stretches of ⌈ε_α⌉ and ⌊ε_α⌋ pairs, alternating,
+    /// with B and D (LPSTC, HPSTC) among them; for ε_α < 2, A–B two pairs, B–D one, D–E two.
+    #[test]
+    fn zone_boundaries_alternate_between_the_two_counts() {
+        for p in pairs() {
+            let zones = p.zone_boundaries();
+            let c = p.contact_points;
+            assert!(zones.iter().any(|(s, _)| (s - c.lpstc).abs() < 1e-12));
+            assert!(zones.iter().any(|(s, _)| (s - c.hpstc).abs() < 1e-12));
+            assert!((zones.last().unwrap().0 - c.fcp).abs() < 1e-12);
+            let (low, high) = (
+                p.contact_ratio.floor() as usize,
+                p.contact_ratio.ceil() as usize,
+            );
+            for w in zones.windows(2) {
+                assert_ne!(w[0].1, w[1].1);
+            }
+            assert!(zones.iter().all(|z| z.1 == low || z.1 == high));
+            assert_eq!(zones[0].1, high);
+            if p.contact_ratio < 2.0 {
+                let counts: Vec<usize> = zones.iter().map(|z| z.1).collect();
+                assert_eq!(counts, vec![2, 1, 2]);
+            }
+        }
+    }
 }

@@ -17,11 +17,12 @@ pub fn write(out: OutputDir, case: &Case, study: &LtcaStudy) -> Result<(), Repor
     let mut ste_series = Vec::new();
     let mut k_series = Vec::new();
     for cycle in &study.cycles {
-        let header = position_header(&cycle.tooth_pairs);
+        let loaded = loaded_pairs(&cycle.results);
+        let header = position_header(&cycle.tooth_pairs, &loaded);
         out.csv(
             &format!("ltca_{}.csv", cycle.name),
             &header.iter().map(String::as_str).collect::<Vec<_>>(),
-            position_rows(&cycle.results, rb2),
+            position_rows(&cycle.results, rb2, &loaded),
         )?;
         let results = &cycle.results;
         ste_series.push((
@@ -54,11 +55,10 @@ pub fn write(out: OutputDir, case: &Case, study: &LtcaStudy) -> Result<(), Repor
                 ),
                 x_label: "driver roll angle [deg]".into(),
                 y_label: "normal force [N]".into(),
-                series: cycle
-                    .tooth_pairs
+                series: loaded
                     .iter()
-                    .enumerate()
-                    .map(|(i, (t1, t2))| {
+                    .map(|&i| {
+                        let (t1, t2) = cycle.tooth_pairs[i];
                         (
                             format!("pair {t1}/{t2}"),
                             results.iter().map(|r| (deg(r), r.pair_forces[i])).collect(),
@@ -150,8 +150,18 @@ pub fn console(study: &LtcaStudy) -> String {
     text
 }
 
-/// CSV header for [`position_rows`] with `pairs` tooth pairs.
-pub fn position_header(pairs: &[(usize, usize)]) -> Vec<String> {
+/// The tooth pairs (indices into the cycle's pairs) that carry load at some position. The
+/// LTCA also carries the pairs within the engagement margin of the path, in case the load
+/// extends the contact; those that never touch get no column.
+pub fn loaded_pairs(results: &[PositionResult]) -> Vec<usize> {
+    let pairs = results.first().map_or(0, |r| r.pair_forces.len());
+    (0..pairs)
+        .filter(|&i| results.iter().any(|r| r.pair_forces[i] > 0.0))
+        .collect()
+}
+
+/// CSV header for [`position_rows`]: columns for the tooth pairs `loaded` of `pairs`.
+pub fn position_header(pairs: &[(usize, usize)], loaded: &[usize]) -> Vec<String> {
     let mut header: Vec<String> = [
         "roll_angle_deg",
         "driver_rotation_deg",
@@ -164,10 +174,12 @@ pub fn position_header(pairs: &[(usize, usize)]) -> Vec<String> {
     .iter()
     .map(|s| s.to_string())
     .collect();
-    for (t1, t2) in pairs {
+    for &i in loaded {
+        let (t1, t2) = pairs[i];
         header.push(format!("force_pair_{t1}_{t2}_n"));
     }
-    for (t1, t2) in pairs {
+    for &i in loaded {
+        let (t1, t2) = pairs[i];
         header.push(format!("position_pair_{t1}_{t2}_mm"));
     }
     header.extend(
@@ -179,7 +191,11 @@ pub fn position_header(pairs: &[(usize, usize)]) -> Vec<String> {
 }
 
 /// One CSV row per position.
-pub fn position_rows(results: &[PositionResult], base_radius_driven: f64) -> Vec<Vec<String>> {
+pub fn position_rows(
+    results: &[PositionResult],
+    base_radius_driven: f64,
+    loaded: &[usize],
+) -> Vec<Vec<String>> {
     results
         .iter()
         .map(|r| {
@@ -192,12 +208,10 @@ pub fn position_rows(results: &[PositionResult], base_radius_driven: f64) -> Vec
                 format!("{:.6e}", r.mesh_stiffness),
                 format!("{:.4}", r.total_force),
             ];
-            row.extend(r.pair_forces.iter().map(|f| format!("{f:.4}")));
-            row.extend(
-                r.pair_positions
-                    .iter()
-                    .map(|p| p.map_or(String::new(), |s| format!("{:.6}", s * 1e3))),
-            );
+            row.extend(loaded.iter().map(|&i| format!("{:.4}", r.pair_forces[i])));
+            row.extend(loaded.iter().map(|&i| {
+                r.pair_positions[i].map_or(String::new(), |s| format!("{:.6}", s * 1e3))
+            }));
             row.extend([
                 r.active_points.to_string(),
                 r.candidate_points.to_string(),

@@ -10,6 +10,7 @@ pub mod ltca;
 pub mod lumped;
 pub mod mesh;
 pub mod optimize;
+pub mod pairs;
 pub mod plot;
 pub mod quick_validation;
 pub mod run;

@@ -90,7 +90,6 @@ impl Check {
     }
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;

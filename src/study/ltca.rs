@@ -5,8 +5,8 @@
 use serde::Serialize;
 
 use crate::case::Case;
-use crate::geometry::FlankModification;
 use crate::geometry::engagement::{self, ENGAGEMENT_MARGIN};
+use crate::geometry::FlankModification;
 use crate::ltca::{engaging_teeth, LtcaModel, Periodicity, PositionResult, PERIODICITY_TOLERANCE};
 use crate::stiffness::{self, potential_energy, IsoStiffness, MeshStiffness};
 

@@ -15,6 +15,7 @@ pub mod ltca;
 pub mod lumped;
 pub mod mesh;
 pub mod optimize;
+pub mod pairs;
 pub mod properties;
 pub mod quick_validation;
 pub mod run;
@@ -39,6 +40,8 @@ pub enum StudyError {
     /// A model that would take more memory than the machine has ([`crate::resources`]).
     #[error(transparent)]
     TooLarge(#[from] crate::resources::TooLarge),
+    #[error(transparent)]
+    Case(#[from] crate::case::CaseError),
 }
 
 /// The summary of a run that stopped before its end, on request ([`crate::interrupt`]) or

@@ -200,6 +200,13 @@ pub enum Command {
         /// Seed of `properties`' generator.
         #[arg(long, value_name = "S", default_value_t = 1)]
         seed: u64,
+        /// `pairs`: only these pairs of the matrix (repeatable; default: all).
+        #[arg(long, value_name = "PAIR")]
+        only: Vec<String>,
+        /// `pairs`: also the explicit FE's stiffness scene of each pair against its LTCA
+        /// (about two minutes a pair on 2 cores).
+        #[arg(long)]
+        fe: bool,
     },
     /// Prints a case file: the given one, or the embedded default (start your own from it:
     /// `geardyn case > my.toml`); with --set, the effective case.
@@ -229,6 +236,11 @@ pub enum ValidationStudy {
     /// changed to plausible, out-of-range or wrong-typed values, or removed): a finite result
     /// or an error naming the parameter, never a panic; exits non-zero otherwise.
     Properties,
+    /// Every fidelity on the matrix of pairs (unequal ratios and their inverse, shifts,
+    /// backlash, hunting tooth, modules 1 and 8, thin rim, 25°, ε_α 2.1 and 2.4): geometry, the
+    /// LTCA's self-checks, mesh convergence, the swap test, the lumped sweep, and with --fe the
+    /// explicit FE's stiffness scene; exits non-zero when a row fails (validation/pairs).
+    Pairs,
 }
 
 impl Command {

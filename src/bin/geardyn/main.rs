@@ -24,7 +24,10 @@ use args::{Cli, Command, CommonArgs, OptimizeArgs, ValidationStudy};
 use lumped::{lumped_case, stability, sweep};
 use optimize::{optimize, optimize_into};
 use progress::{fe_check_run, fe_run, fe_run_reusing, progress_bar, stage, staged_bar};
-use validate::{validate_integrators, validate_mass_scaling, validate_properties, validate_quick};
+use validate::{
+    validate_integrators, validate_mass_scaling, validate_pairs, validate_properties,
+    validate_quick,
+};
 
 /// The exit code of a run stopped on SIGINT or SIGTERM (128 + SIGINT, as shells report it).
 const EXIT_INTERRUPTED: u8 = 130;
@@ -99,6 +102,13 @@ fn main() -> ExitCode {
             seed,
             ..
         } => validate_properties(&common, cases, seed),
+        Command::Validate {
+            study: ValidationStudy::Pairs,
+            common,
+            only,
+            fe,
+            ..
+        } => validate_pairs(&common, &only, fe),
         Command::Validate {
             study: ValidationStudy::MassScaling,
             common,

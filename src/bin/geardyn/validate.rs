@@ -95,3 +95,70 @@ pub fn validate_mass_scaling(args: &CommonArgs, scene: &str) -> Result<()> {
     println!("{table}wrote {}", dir.display());
     Ok(())
 }
+
+pub fn validate_pairs(args: &CommonArgs, only: &[String], with_fe: bool) -> Result<()> {
+    if args.case.is_some() || !args.set.is_empty() {
+        anyhow::bail!(
+            "validate pairs runs its own matrix of pairs (geardyn::samples::PAIR_MATRIX): give no case file or --set; choose pairs with --only"
+        );
+    }
+    let names: Vec<&str> = geardyn::samples::PAIR_MATRIX
+        .iter()
+        .map(|p| p.name)
+        .collect();
+    for name in only {
+        anyhow::ensure!(
+            names.contains(&name.as_str()),
+            "--only {name}: no such pair; the matrix has {}",
+            names.join(", ")
+        );
+    }
+    let pairs: Vec<_> = geardyn::samples::PAIR_MATRIX
+        .iter()
+        .filter(|p| only.is_empty() || only.iter().any(|o| o == p.name))
+        .collect();
+    let base = load(args, Vec::new())?;
+    let dir = output_dir(args, "validate-pairs", &base)?;
+    let started = std::time::Instant::now();
+    let bar = staged_bar();
+    let mut rows = Vec::new();
+    for pair in pairs {
+        let mut row = study::pairs::row(pair, &stage(&bar))?;
+        if with_fe {
+            let case = pair.case()?;
+            let scene = study::fe::scene(&case, "stiffness")?;
+            bar.suspend(|| eprintln!("pair {}: the explicit FE's stiffness scene", pair.name));
+            let run = fe_run(
+                &case,
+                scene,
+                &dir.join(pair.name).join("fe-stiffness"),
+                false,
+            )?;
+            study::pairs::add_fe(&mut row, run.summary.stiffness_vs_ltca_same_mesh.as_ref());
+        }
+        bar.suspend(|| {
+            eprintln!(
+                "pair {}: {} ({:.0} s)",
+                pair.name,
+                if row.passed { "ok" } else { "FAILED" },
+                row.wall_s
+            );
+            for check in row.checks.iter().filter(|c| !c.passed) {
+                eprintln!("  {}", check.line());
+            }
+        });
+        rows.push(row);
+    }
+    bar.finish_and_clear();
+    let result = study::pairs::table(rows, started.elapsed().as_secs_f64());
+    print!("{}", report::pairs::write(OutputDir(&dir), &result)?);
+    println!("wrote {}", dir.display());
+    anyhow::ensure!(
+        result.failed == 0,
+        "{} of {} pairs failed a check (pairs.md and checks.csv in {})",
+        result.failed,
+        result.rows.len(),
+        dir.display()
+    );
+    Ok(())
+}

@@ -1122,6 +1122,18 @@ impl Case {
         (force.abs() * e_star / (std::f64::consts::PI * width * radius)).sqrt()
     }
 
+    /// The Hertzian half-width of the contact at the pitch point under a normal mesh force
+    /// `force` [N] carried by one tooth pair across the face [m]: a = 2F / (π b p₀), with p₀ from
+    /// [`Self::hertz_pressure_at`] (Johnson, *Contact Mechanics*, eq. 4.43–4.45; the same
+    /// a = √(4 F R / (π b E*))).
+    pub fn hertz_half_width_at(&self, force: f64) -> f64 {
+        let width = self.pair.gears[0]
+            .spec
+            .face_width
+            .min(self.pair.gears[1].spec.face_width);
+        2.0 * force.abs() / (std::f64::consts::PI * width * self.hertz_pressure_at(force))
+    }
+
     /// What the case asks that the models cannot answer faithfully, though it is valid input.
     pub fn warnings(&self) -> Vec<String> {
         let mut warnings = Vec::new();
@@ -1555,6 +1567,19 @@ mod tests {
         let warnings = heavy.warnings();
         assert_eq!(warnings.len(), 1);
         assert!(warnings[0].contains("6.2 GPa") && warnings[0].contains("linear-elastic"));
+    }
+
+    /// The Hertzian half-width of the paper pair at the pitch point, by hand from the closed
+    /// form a = √(4 F R / (π b E*)) (Johnson eq. 4.43), not through the pressure: F = T/r_b2
+    /// = 2 669.7 N, b = 25.4 mm, R = ρ/2 = 9.789 mm, E* = E/(2(1 − ν²)): a = 0.107581 mm.
+    #[test]
+    fn hertz_half_width_of_the_paper_pair() {
+        let case = Case::embedded_default().unwrap();
+        let force = 143.6 / case.pair.gears[1].base_radius;
+        let a = case.hertz_half_width_at(force);
+        assert!((a / 1.075_809_663_5e-4 - 1.0).abs() < 1e-8, "{a}");
+        // a ∝ √F.
+        assert!((case.hertz_half_width_at(4.0 * force) / a - 2.0).abs() < 1e-12);
     }
 
     #[test]

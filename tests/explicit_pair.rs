@@ -213,6 +213,52 @@ fn static_dte_matches_the_ltca_on_the_same_mesh() {
     assert!((dte / ste - 1.0).abs() < 0.08, "FE {dte:e} vs LTCA {ste:e}");
 }
 
+/// The same on an unequal pair, 24/40, where the old pairing (gear-1 tooth t with gear-2 tooth
+/// (z₂ − t mod z₂) mod z₂) put the second tooth pair on the wrong driven tooth: at 0.35 of a
+/// pitch from the pitch point two pairs carry the load (the entering pair from 0.143 p: the
+/// approach AC is 0.857 p_b), so the static DTE against the LTCA's at the same position tests
+/// both pairs' partners; a wrong partner gave several hundred percent. Tolerance 8 %, as above.
+#[test]
+fn an_unequal_pair_in_double_contact_matches_the_ltca() {
+    let mut overrides: Vec<Override> = geardyn::samples::matrix_pair("24-40")
+        .unwrap()
+        .parsed_overrides();
+    overrides.extend([
+        Override::set("mesh.fine_element_mm", 1.5),
+        Override::set("mesh.coarse_element_mm", 3.0),
+        Override::set("fe.explicit_fine_element_mm", 1.5),
+    ]);
+    let case = Case::load_with(None, &overrides).unwrap();
+    let duration = 8.0e-4;
+    let mut p = static_scene(&case, duration, 16.0);
+    let (position, positions) = (7, 20);
+    p.drive.start_rotation =
+        case.pair.gears[0].angular_pitch() * position as f64 / positions as f64;
+    let (integrator, state) = relaxed(&p, duration);
+    let dte = state.hub[0] - p.model.kinematic_hub_rotation(p.drive.start_rotation);
+    let force = integrator.last_contact.force_on_driven.norm();
+    let static_force = 143.6 / case.pair.gears[1].base_radius;
+    assert!(
+        (force / static_force - 1.0).abs() < 2e-3,
+        "settled: {force} N vs {static_force} N"
+    );
+    let ltca =
+        study::ltca::model(&case, &case.relief_variant("none").unwrap().modifications).unwrap();
+    let solved = ltca.solve_position(position, positions, 143.6).unwrap();
+    let loaded = solved.pair_forces.iter().filter(|f| **f > 0.0).count();
+    assert_eq!(loaded, 2, "{:?}", solved.pair_forces);
+    eprintln!(
+        "24/40 static FE DTE {dte:.5e} rad, LTCA STE {:.5e} rad, ratio {:.4}",
+        solved.ste,
+        dte / solved.ste
+    );
+    assert!(
+        (dte / solved.ste - 1.0).abs() < 0.08,
+        "FE {dte:e} vs LTCA {:e}",
+        solved.ste
+    );
+}
+
 /// The mesh dashpot: from a preloaded static state (relaxed as above, penalty factor 1 for a 4×
 /// longer step), with the relaxation damping off, a 10 % load step (smoothed over 50 µs) rings
 /// the mesh mode down. Three successive extremes of the DTE give the half-period ratio

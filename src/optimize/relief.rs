@@ -69,7 +69,7 @@ impl ReliefDesign {
             return Err(GeometryError::Relief {
                 parameter: "relief length fraction".into(),
                 reason: format!(
-                    "{} is outside (0, 1]: 1 is long relief (from the single-contact point), 0.5 short",
+                    "{} is outside (0, 1]: 1 is long relief (from the HPSTC / LPSTC), 0.5 short",
                     self.length
                 ),
             });

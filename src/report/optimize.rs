@@ -39,7 +39,7 @@ pub fn console(study: &OptimizeStudy) -> String {
         );
     }
     out += &format!(
-        "optimum ({} relief, length {:.3} of the double-contact zone): tip {:.2} / {:.2} um, root {:.2} / {:.2} um (gear 1 / gear 2)\n",
+        "optimum ({} relief, length {:.3} of the end zone from the HPSTC / LPSTC): tip {:.2} / {:.2} um, root {:.2} / {:.2} um (gear 1 / gear 2)\n",
         s.shape.name(),
         s.relief_length_fraction,
         s.tip_relief_um[0],

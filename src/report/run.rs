@@ -90,6 +90,10 @@ pub struct RunSummary {
     pub mesh_mode_lumped_fe_k_free_hz: Option<f64>,
     pub mesh_mode_fe_modal_driver_held_hz: Option<f64>,
     pub mesh_mode_lumped_fe_k_driver_held_hz: Option<f64>,
+    /// The stages' checks of their own answers (LTCA, FE stiffness run) that failed: errors
+    /// (the answer is wrong) and warnings (suspicious); the report's "Self-checks" lists them.
+    pub self_check_errors: usize,
+    pub self_check_warnings: usize,
 }
 
 fn read(dir: &Path, stage: &str) -> Option<Value> {
@@ -223,7 +227,16 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
             .iter()
             .all(|key| s.get(key).is_none_or(|d| d.is_null()))
     });
+    let checks = self_checks(&[("ltca/", &ltca), (&format!("{fe_run}/"), &fe)]);
+    let failed = |warning: bool| {
+        checks
+            .iter()
+            .filter(|c| c.passed == Some(false) && c.warning_only == warning)
+            .count()
+    };
     let summary = RunSummary {
+        self_check_errors: failed(false),
+        self_check_warnings: failed(true),
         interrupted: manifest.as_ref().and_then(|m| m.interrupted.clone()),
         case: field(&ltca, &["case"]).and_then(|c| c.as_str().map(String::from)),
         torque_nm: number(&ltca, &["torque_nm"]),
@@ -244,12 +257,19 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
         natural_frequency_sweep_fe_hz: number(&sweep_fe, &["natural_frequency_hz"]),
         sweep_warnings: [("LTCA k", &sweep_ltca), ("FE k", &sweep_fe)]
             .into_iter()
-            .flat_map(|(source, summary)| match field(summary, &["warnings"]) {
-                Some(Value::Array(warnings)) => warnings
-                    .iter()
-                    .filter_map(|w| w.as_str().map(|w| format!("{source}: {w}")))
-                    .collect(),
-                _ => Vec::new(),
+            .flat_map(|(source, summary)| {
+                let diverged = field(summary, &["diverged"]).and_then(|d| {
+                    d.as_str()
+                        .map(|d| format!("{source}: the sweep stopped: {d}"))
+                });
+                let warnings = match field(summary, &["warnings"]) {
+                    Some(Value::Array(warnings)) => warnings
+                        .iter()
+                        .filter_map(|w| w.as_str().map(|w| format!("{source}: {w}")))
+                        .collect(),
+                    _ => Vec::new(),
+                };
+                diverged.into_iter().chain(warnings).collect::<Vec<_>>()
             })
             .collect(),
         max_floquet_multiplier: number(&stability, &["max_multiplier"]),
@@ -289,6 +309,7 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
             &compare,
         ],
     );
+    sections.insert(1, self_check_section(&checks));
     if let Some(message) = &summary.interrupted {
         sections.insert(
             0,
@@ -321,6 +342,110 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
     out.bytes("index.html", html(dir, &summary, &sections).as_bytes())?;
     out.json("summary.json", &summary)?;
     Ok(summary)
+}
+
+/// One self-check as a stage's summary.json holds it ([`crate::study::checks::Check`]).
+struct StageCheck {
+    stage: String,
+    quantity: String,
+    value: Option<f64>,
+    reference: Option<f64>,
+    rule: String,
+    passed: Option<bool>,
+    warning_only: bool,
+}
+
+/// The `self_checks` of each stage's summary, in order.
+fn self_checks(stages: &[(&str, &Option<Value>)]) -> Vec<StageCheck> {
+    stages
+        .iter()
+        .flat_map(|(stage, summary)| {
+            field(summary, &["self_checks"])
+                .and_then(|c| c.as_array().cloned())
+                .unwrap_or_default()
+                .into_iter()
+                .map(move |c| {
+                    let text = |key: &str| c.get(key).and_then(|v| v.as_str()).unwrap_or("–");
+                    let tolerance = c.get("tolerance").and_then(|v| v.as_f64());
+                    StageCheck {
+                        stage: stage.to_string(),
+                        quantity: text("quantity").to_string(),
+                        value: c.get("value").and_then(|v| v.as_f64()),
+                        reference: c.get("reference").and_then(|v| v.as_f64()),
+                        rule: match (text("kind"), tolerance) {
+                            ("relative", Some(t)) => format!("relative ≤ {t:.1e}"),
+                            ("absolute", Some(t)) => format!("absolute ≤ {t:.1e}"),
+                            ("below", _) => "below the reference".into(),
+                            (kind, _) => kind.to_string(),
+                        },
+                        passed: c.get("passed").and_then(|v| v.as_bool()),
+                        warning_only: c
+                            .get("warning_only")
+                            .and_then(|v| v.as_bool())
+                            .unwrap_or(false),
+                    }
+                })
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// The section that lists every stage's checks of its own answer.
+fn self_check_section(checks: &[StageCheck]) -> Section {
+    let errors = checks
+        .iter()
+        .filter(|c| c.passed == Some(false) && !c.warning_only);
+    let warnings = checks
+        .iter()
+        .filter(|c| c.passed == Some(false) && c.warning_only);
+    let verdict = match (errors.count(), warnings.count()) {
+        (0, 0) if checks.is_empty() => "No stage reached its self-checks.".to_string(),
+        (0, 0) => format!("All {} checks passed.", checks.len()),
+        (0, w) => format!(
+            "No check failed; {w} of {} flag a result as suspicious (WARNING below).",
+            checks.len()
+        ),
+        (e, w) => format!(
+            "{e} of {} checks FAILED (the answer of that stage is wrong), {w} warnings.",
+            checks.len()
+        ),
+    };
+    Section {
+        title: "Self-checks".into(),
+        text: vec![format!(
+            "Each stage checks its own answer: the LTCA its periodicity over a base pitch, the \
+             contact conditions, the torque balance, the unloaded geometry's expectations and its \
+             mesh against the Hertzian contact; the explicit FE its k(θ) and DTE against the LTCA \
+             on its own mesh. {verdict}"
+        )],
+        tables: vec![Table {
+            name: "self_checks",
+            caption: "The stages' checks of their own answers".into(),
+            header: ["stage", "check", "value", "reference", "rule", "verdict"]
+                .map(String::from)
+                .to_vec(),
+            rows: checks
+                .iter()
+                .map(|c| {
+                    row(&[
+                        c.stage.clone(),
+                        c.quantity.clone(),
+                        show_e(c.value),
+                        show_e(c.reference),
+                        c.rule.clone(),
+                        match (c.passed, c.warning_only) {
+                            (Some(true), _) => "ok",
+                            (Some(false), true) => "WARNING",
+                            (Some(false), false) => "FAILED",
+                            (None, _) => "–",
+                        }
+                        .into(),
+                    ])
+                })
+                .collect(),
+        }],
+        plots: Vec::new(),
+    }
 }
 
 fn row(cells: &[String]) -> Vec<String> {
@@ -406,7 +531,7 @@ fn sections(
             row(&[
                 "recommended relief (tip, root per gear 1 / 2) [µm]".into(),
                 format!(
-                    "tip {}, root {}, {} over {} of the double-contact zone",
+                    "tip {}, root {}, {} over {} of the end zone (HPSTC to tip, LPSTC to SAP)",
                     amounts(&s.tip_relief_um),
                     amounts(&s.root_relief_um),
                     s.relief_shape

@@ -48,18 +48,17 @@ impl Check {
             (false, true) => "WARNING",
             (false, false) => "FAILED",
         };
+        let rule = match self.kind {
+            CheckKind::Absolute => format!("absolute, tolerance {:.1e}", self.tolerance),
+            CheckKind::Relative => format!("relative, tolerance {:.1e}", self.tolerance),
+            CheckKind::Below if self.tolerance > 0.0 => {
+                format!("below by {:.1e} of it", self.tolerance)
+            }
+            CheckKind::Below => "below it".to_string(),
+        };
         format!(
-            "{verdict}: {}: {:.4e} against {:.4e} ({}, tolerance {:.1e}; {})",
-            self.quantity,
-            self.value,
-            self.reference,
-            match self.kind {
-                CheckKind::Absolute => "absolute",
-                CheckKind::Relative => "relative",
-                CheckKind::Below => "below",
-            },
-            self.tolerance,
-            self.reference_source
+            "{verdict}: {}: {:.4e} against {:.4e} ({rule}; {})",
+            self.quantity, self.value, self.reference, self.reference_source
         )
     }
 

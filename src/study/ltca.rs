@@ -158,7 +158,8 @@ pub struct LtcaSummary {
     pub wall_s: f64,
     pub variants: Vec<VariantSummary>,
     pub model: &'static str,
-    /// Every variant's self-checks, the variant's name before each quantity.
+    /// Every variant's self-checks, the variant's name before each quantity, and the mesh's
+    /// resolution of the contact ([`contact_resolution_check`]).
     pub self_checks: Vec<Check>,
     /// The self-checks that failed (errors) and that flag a suspicious result (warnings).
     pub self_check_errors: usize,
@@ -253,6 +254,7 @@ pub fn run(
                 ..check.clone()
             })
         })
+        .chain([contact_resolution_check(case, torque)])
         .collect();
     let summary = LtcaSummary {
         case: case.name().to_string(),
@@ -344,6 +346,39 @@ pub const KKT_TOLERANCE: f64 = 1e-9;
 /// Largest peak-to-peak unloaded TE of an unmodified pair [m]: the exact profiles are sampled
 /// as polylines of 2000 flank segments, whose chords sit a few nm inside the involute.
 pub const UNLOADED_TE_TOLERANCE: f64 = 0.01e-6;
+
+/// Flank elements at most this many Hertzian half-widths (at the pitch point, the whole load on
+/// one pair): beyond it the mean mesh stiffness is 0.5 % or more above the mesh-converged one.
+/// The node-to-surface contact's error depends on h/a nearly alone, measured on eight pairs of
+/// validation/pairs (36/36, 24/40, 17/53, 19/57, 31/32, module 1 and 8, a thin rim) at
+/// 71.8–287 N·m: h/a 1.61 → +0.19 %, 1.83–1.87 → +0.46 … +0.63 %, 2.07–2.15 → +0.96 … +1.13 %,
+/// 2.57 → +1.4 %, 3.04 → +2.75 % against h/4.
+pub const CONTACT_RESOLUTION_LIMIT: f64 = 1.9;
+
+/// The flank elements the check recommends, in Hertzian half-widths: about 0.2 % on the mean.
+pub const CONTACT_RESOLUTION_RECOMMENDED: f64 = 1.6;
+
+/// A warning when the flank elements are coarse against the Hertzian contact they carry:
+/// h / a ≤ [`CONTACT_RESOLUTION_LIMIT`], a from [`Case::hertz_half_width_at`] under T/r_b2. The
+/// stiffness comes out too high, more so at lower loads (a ∝ √F).
+pub fn contact_resolution_check(case: &Case, torque: f64) -> Check {
+    let half_width = case.hertz_half_width_at(torque / case.pair.gears[1].base_radius);
+    let fine = case.file.mesh.fine_element_mm * 1e-3;
+    Check::new(
+        "ltca",
+        format!(
+            "flank elements over the Hertzian half-width at the pitch point ({:.3} mm at this \
+             torque; above {CONTACT_RESOLUTION_LIMIT} the mean stiffness is 0.5 % or more too \
+             high: set mesh.fine_element_mm to {:.3} or less)",
+            half_width * 1e3,
+            CONTACT_RESOLUTION_RECOMMENDED * half_width * 1e3
+        ),
+        (fine / half_width, CONTACT_RESOLUTION_LIMIT),
+        "the mesh-converged contact (validation/pairs)",
+        (CheckKind::Below, 0.0),
+    )
+    .warning()
+}
 
 /// The checks an LTCA cycle makes of its own answer:
 /// * periodicity over one base pitch (the STE and every pair's force one pitch on equal the

@@ -81,8 +81,9 @@ pub struct OptimizeOptions {
     pub torque_range: TorqueRange,
     /// LTCA positions per base pitch.
     pub positions: usize,
-    /// Smallest loaded contact ratio allowed at any torque of the range.
-    pub min_contact_ratio: f64,
+    /// Smallest loaded contact ratio allowed at any torque of the range; None: the pair's own
+    /// ([`default_min_contact_ratio`]).
+    pub min_contact_ratio: Option<f64>,
     /// Largest relief amount [µm].
     pub max_relief_um: f64,
     /// Shortest relief, as a fraction of the double-contact zone.
@@ -93,10 +94,21 @@ pub struct OptimizeOptions {
     pub harris_range: TorqueRange,
 }
 
+/// The smallest loaded contact ratio a relief may leave by default: ⌊ε_α⌋ + 0.2, at most ε_α —
+/// 1.2 for a pair with ε_α < 2 (the relief may not reduce the pair to single contact over
+/// more than 80 % of a pitch), 2.2 (or ε_α) for a high-contact-ratio pair, whose zone of least
+/// contact carries two pairs and which should not fall back to single contact.
+pub fn default_min_contact_ratio(pair: &crate::geometry::GearPair) -> f64 {
+    let ratio = pair.contact_ratio;
+    (ratio.floor() + MIN_CONTACT_RATIO_MARGIN).min(ratio)
+}
+
 /// The defaults of [`OptimizeOptions`], shared with the command line's.
 pub const DEFAULT_TORQUE_RANGE: &str = "50:150:5";
 pub const DEFAULT_POSITIONS: usize = 64;
-pub const DEFAULT_MIN_CONTACT_RATIO: f64 = 1.2;
+/// The loaded contact ratio the relief may not go below, by default, above the number of pairs
+/// in the zone of least contact.
+pub const MIN_CONTACT_RATIO_MARGIN: f64 = 0.2;
 pub const DEFAULT_MAX_RELIEF_UM: f64 = 40.0;
 pub const DEFAULT_MIN_LENGTH: f64 = 0.25;
 pub const DEFAULT_RPM: &str = "100:12000:300";
@@ -108,7 +120,7 @@ impl Default for OptimizeOptions {
         OptimizeOptions {
             torque_range: parse(DEFAULT_TORQUE_RANGE),
             positions: DEFAULT_POSITIONS,
-            min_contact_ratio: DEFAULT_MIN_CONTACT_RATIO,
+            min_contact_ratio: None,
             max_relief_um: DEFAULT_MAX_RELIEF_UM,
             min_length: DEFAULT_MIN_LENGTH,
             rpm: DEFAULT_RPM.parse().expect("a valid default"),
@@ -383,7 +395,7 @@ pub fn run(
     let harris_range = percent(&options.harris_range)?;
     if !(options.min_length > 0.0 && options.min_length <= 1.0) {
         return Err(StudyError::Input(format!(
-            "--min-relief-length {} is invalid: give a fraction of the double-contact zone in (0, 1]",
+            "--min-relief-length {} is invalid: give a fraction of the end zone from the HPSTC / LPSTC in (0, 1]",
             options.min_length
         )));
     }
@@ -405,7 +417,9 @@ pub fn run(
     let limits = robust::Limits {
         max_amount: options.max_relief_um * 1e-6,
         min_length: options.min_length,
-        min_contact_ratio: options.min_contact_ratio,
+        min_contact_ratio: options
+            .min_contact_ratio
+            .unwrap_or_else(|| default_min_contact_ratio(pair)),
         contact_deflection: deflection,
     };
     let settings = robust::Settings::default();

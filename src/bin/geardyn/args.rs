@@ -304,9 +304,10 @@ pub struct OptimizeArgs {
     /// LTCA positions per base pitch.
     #[arg(long, default_value_t = optimize::DEFAULT_POSITIONS, value_name = "N")]
     pub positions: usize,
-    /// Smallest loaded contact ratio allowed at any torque of the range.
-    #[arg(long, default_value_t = optimize::DEFAULT_MIN_CONTACT_RATIO, value_name = "EPS")]
-    pub min_contact_ratio: f64,
+    /// Smallest loaded contact ratio allowed at any torque of the range. Default: ⌊ε_α⌋ + 0.2,
+    /// at most ε_α (1.2 for ε_α < 2; 2.2 for a high-contact-ratio pair)
+    #[arg(long, value_name = "EPS")]
+    pub min_contact_ratio: Option<f64>,
     /// Largest relief amount [µm].
     #[arg(long, default_value_t = optimize::DEFAULT_MAX_RELIEF_UM, value_name = "UM")]
     pub max_relief_um: f64,

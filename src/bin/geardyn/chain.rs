@@ -127,6 +127,28 @@ pub fn run(args: &CommonArgs, full: bool, resume: bool) -> Result<()> {
     Ok(())
 }
 
+/// A sweep that diverged has written its points up to there and its summary says where and
+/// why: the chain goes on (the report names the divergence); any other failure stops it.
+fn keeping_divergence(dir: &Path, outcome: Result<()>) -> Result<()> {
+    let Err(error) = outcome else {
+        return Ok(());
+    };
+    let diverged = std::fs::read_to_string(dir.join("summary.json"))
+        .ok()
+        .and_then(|text| serde_json::from_str::<study::StoppedEarly>(&text).ok())
+        .and_then(|stopped| stopped.diverged);
+    match diverged {
+        Some(message) => {
+            eprintln!(
+                "warning: {message}; the chain goes on, the report names the divergence ({})",
+                dir.display()
+            );
+            Ok(())
+        }
+        None => Err(error),
+    }
+}
+
 fn stages(
     args: &CommonArgs,
     case: &geardyn::case::Case,
@@ -190,18 +212,24 @@ fn stages(
 
     announce()?;
     let rpm = plan.sweep_rpm.clone();
-    sweep(
-        &unmodified("sweep-ltca"),
-        rpm.clone(),
-        &LumpedShorthands::default(),
-        None,
-        false,
+    keeping_divergence(
+        &dir.join("sweep-ltca"),
+        sweep(
+            &unmodified("sweep-ltca"),
+            rpm.clone(),
+            &LumpedShorthands::default(),
+            None,
+            false,
+        ),
     )?;
     let fe_k = LumpedShorthands {
         stiffness: Some(StiffnessSource::Csv(stiffness_csv.clone())),
         ..LumpedShorthands::default()
     };
-    sweep(&sub("sweep-fe"), rpm, &fe_k, None, false)?;
+    keeping_divergence(
+        &dir.join("sweep-fe"),
+        sweep(&sub("sweep-fe"), rpm, &fe_k, None, false),
+    )?;
     stability(
         &unmodified("stability"),
         &plan.stability_rpm,

@@ -120,6 +120,18 @@ pub fn fe_run(case: &Case, scene: &Scene, dir: &Path, resume: bool) -> Result<st
         );
     }
     print!("{}", report::fe::console(&result));
+    let checks = &result.summary.self_checks;
+    for check in checks.iter().filter(|c| !c.passed) {
+        eprintln!("{}", check.line());
+    }
+    let errors = checks.iter().filter(|c| c.is_error()).count();
+    if errors > 0 {
+        anyhow::bail!(
+            "{errors} of the run's checks against the LTCA on its own mesh failed (above); its \
+             results are in {}",
+            dir.display()
+        );
+    }
     Ok(result)
 }
 

@@ -63,6 +63,18 @@ pub fn extremes(values: &[f64]) -> (f64, f64) {
         })
 }
 
+/// The largest of `values`; NaN if any is NaN, −∞ if there are none: for the checks a run
+/// makes of its own answer, where a fold with `f64::max` would drop a NaN and pass.
+pub fn largest(values: impl IntoIterator<Item = f64>) -> f64 {
+    values.into_iter().fold(f64::NEG_INFINITY, |a, b| {
+        if a.is_nan() || b.is_nan() {
+            f64::NAN
+        } else {
+            a.max(b)
+        }
+    })
+}
+
 /// max − min of `values` (−∞ for none).
 pub fn peak_to_peak(values: &[f64]) -> f64 {
     let (lo, hi) = extremes(values);
@@ -303,6 +315,14 @@ pub fn spectrum_peaks(spectrum: &[(f64, f64)], min_hz: f64, count: usize) -> Vec
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn largest_keeps_a_nan() {
+        assert!(largest([1.0, f64::NAN, 3.0]).is_nan());
+        assert!(largest([f64::NAN, 1.0]).is_nan());
+        assert_eq!(largest([1.0, 3.0, 2.0]), 3.0);
+        assert_eq!(largest(std::iter::empty()), f64::NEG_INFINITY);
+    }
 
     #[test]
     fn harmonic_amplitudes_read_known_harmonics() {

@@ -97,10 +97,9 @@ fn step_above_the_critical_step_is_caught() {
 }
 
 /// The pair's own stable step where the contact is — the power iteration on bodies plus penalty
-/// springs (`coupled_critical_step`) — against runs continued from that state: at 0.95 of it the
-/// run stays stable, at 1.1 it diverges within a few hundred steps (an unstable mode of the
-/// central difference grows by 2.4× per step at 1.1×). With no spring closed it is the bodies'
-/// own power iteration (to its convergence, 1e-3); closed springs lower it, and the step the run
+/// springs (`coupled_critical_step`) — against runs continued from that state: at 1.1 of it the
+/// run diverges within a few hundred steps, at the run's own step it stays balanced. With no
+/// spring closed it is the bodies' own power iteration (to its convergence, 1e-3); closed springs lower it, and the step the run
 /// uses (set by the contact springs' bound for every contact state) stays below it. Penalty
 /// factor 16, so that the springs and not the bodies' elements limit the step on this coarse
 /// mesh (at factor 1 the bodies do: 2.76e-8 s against the springs' bound 3.04e-8 s).
@@ -157,9 +156,14 @@ fn coupled_step_is_where_the_meshing_pair_goes_unstable() {
     unstable.dt = 1.1 * coupled;
     let diverged = continue_at(&mut unstable, &mut state, 1000);
     assert!(diverged.is_err(), "1.1 x the coupled step runs on");
-    let (mut stable, mut state) = in_mesh();
-    stable.dt = 0.95 * coupled;
-    continue_at(&mut stable, &mut state, 3000).unwrap();
+    // The run's own step, below every contact spring's bound, keeps the balance as points
+    // close and open. (0.95 × the coupled step does not: the coupled step holds for the contact
+    // set it is measured on, and each point that closes as the pair turns adds a penalty spring
+    // whose own bound, 7.6e-9 s here, is below it — the balance then takes spikes of 0.1–1.6 J
+    // against 5 J present. A step chosen from the coupled one must be re-checked as the contact
+    // changes.)
+    let (mut own, mut state) = in_mesh();
+    continue_at(&mut own, &mut state, 3000).unwrap();
 }
 
 /// The pair with the driver held at the pitch-point position and the load torque ramped over
@@ -214,12 +218,16 @@ fn static_dte_matches_the_ltca_on_the_same_mesh() {
 }
 
 /// The same on an unequal pair, 24/40, where the old pairing (gear-1 tooth t with gear-2 tooth
-/// (z₂ − t mod z₂) mod z₂) put the second tooth pair on the wrong driven tooth: at 0.35 of a
-/// pitch from the pitch point two pairs carry the load (the entering pair from 0.143 p: the
-/// approach AC is 0.857 p_b), so the static DTE against the LTCA's at the same position tests
-/// both pairs' partners; a wrong partner gave several hundred percent. Tolerance 8 %, as above.
+/// (z₂ − t mod z₂) mod z₂) put the second tooth pair on the wrong driven tooth. At the pitch
+/// point one pair carries the load; at 0.35 of a pitch two do (the entering pair from 0.143 p:
+/// the approach AC is 0.857 p_b). At both, the FE's load per tooth pair (drive flanks) against
+/// the LTCA's on the same mesh: the same pairs loaded (above 2 % of the load), each pair's
+/// share within 0.15 of the load (measured 0.095 at 0.35 pitch: 0.367 against 0.462 for the
+/// entering pair, 0.2 pitch into its contact near the driven tip, where 1.5 mm flank elements
+/// resolve the contact coarsely; the converged LTCA gives 0.457). A wrong partner leaves the
+/// entering pair unloaded (0.46 off) or loads a pair the LTCA does not.
 #[test]
-fn an_unequal_pair_in_double_contact_matches_the_ltca() {
+fn an_unequal_pair_shares_the_load_among_the_ltca_pairs() {
     let mut overrides: Vec<Override> = geardyn::samples::matrix_pair("24-40")
         .unwrap()
         .parsed_overrides();
@@ -229,34 +237,114 @@ fn an_unequal_pair_in_double_contact_matches_the_ltca() {
         Override::set("fe.explicit_fine_element_mm", 1.5),
     ]);
     let case = Case::load_with(None, &overrides).unwrap();
-    let duration = 8.0e-4;
-    let mut p = static_scene(&case, duration, 16.0);
-    let (position, positions) = (7, 20);
-    p.drive.start_rotation =
-        case.pair.gears[0].angular_pitch() * position as f64 / positions as f64;
-    let (integrator, state) = relaxed(&p, duration);
-    let dte = state.hub[0] - p.model.kinematic_hub_rotation(p.drive.start_rotation);
-    let force = integrator.last_contact.force_on_driven.norm();
-    let static_force = 143.6 / case.pair.gears[1].base_radius;
-    assert!(
-        (force / static_force - 1.0).abs() < 2e-3,
-        "settled: {force} N vs {static_force} N"
-    );
     let ltca =
         study::ltca::model(&case, &case.relief_variant("none").unwrap().modifications).unwrap();
-    let solved = ltca.solve_position(position, positions, 143.6).unwrap();
-    let loaded = solved.pair_forces.iter().filter(|f| **f > 0.0).count();
-    assert_eq!(loaded, 2, "{:?}", solved.pair_forces);
-    eprintln!(
-        "24/40 static FE DTE {dte:.5e} rad, LTCA STE {:.5e} rad, ratio {:.4}",
-        solved.ste,
-        dte / solved.ste
-    );
-    assert!(
-        (dte / solved.ste - 1.0).abs() < 0.08,
-        "FE {dte:e} vs LTCA {:e}",
-        solved.ste
-    );
+    let static_force = 143.6 / case.pair.gears[1].base_radius;
+    let duration = 8.0e-4;
+    let positions = 20;
+    for (position, pairs) in [(0, 1), (7, 2)] {
+        let mut p = static_scene(&case, duration, 16.0);
+        p.drive.start_rotation =
+            case.pair.gears[0].angular_pitch() * position as f64 / positions as f64;
+        let (integrator, state) = relaxed(&p, duration);
+        let contact = &integrator.last_contact;
+        let force = contact.force_on_driven.norm();
+        assert!(
+            (force / static_force - 1.0).abs() < 2e-3,
+            "settled: {force} N vs {static_force} N"
+        );
+        let solved = ltca.solve_position(position, positions, 143.6).unwrap();
+        let ltca_total: f64 = solved.pair_forces.iter().sum();
+        let fe_total: f64 = p
+            .model
+            .flank_pairs
+            .iter()
+            .zip(&contact.pair_forces)
+            .filter(|(fp, _)| fp.drive)
+            .map(|(_, f)| f)
+            .sum();
+        let fe_share = |teeth: (usize, usize)| {
+            p.model
+                .flank_pairs
+                .iter()
+                .zip(&contact.pair_forces)
+                .filter(|(fp, _)| fp.drive && fp.teeth == teeth)
+                .map(|(_, f)| f)
+                .sum::<f64>()
+                / fe_total
+        };
+        let mut loaded = 0;
+        for (i, teeth) in ltca.tooth_pairs.iter().enumerate() {
+            let (fe, lt) = (fe_share(*teeth), solved.pair_forces[i] / ltca_total);
+            eprintln!("24/40 at {position}/{positions} pitch, pair {teeth:?}: FE share {fe:.4}, LTCA {lt:.4}");
+            assert!((fe - lt).abs() < 0.15, "pair {teeth:?}: FE {fe} LTCA {lt}");
+            assert_eq!(fe > 0.02, lt > 0.02, "pair {teeth:?}: FE {fe} LTCA {lt}");
+            loaded += usize::from(lt > 0.02);
+        }
+        assert_eq!(loaded, pairs);
+        // No drive flank outside the LTCA's pairs carries load.
+        let listed: f64 = ltca.tooth_pairs.iter().map(|t| fe_share(*t)).sum();
+        assert!((listed - 1.0).abs() < 1e-9, "{listed}");
+    }
+}
+
+/// Every back-flank contact pair of a scene is driven tooth −s + 1 for driver tooth s
+/// ([`geardyn::geometry::ToothPair::back_flank_partner`]), on every tooth pair of a scene over
+/// three pitches; and near the mesh (driver teeth −2 … 1, as placed) that driven flank is nearer
+/// (middle node to middle node) to the driver's back flank than the one on the far side of the
+/// drive partner, for the paper pair and 24/40. Far from the mesh "the nearer neighbour" is no
+/// criterion (both gears curve away): it once picked the wrong tooth there for unequal pairs.
+#[test]
+fn back_flanks_pair_across_the_tooth_space() {
+    use geardyn::geometry::Side;
+    for overrides in [
+        Vec::new(),
+        geardyn::samples::matrix_pair("24-40")
+            .unwrap()
+            .parsed_overrides(),
+    ] {
+        let mut overrides = overrides;
+        overrides.extend([
+            Override::set("mesh.fine_element_mm", 1.5),
+            Override::set("mesh.coarse_element_mm", 3.0),
+            Override::set("fe.explicit_fine_element_mm", 1.5),
+        ]);
+        let case = Case::load_with(None, &overrides).unwrap();
+        let z2 = case.pair.gears[1].teeth() as usize;
+        // 0.1 s at 60 rpm: 0.63 rad of the driver, 3.6 pitches of 36 teeth, 2.4 of 24.
+        let p = prepared(&case, 60.0, 0.1, 0.01, 1.0);
+        let model = &p.model;
+        let middle = |g: usize, tooth: usize| {
+            let nodes = &model.meshes[g].flank(tooth, Side::Right).nodes;
+            model.placement[g].to_global(&model.meshes[g].nodes[nodes[nodes.len() / 2]])
+        };
+        let mut checked = 0;
+        for fp in model.flank_pairs.iter().filter(|fp| !fp.drive) {
+            let (t1, back) = fp.teeth;
+            let drive = model
+                .flank_pairs
+                .iter()
+                .find(|d| d.drive && d.teeth.0 == t1)
+                .unwrap()
+                .teeth
+                .1;
+            assert_eq!(back, (drive + 1) % z2);
+            // As placed, "nearer" tells the sides apart only near the mesh: within two pitches.
+            let z1 = case.pair.gears[0].teeth() as usize;
+            if !(t1 <= 1 || t1 + 2 >= z1) {
+                continue;
+            }
+            let far = (drive + z2 - 1) % z2;
+            let own = middle(0, t1);
+            assert!(
+                (middle(1, back) - own).norm() < (middle(1, far) - own).norm(),
+                "{} teeth: driver {t1}, drive partner {drive}, back {back}",
+                case.pair.gears[0].teeth()
+            );
+            checked += 1;
+        }
+        assert!(checked >= 3);
+    }
 }
 
 /// The mesh dashpot: from a preloaded static state (relaxed as above, penalty factor 1 for a 4×

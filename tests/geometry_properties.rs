@@ -43,7 +43,10 @@ proptest! {
                 prop_assert!(!message.is_empty() && !message.contains("NaN"), "{message}");
             }
             Ok(pair) => {
-                prop_assert!(pair.contact_ratio >= 1.0 && pair.contact_ratio < 2.0);
+                prop_assert!(
+                    pair.contact_ratio >= 1.0
+                        && pair.contact_ratio < geardyn::geometry::MAX_CONTACT_RATIO
+                );
                 prop_assert!(pair.backlash_normal.abs() < 1e-12);
                 let shape = if parabolic { ReliefShape::Parabolic } else { ReliefShape::Linear };
                 let (tip_start, root_start) = if short { (ReliefStart::Short, ReliefStart::Short) } else { (ReliefStart::Hpstc, ReliefStart::Lpstc) };

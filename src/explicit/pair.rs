@@ -45,6 +45,7 @@ use nalgebra::{Point2, Rotation2, Vector2};
 use crate::contact::{project_on_quadratic_edge, ContactLaw, FrictionState};
 use crate::explicit::body::{ExplicitBody, ExplicitMaterial, ForceOutput};
 use crate::fe::FeError;
+use crate::geometry::engagement::ToothPair;
 use crate::geometry::{GearPair, Placement, Side};
 use crate::mesh::GearMesh;
 
@@ -363,7 +364,6 @@ impl ExplicitPair {
             .sum();
         let mut flanks = Vec::new();
         let mut flank_pairs = Vec::new();
-        let z2 = pair.gears[1].teeth() as usize;
         let mut add_pair = |t1: usize, t2: usize, side: Side, drive: bool| {
             let a = flanks.len();
             for (g, tooth) in [(0, t1), (1, t2)] {
@@ -384,21 +384,14 @@ impl ExplicitPair {
         };
         for &(t1, t2) in &tooth_pairs {
             add_pair(t1, t2, Side::Left, true);
-            // The back flank of gear-1 tooth t1 faces the back flank of the gear-2 tooth on the
-            // other side of the tooth space: t2 ± 1, whichever is nearer in the placed pair.
-            let middle = |g: usize, tooth: usize| {
-                let nodes = &meshes[g].flank(tooth, Side::Right).nodes;
-                placement[g].to_global(&meshes[g].nodes[nodes[nodes.len() / 2]])
-            };
-            let own = middle(0, t1);
-            let back = [(t2 + 1) % z2, (t2 + z2 - 1) % z2]
-                .into_iter()
-                .min_by(|a, b| {
-                    (middle(1, *a) - own)
-                        .norm()
-                        .total_cmp(&(middle(1, *b) - own).norm())
-                })
-                .expect("two candidates");
+            // The back flank of gear-1 tooth t1 faces the back flank of the gear-2 tooth behind
+            // it ([`ToothPair::back_flank_partner`]; indices mod z₂ keep the signed relation).
+            let (_, back) = ToothPair {
+                driver: t1 as i64,
+                driven: t2 as i64,
+            }
+            .back_flank_partner()
+            .indices(pair);
             add_pair(t1, back, Side::Right, false);
         }
         Ok(ExplicitPair {

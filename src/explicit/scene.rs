@@ -4,9 +4,11 @@
 //!
 //! # Model no more than the scene needs
 //! Only the teeth that engage while the driver turns through the scene get fine flanks:
-//! starting with tooth 0 of each gear at the pitch point, gear-1 teeth 1, 0, z₁−1, …, z₁−n
-//! (n = the base pitches the driver turns) and their partners (−k mod z₂) on gear 2 — the rest
-//! of each gear is meshed coarse. Contact pairs are those tooth pairs, drive and back flanks.
+//! starting with tooth 0 of each gear at the pitch point, the signed tooth pairs on the path of
+//! contact or within 0.2 base pitch of it over the scene's rotation ([`engagement`]: driver
+//! tooth s meets driven tooth −s, for any tooth counts), and on gear 2 the teeth on either side
+//! of each partner (the back flanks) — the rest of each gear is meshed coarse. Contact pairs
+//! are those tooth pairs, drive and back flanks.
 //!
 //! # Time step (seed paper eqs. 28–31, and the eigenvalue it approximates)
 //! Δt_cr = min(2/ω_max of each body with its bore fixed, by power iteration on M⁻¹K;

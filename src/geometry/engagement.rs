@@ -59,6 +59,17 @@ impl ToothPair {
         )
     }
 
+    /// The pair whose back flanks face each other across the tooth space behind the driver
+    /// tooth: driver tooth s pushes driven tooth −s ahead of it, so the driven tooth in the
+    /// space behind it is the one driver tooth s − 1 pushes, −s + 1 (they meet only when the
+    /// torque reverses or backlash closes).
+    pub fn back_flank_partner(&self) -> ToothPair {
+        ToothPair {
+            driver: self.driver,
+            driven: self.driven + 1,
+        }
+    }
+
     /// The driver roll angle of this pair's drive-flank contact at driver rotation θ [rad].
     pub fn roll_angle(&self, pair: &GearPair, driver_rotation: f64) -> f64 {
         pair.roll_angle_at(1, pair.contact_points.pitch)

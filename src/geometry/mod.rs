@@ -22,7 +22,7 @@ pub use engagement::{engaged_pairs, ToothPair};
 pub use error::{GearIndex, GeometryError};
 pub use gear::{BasicRack, Gear, GearSpec};
 pub use outline::{OutlinePoint, OutlineResolution, Segment, Side};
-pub use pair::{ContactPoints, FlankRollAngles, GearPair, PairSpec, Placement};
+pub use pair::{ContactPoints, FlankRollAngles, GearPair, PairSpec, Placement, MAX_CONTACT_RATIO};
 pub use relief::{
     FlankModification, FlankReliefSpec, ReliefShape, ReliefSpec, ReliefStart, ReliefZone,
 };

@@ -17,11 +17,11 @@
 //! * `lpstc` — root relief from the lowest point of single tooth contact: long root relief.
 //! * `short` — half of that double-contact zone (the start is half-way between the single-contact
 //!   point and the end of the active profile).
+//! * an explicit roll angle of the gear, or a diameter on the gear.
 //!
 //! For a high contact ratio (2 ≤ ε_α < 3) the HPSTC and LPSTC are the boundaries of the zones of
 //! least contact ([`super::GearPair`]: A + ⌊ε_α⌋ p_b and E − ⌊ε_α⌋ p_b), and "double contact"
 //! above reads "the end zone of more contact" (three pairs against two).
-//! * an explicit roll angle of the gear, or a diameter on the gear.
 
 /// Shape of the relief curve.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]

@@ -493,12 +493,14 @@ impl LtcaModel {
             .pairs
             .iter()
             .flat_map(|p| [p.driver, p.driver + 1])
-            .map(|s| (force(first, s) - force(later, s - 1)).abs())
-            .fold(0.0, f64::max);
+            .map(|s| (force(first, s) - force(later, s - 1)).abs());
+        let force_difference = crate::signal::largest(force_difference);
         Periodicity {
             ste_first: first.ste,
             ste_one_pitch_on: later.ste,
-            ste_relative_difference: (later.ste - first.ste).abs() / first.ste.abs(),
+            // Over the loaded deflection: a backlash or relief gap in φ would loosen it.
+            ste_relative_difference: (later.ste - first.ste).abs()
+                / (first.ste - first.unloaded_te).abs(),
             force_relative_difference: force_difference / first.total_force,
         }
     }

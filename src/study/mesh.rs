@@ -22,14 +22,15 @@ pub struct MeshStudy {
 pub fn run(case: &Case, relief: Option<&str>) -> Result<MeshStudy, StudyError> {
     let variant = super::relief_variant(case, relief)?;
     let mut gears = Vec::new();
+    // The LTCA's meshes: fine the teeth that engage over its base pitch.
+    let fine = crate::ltca::engaging_teeth(&case.pair);
     for index in 1..=2 {
         let gear = case.pair.gear(index);
-        let z = gear.teeth() as usize;
         let started = std::time::Instant::now();
         let mesh = mesh_gear(
             gear,
             &variant.modifications[index - 1],
-            &case.mesh_spec(vec![z - 1, 0, 1]),
+            &case.mesh_spec(fine[index - 1].clone()),
         );
         let wall_s = started.elapsed().as_secs_f64();
         crate::fe::assembly::check_elements(&mesh.nodes, &mesh.elements)?;

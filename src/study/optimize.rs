@@ -95,9 +95,10 @@ pub struct OptimizeOptions {
 }
 
 /// The smallest loaded contact ratio a relief may leave by default: ⌊ε_α⌋ + 0.2, at most ε_α —
-/// 1.2 for a pair with ε_α < 2 (the relief may not reduce the pair to single contact over
-/// more than 80 % of a pitch), 2.2 (or ε_α) for a high-contact-ratio pair, whose zone of least
-/// contact carries two pairs and which should not fall back to single contact.
+/// 1.2 for a pair with 1.2 ≤ ε_α < 2 (the relief may not reduce the pair to single contact over
+/// more than 80 % of a pitch; below 1.2, ε_α itself), 2.2 (or ε_α) for a high-contact-ratio
+/// pair, whose zone of least contact carries two pairs and which should not fall back to single
+/// contact.
 pub fn default_min_contact_ratio(pair: &crate::geometry::GearPair) -> f64 {
     let ratio = pair.contact_ratio;
     (ratio.floor() + MIN_CONTACT_RATIO_MARGIN).min(ratio)

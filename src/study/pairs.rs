@@ -108,11 +108,7 @@ pub fn swap_differences(
         .map(|j| swapped[(n - j) % n].ste * swapped_rb2)
         .collect();
     let mean = |v: &[f64]| v.iter().sum::<f64>() / n as f64;
-    let largest = a
-        .iter()
-        .zip(&b)
-        .map(|(x, y)| (y / x - 1.0).abs())
-        .fold(0.0, f64::max);
+    let largest = crate::signal::largest(a.iter().zip(&b).map(|(x, y)| (y / x - 1.0).abs()));
     ((mean(&b) / mean(&a) - 1.0).abs(), largest)
 }
 
@@ -204,12 +200,13 @@ pub fn row(pair: &MatrixPair, progress: Progress) -> Result<PairRow, StudyError>
     ));
     let s = &unmodified.summary;
     let periodicity = |needle: &str| {
-        ltca.summary
-            .self_checks
-            .iter()
-            .filter(|c| c.quantity.starts_with("none:") && c.quantity.contains(needle))
-            .map(|c| c.value)
-            .fold(0.0, f64::max)
+        crate::signal::largest(
+            ltca.summary
+                .self_checks
+                .iter()
+                .filter(|c| c.quantity.starts_with("none:") && c.quantity.contains(needle))
+                .map(|c| c.value),
+        )
     };
     let passed = checks.iter().all(|c| !c.is_error());
     let p = &case.pair;
@@ -243,6 +240,53 @@ pub fn row(pair: &MatrixPair, progress: Progress) -> Result<PairRow, StudyError>
         passed,
         wall_s: started.elapsed().as_secs_f64(),
     })
+}
+
+/// A row whose study stopped with an error (an LTCA that is not periodic, a case the geometry
+/// refuses): every number NaN, one failed check that carries the message, so the matrix goes
+/// on and its table names the row.
+pub fn failed_row(pair: &MatrixPair, message: &str) -> PairRow {
+    let case = pair.case().ok();
+    let p = case.as_ref().map(|c| &c.pair);
+    let nan = f64::NAN;
+    PairRow {
+        name: pair.name.into(),
+        what: pair.what.into(),
+        teeth: p.map_or([0, 0], |p| [p.gears[0].teeth(), p.gears[1].teeth()]),
+        module_mm: p.map_or(nan, |p| p.gears[0].module() * 1e3),
+        pressure_angle_deg: case
+            .as_ref()
+            .map_or(nan, |c| c.file.tool.pressure_angle_deg),
+        contact_ratio: p.map_or(nan, |p| p.contact_ratio),
+        center_distance_mm: p.map_or(nan, |p| p.center_distance * 1e3),
+        backlash_normal_um: p.map_or(nan, |p| p.backlash_normal * 1e6),
+        ltca_tooth_pairs: 0,
+        mesh_stiffness_mean_n_per_m: nan,
+        ste_mean_um: nan,
+        ste_peak_to_peak_um: nan,
+        loaded_contact_ratio: nan,
+        periodicity_ste_rel: nan,
+        periodicity_force_rel: nan,
+        convergence_fine_mm: [nan; 3],
+        convergence_mean_stiffness_n_per_m: [nan; 3],
+        convergence_rel: nan,
+        swap_ste_mean_rel: nan,
+        swap_ste_max_rel: nan,
+        sweep_outcome: "not reached".into(),
+        sweep_max_dynamic_factor: None,
+        sweep_primary_resonance_rpm: None,
+        fe_stiffness_mean_rel: None,
+        fe_static_te_mean_rel: None,
+        checks: vec![Check::new(
+            "pairs",
+            format!("the row's studies: {message}"),
+            (nan, 0.0),
+            "a row that runs to its end",
+            (CheckKind::Absolute, 0.0),
+        )],
+        passed: false,
+        wall_s: 0.0,
+    }
 }
 
 /// The lumped sweep of the case on its LTCA k(θ) over 0.3 … 1.5 × the primary resonance speed

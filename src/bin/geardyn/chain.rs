@@ -212,6 +212,13 @@ fn stages(
 
     announce()?;
     let rpm = plan.sweep_rpm.clone();
+    // A summary left by an earlier attempt must not speak for this one.
+    for folder in ["sweep-ltca", "sweep-fe"] {
+        match std::fs::remove_file(dir.join(folder).join("summary.json")) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(e.into()),
+            _ => {}
+        }
+    }
     keeping_divergence(
         &dir.join("sweep-ltca"),
         sweep(

@@ -123,8 +123,13 @@ pub fn validate_pairs(args: &CommonArgs, only: &[String], with_fe: bool) -> Resu
     let bar = staged_bar();
     let mut rows = Vec::new();
     for pair in pairs {
-        let mut row = study::pairs::row(pair, &stage(&bar))?;
-        if with_fe {
+        // A row that stops with an error (not periodic, a refused case) fails itself, not
+        // the matrix.
+        let mut row = match study::pairs::row(pair, &stage(&bar)) {
+            Ok(row) => row,
+            Err(error) => study::pairs::failed_row(pair, &error_text(&error.into())),
+        };
+        if with_fe && row.mesh_stiffness_mean_n_per_m.is_finite() {
             let case = pair.case()?;
             let scene = study::fe::scene(&case, "stiffness")?;
             bar.suspend(|| eprintln!("pair {}: the explicit FE's stiffness scene", pair.name));

@@ -246,7 +246,7 @@ fn an_unequal_pair_shares_the_load_among_the_ltca_pairs() {
         let mut p = static_scene(&case, duration, 16.0);
         p.drive.start_rotation =
             case.pair.gears[0].angular_pitch() * position as f64 / positions as f64;
-        let (integrator, state) = relaxed(&p, duration);
+        let (integrator, _) = relaxed(&p, duration);
         let contact = &integrator.last_contact;
         let force = contact.force_on_driven.norm();
         assert!(

@@ -508,7 +508,7 @@ impl LtcaModel {
 
 /// Relative tolerance of the periodicity check. The bodies are not rotationally periodic (fine
 /// elements on the engaged teeth only, the coarse teeth beyond), so the teeth loaded one pitch
-/// on sit in a slightly different mesh: 1e-5 of the STE at most over the matrix of pairs
+/// on sit in a slightly different mesh: a few 1e-6 of the STE at most over the matrix of pairs
 /// (validation/pairs). A missing or wrong partner moves either by tens of percent.
 pub const PERIODICITY_TOLERANCE: f64 = 1e-4;
 
@@ -518,7 +518,7 @@ pub struct Periodicity {
     /// Loaded STE φ at the first position and one pitch on [rad].
     pub ste_first: f64,
     pub ste_one_pitch_on: f64,
-    /// |φ(p) − φ(0)| / |φ(0)|.
+    /// |φ(p) − φ(0)| / |φ(0) − φ₀(0)|: over the loaded deflection (φ₀ the unloaded TE).
     pub ste_relative_difference: f64,
     /// Largest difference of a tooth pair's force over the total load.
     pub force_relative_difference: f64,

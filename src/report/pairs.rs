@@ -34,6 +34,8 @@ pub fn write(dir: OutputDir, result: &PairsValidation) -> Result<String, ReportE
             "sweep_outcome",
             "sweep_max_dynamic_factor",
             "fe_stiffness_mean_rel",
+            "optimize_ste_pp_none_um",
+            "optimize_ste_pp_optimum_um",
             "passed",
         ],
         result.rows.iter().map(|r| {
@@ -62,6 +64,8 @@ pub fn write(dir: OutputDir, result: &PairsValidation) -> Result<String, ReportE
                 r.sweep_outcome.clone(),
                 opt(r.sweep_max_dynamic_factor, 4),
                 opt(r.fe_stiffness_mean_rel, 5),
+                format!("{:.4}", r.optimize_ste_pp_none_um),
+                format!("{:.4}", r.optimize_ste_pp_optimum_um),
                 r.passed.to_string(),
             ]
         }),
@@ -90,8 +94,8 @@ pub fn write(dir: OutputDir, result: &PairsValidation) -> Result<String, ReportE
         }),
     )?;
     let mut md = String::from(
-        "| pair | z1/z2 | m [mm] | α [°] | ε_α | pairs | k̄ [N/m] | STE p-p [µm] | ε_load | periodic (STE) | k̄(h)/k̄(h/4) − 1 | swap mean / max | sweep | FE k̄/LTCA − 1 | |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| pair | z1/z2 | m [mm] | α [°] | ε_α | pairs | k̄ [N/m] | STE p-p [µm] | ε_load | periodic (STE) | k̄(h)/k̄(h/4) − 1 | swap mean / max | sweep | relief: robust STE p-p none → optimum [µm] | FE k̄/LTCA − 1 | |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in &result.rows {
         let failed: Vec<&str> = r
@@ -101,7 +105,7 @@ pub fn write(dir: OutputDir, result: &PairsValidation) -> Result<String, ReportE
             .map(|c| c.quantity.as_str())
             .collect();
         md += &format!(
-            "| {} | {}/{} | {} | {} | {:.3} | {} | {:.4e} | {:.3} | {:.3} | {:.1e} | {:+.2} % | {:.2} % / {:.2} % | {} | {} | {} |\n",
+            "| {} | {}/{} | {} | {} | {:.3} | {} | {:.4e} | {:.3} | {:.3} | {:.1e} | {:+.2} % | {:.2} % / {:.2} % | {} | {:.3} → {:.3} | {} | {} |\n",
             r.name,
             r.teeth[0],
             r.teeth[1],
@@ -120,6 +124,8 @@ pub fn write(dir: OutputDir, result: &PairsValidation) -> Result<String, ReportE
                 Some(df) => format!("DF {df:.2}"),
                 None => r.sweep_outcome.clone(),
             },
+            r.optimize_ste_pp_none_um,
+            r.optimize_ste_pp_optimum_um,
             r.fe_stiffness_mean_rel
                 .map_or("—".into(), |v| format!("{:+.2} %", 100.0 * v)),
             if r.passed {

@@ -15,6 +15,8 @@
 //!   neighbouring positions is about 1 %: which gear's nodes are the candidates changes);
 //! * the lumped sweep on the LTCA's k(θ) (its outcome is reported, not judged: a zero-backlash
 //!   pair may leave the model near resonance, issue 29);
+//! * the relief optimizer with its defaults: the optimum's robust STE peak-to-peak at most the
+//!   better of its starts (no relief, the classic rule long);
 //! * optionally (the binary's `--fe`) the explicit FE's stiffness scene against the LTCA on its
 //!   own mesh.
 
@@ -70,6 +72,10 @@ pub struct PairRow {
     /// The explicit FE's k(θ) over the same-mesh LTCA's: mean − 1, and its static TE mean − 1.
     pub fe_stiffness_mean_rel: Option<f64>,
     pub fe_static_te_mean_rel: Option<f64>,
+    /// The relief optimizer's robust objective (STE peak-to-peak over the load range) without
+    /// relief and at its optimum [µm].
+    pub optimize_ste_pp_none_um: f64,
+    pub optimize_ste_pp_optimum_um: f64,
     pub checks: Vec<Check>,
     pub passed: bool,
     pub wall_s: f64,
@@ -173,6 +179,36 @@ pub fn row(pair: &MatrixPair, progress: Progress) -> Result<PairRow, StudyError>
     progress(&stage, 4, 5);
 
     let mut checks: Vec<Check> = ltca.summary.self_checks.clone();
+    // The relief optimizer with its defaults (LTCA only): its optimum at most the better of
+    // its two starts' objectives (no relief, the classic rule long), which it begins from.
+    let (optimize_none, optimize_optimum) = match super::optimize::run(
+        &case,
+        &super::optimize::OptimizeOptions::default(),
+        &|_, _, _| {},
+    ) {
+        Ok(study) => {
+            let s = &study.summary;
+            let start = s.objective_none.min(s.objective_classic);
+            checks.push(Check::new(
+                    "pairs",
+                    "relief optimizer: robust STE peak-to-peak of the optimum over the better start [µm]",
+                    (s.objective_optimum, start * (1.0 + 1e-9)),
+                    "no relief and the classic rule (long), where it starts",
+                    (CheckKind::Below, 0.0),
+                ));
+            (s.objective_none, s.objective_optimum)
+        }
+        Err(error) => {
+            checks.push(Check::new(
+                "pairs",
+                format!("relief optimizer: {error}"),
+                (f64::NAN, 0.0),
+                "an optimizer that runs",
+                (CheckKind::Absolute, 0.0),
+            ));
+            (f64::NAN, f64::NAN)
+        }
+    };
     checks.push(Check::new(
         "pairs",
         format!(
@@ -236,6 +272,8 @@ pub fn row(pair: &MatrixPair, progress: Progress) -> Result<PairRow, StudyError>
         sweep_primary_resonance_rpm,
         fe_stiffness_mean_rel: None,
         fe_static_te_mean_rel: None,
+        optimize_ste_pp_none_um: optimize_none,
+        optimize_ste_pp_optimum_um: optimize_optimum,
         checks,
         passed,
         wall_s: started.elapsed().as_secs_f64(),
@@ -277,6 +315,8 @@ pub fn failed_row(pair: &MatrixPair, message: &str) -> PairRow {
         sweep_primary_resonance_rpm: None,
         fe_stiffness_mean_rel: None,
         fe_static_te_mean_rel: None,
+        optimize_ste_pp_none_um: nan,
+        optimize_ste_pp_optimum_um: nan,
         checks: vec![Check::new(
             "pairs",
             format!("the row's studies: {message}"),

@@ -20,7 +20,7 @@ use crate::geometry::{
     ReliefShape, ReliefSpec, ReliefStart,
 };
 use crate::ltca::body::BodyMaterial;
-use crate::lumped::Drive;
+use crate::lumped::{Drive, ForceLawKind};
 
 /// The seed paper's pair, embedded in the binary and used when no case file is given.
 pub const EMBEDDED_DEFAULT: &str = include_str!("../data/cases/paper36.toml");
@@ -138,6 +138,10 @@ pub struct LumpedSection {
     /// The relief variant whose LTCA k(θ) and unloaded TE the `ltca` source takes; default:
     /// the case's first.
     pub relief: Option<String>,
+    /// "load-dependent" (the LTCA's own W(θ, δ) over 0.035–4.8 × the design torque; the `ltca`
+    /// source only) or "secant" (k(θ) at the design torque, linear in the approach).
+    #[serde(default)]
+    pub force_law: ForceLawKind,
 }
 
 impl Default for LumpedSection {
@@ -154,6 +158,7 @@ impl Default for LumpedSection {
             gear_mass_kg: None,
             rims: false,
             relief: None,
+            force_law: ForceLawKind::default(),
         }
     }
 }
@@ -604,6 +609,7 @@ pub struct LumpedSettings {
     pub rims: bool,
     /// The relief variant of the `ltca` source; None: the case's first.
     pub relief: Option<String>,
+    pub force_law: ForceLawKind,
 }
 
 impl Case {
@@ -1064,6 +1070,7 @@ impl Case {
             gear_masses: lumped.gear_mass_kg,
             rims: lumped.rims,
             relief: lumped.relief.clone(),
+            force_law: lumped.force_law,
         };
         if let Some(name) = &lumped.relief {
             known_variant("lumped.relief", name, &relief_variants)?;

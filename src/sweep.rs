@@ -12,7 +12,9 @@
 
 use rayon::prelude::*;
 
-use crate::lumped::{floquet_max_multiplier, record_periods, steady_state, MeshModel, State};
+use crate::lumped::{
+    floquet_max_multiplier, periodic_orbit, record_periods, steady_state, MeshModel, State,
+};
 use crate::signal::{amplitude_spectrum, strongest_lines};
 
 /// Least samples per mesh period (an integer number, so the FFT sees whole periods).
@@ -30,6 +32,9 @@ pub fn steps_per_period(model: &MeshModel, driver_speed: f64) -> usize {
 /// A speed's steady state is reached when the state at period boundaries repeats to this
 /// fraction of the static deflection, within at most [`MAX_PERIODS`] mesh periods.
 pub const STEADY_TOLERANCE: f64 = 1e-7;
+/// The shooting's tolerance for a period-one orbit ([`periodic_orbit`]), of the static
+/// deflection: ten times the steady state's, so a settled state is taken as it is.
+pub const ORBIT_TOLERANCE: f64 = 1e-6;
 pub const MAX_PERIODS: usize = 4000;
 /// Mesh harmonics reported.
 pub const HARMONICS: usize = 5;
@@ -54,8 +59,16 @@ pub struct SweepPoint {
     /// The strongest spectral lines of the DTE (DC excluded): (frequency [Hz], amplitude [m]),
     /// strongest first.
     pub peaks: Vec<(f64, f64)>,
-    /// Largest Floquet multiplier of the linear model (> 1: parametrically unstable).
-    pub floquet: f64,
+    /// Largest Floquet multiplier of the linearized drive flanks (the tangent stiffness about
+    /// the quasi-static state, no separation; > 1: parametrically unstable).
+    #[serde(alias = "floquet")]
+    pub floquet_linear: f64,
+    /// Largest Floquet multiplier of the period-one orbit of the model as integrated (contact
+    /// loss, back flanks, force law; [`periodic_orbit`]): at the steady state where it settled,
+    /// else the orbit shooting finds (> 1: the periodic response is unstable — a response that
+    /// did not settle, or grew without bound); `None` where no period-one orbit was found.
+    #[serde(default)]
+    pub floquet_orbit: Option<f64>,
     pub periods: usize,
     pub converged: bool,
 }
@@ -68,9 +81,16 @@ pub struct SweepDivergence {
     pub direction: String,
     /// Mesh periods integrated at that speed before the response left the model's range.
     pub periods: usize,
-    /// Largest Floquet multiplier of the linear model at that speed (> 1: parametric
+    /// Largest Floquet multiplier of the linearized drive flanks at that speed (> 1: parametric
     /// instability).
     pub floquet_max_multiplier: f64,
+    /// Largest Floquet multiplier of the period-one orbit of the model as integrated, where
+    /// shooting found one ([`periodic_orbit`]).
+    #[serde(default)]
+    pub orbit_floquet_max_multiplier: Option<f64>,
+    /// The same at the last speed of this direction that settled (its steady state's orbit).
+    #[serde(default)]
+    pub last_orbit_floquet_max_multiplier: Option<f64>,
     /// The bound it passed [m].
     pub bound_m: f64,
     /// The model's backlash [m] (zero: the back flanks engage as the drive flanks open).
@@ -89,6 +109,29 @@ impl std::fmt::Display for SweepDivergence {
             self.periods,
             self.bound_m * 1e3
         )?;
+        match (
+            self.orbit_floquet_max_multiplier,
+            self.last_orbit_floquet_max_multiplier,
+        ) {
+            (Some(orbit), _) if orbit > 1.0 => write!(
+                f,
+                ". The periodic response of the model as integrated (contact loss and back \
+                 flanks included) exists here but is unstable: its largest Floquet multiplier is \
+                 {orbit:.4} > 1 (shooting)"
+            )?,
+            (None, Some(last)) => write!(
+                f,
+                ". No periodic response of the model as integrated (contact loss and back flanks \
+                 included) was found here (shooting); at the last speed that settled its largest \
+                 Floquet multiplier was {last:.4}{}",
+                if last > 0.9 {
+                    ", near 1: the periodic response ends at a fold between the two speeds"
+                } else {
+                    ""
+                }
+            )?,
+            _ => {}
+        }
         if self.floquet_max_multiplier > 1.0 {
             write!(
                 f,
@@ -194,12 +237,19 @@ fn analyse(
     let speed = rpm * 2.0 * std::f64::consts::PI / 60.0;
     let steps = steps_per_period(model, speed);
     let s = steady_state(model, speed, steps, start, STEADY_TOLERANCE, MAX_PERIODS);
+    // The orbit where the response settled; else the one shooting finds from where this
+    // speed started (unstable, or the response would have settled on it).
+    let orbit = |from: State| {
+        periodic_orbit(model, speed, steps, from, ORBIT_TOLERANCE).map(|o| o.max_multiplier())
+    };
     if s.diverged {
         return Err(SweepDivergence {
             driver_speed_rpm: rpm,
             direction: direction.into(),
             periods: s.periods,
             floquet_max_multiplier: floquet_max_multiplier(model, speed, steps),
+            orbit_floquet_max_multiplier: orbit(start),
+            last_orbit_floquet_max_multiplier: None,
             bound_m: model.divergence_bound(),
             backlash_m: model.backlash.unwrap_or(0.0),
         });
@@ -238,7 +288,8 @@ fn analyse(
         separated: s.separated,
         harmonics,
         peaks,
-        floquet: floquet_max_multiplier(model, speed, steps),
+        floquet_linear: floquet_max_multiplier(model, speed, steps),
+        floquet_orbit: orbit(s.start),
         periods: s.periods,
         converged: s.converged,
     };
@@ -318,7 +369,14 @@ pub fn continue_sweep(
                     state = next;
                     points.push(point);
                 }
-                Err(divergence) => return (points, state, Some(divergence)),
+                Err(divergence) => {
+                    let last = points.last().and_then(|p: &SweepPoint| p.floquet_orbit);
+                    let divergence = SweepDivergence {
+                        last_orbit_floquet_max_multiplier: last,
+                        ..divergence
+                    };
+                    return (points, state, Some(divergence));
+                }
             }
         }
         (points, state, None)
@@ -367,12 +425,28 @@ pub fn peaks(rpms: &[f64], values: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// Independent points in parallel (no continuation), for maps such as Floquet stability.
+/// Independent points in parallel (no continuation), for maps such as Floquet stability: the
+/// largest multiplier of the linearized drive flanks at each speed.
 pub fn floquet_map(model: &MeshModel, rpms: &[f64]) -> Vec<f64> {
     rpms.par_iter()
         .map(|rpm| {
             let speed = rpm * 2.0 * std::f64::consts::PI / 60.0;
             floquet_max_multiplier(model, speed, steps_per_period(model, speed))
+        })
+        .collect()
+}
+
+/// The largest Floquet multiplier of the period-one orbit of the model as integrated at each
+/// speed ([`periodic_orbit`], shooting from the quasi-static state, each speed on its own, in
+/// parallel); `None` where no orbit was found.
+pub fn orbit_floquet_map(model: &MeshModel, rpms: &[f64]) -> Vec<Option<f64>> {
+    rpms.par_iter()
+        .map(|rpm| {
+            let speed = rpm * 2.0 * std::f64::consts::PI / 60.0;
+            let steps = steps_per_period(model, speed);
+            let mut guess = model.static_state();
+            guess.q[0] += model.quasi_static_deflection(0.0) - guess.mesh_deflection();
+            periodic_orbit(model, speed, steps, guess, ORBIT_TOLERANCE).map(|o| o.max_multiplier())
         })
         .collect()
 }

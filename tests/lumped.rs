@@ -1,7 +1,9 @@
 //! The 1-DOF mesh model against analytic solutions: the forced response of a constant-stiffness
 //! mesh (FRF), the Mathieu instability tongue from Floquet theory, and brute-force integration.
 
-use geardyn::lumped::{floquet_max_multiplier, integrate_period, steady_state, MeshModel, State};
+use geardyn::lumped::{
+    floquet_max_multiplier, integrate_period, periodic_orbit, steady_state, MeshModel, State,
+};
 use geardyn::stiffness::{MeshStiffness, PeriodicTable};
 use std::f64::consts::PI;
 
@@ -25,6 +27,7 @@ fn model(stiffness: PeriodicTable, te_amplitude: f64, zeta: f64) -> MeshModel {
         backlash: None,
         bearings: None,
         back_reflection: None,
+        force_law: None,
     };
     m.damping = m.damping_from_ratio(zeta);
     m
@@ -666,4 +669,89 @@ fn unbounded_growth_is_reported_as_divergence() {
         .expect("the undamped run-up diverges in the tongue");
     assert!(t > 0.0 && t < 2.0);
     assert!(through.displacement.iter().all(|x| x.is_finite()));
+}
+
+/// On a linear model (no separation) the one-period map is affine, so the orbit's Jacobian is
+/// the monodromy matrix: shooting finds the periodic orbit in one Newton step, stable or not,
+/// and its multipliers equal the linear Floquet analysis's — inside the Mathieu tongue
+/// (|λ| > 1, an orbit forward integration never settles on) and outside it.
+#[test]
+fn the_orbit_multipliers_of_a_linear_model_are_its_monodromy() {
+    let eps = 0.3;
+    let m = model(cosine_stiffness(eps), 1e-6, 0.02);
+    let wn = m.natural_frequency();
+    for ratio in [1.0, 1.5, 2.0, 2.03, 3.0] {
+        let speed = driver_speed(ratio * wn);
+        let steps = 512;
+        let linear = floquet_max_multiplier(&m, speed, steps);
+        let orbit = periodic_orbit(&m, speed, steps, State::from((m.force / K_MEAN, 0.0)), 1e-9)
+            .unwrap_or_else(|| panic!("no orbit at ω_m/ω_n = {ratio}"));
+        assert!(
+            orbit.iterations <= 2,
+            "{ratio}: {} iterations",
+            orbit.iterations
+        );
+        let got = orbit.max_multiplier();
+        assert!(
+            (got / linear - 1.0).abs() < 1e-5,
+            "{ratio}: {got} vs {linear}"
+        );
+        // The orbit returns to itself.
+        let end = integrate_period(&m, speed, steps, orbit.start, |_, _, _| {});
+        assert!((end.q[0] - orbit.start.q[0]).abs() < 1e-9 * m.force / K_MEAN);
+    }
+    // The tongue's centre is unstable, far from it stable.
+    let centre = floquet_max_multiplier(&m, driver_speed(2.0 * wn), 512);
+    assert!(centre > 1.0 && floquet_max_multiplier(&m, driver_speed(1.5 * wn), 512) < 1.0);
+}
+
+/// Where the teeth separate and hit the back flanks the linearized drive flanks say nothing of
+/// stability; the integrated model's orbit does. With the secant law, rims and ζ = 0.05 the
+/// paper pair at zero backlash diverges near 7 330 rpm (issue 29) while the drive flanks
+/// linearized read at most 0.71: the steady states' orbit multipliers climb towards 1 on the
+/// way there (0.71 → 0.98 from 7 200 to 7 300 rpm, measured), and at 7 330 rpm shooting finds no
+/// period-one orbit at all — the periodic response ends at a fold, and the divergence message
+/// says so. Far below (5 000 rpm) the orbit's multiplier is the linearization's.
+#[test]
+fn the_orbit_of_the_switched_model_shows_where_the_sweep_diverges() {
+    let path = std::env::temp_dir().join(format!("geardyn-orbit-{}.toml", std::process::id()));
+    std::fs::write(&path, geardyn::samples::paper36_case().text).unwrap();
+    let case = geardyn::case::Case::load_with(
+        Some(&path),
+        &[
+            geardyn::case::Override::set("lumped.force_law", "secant"),
+            geardyn::case::Override::set("lumped.rims", true),
+        ],
+    )
+    .unwrap();
+    std::fs::remove_file(&path).ok();
+    let m = geardyn::study::lumped::setup(&case).unwrap().model;
+    let rpms = [5000.0, 7200.0, 7240.0, 7280.0, 7300.0, 7330.0];
+    let done = geardyn::sweep::continue_sweep(
+        &m,
+        &rpms,
+        geardyn::sweep::SweepProgress::start(&m),
+        &|| false,
+    );
+    let up = &done.up;
+    assert_eq!(up.len(), 5, "the up-sweep settles up to 7300 rpm");
+    for p in up {
+        assert!(p.floquet_linear < 0.72, "{p:?}");
+    }
+    let orbit: Vec<f64> = up.iter().map(|p| p.floquet_orbit.unwrap()).collect();
+    assert!(
+        (orbit[0] / up[0].floquet_linear - 1.0).abs() < 0.02,
+        "{orbit:?}"
+    );
+    assert!(orbit.windows(2).skip(1).all(|w| w[1] > w[0]), "{orbit:?}");
+    assert!(orbit[4] > 0.95 && orbit[4] < 1.0, "{orbit:?}");
+    let divergence = done.diverged.expect("diverges at 7330 rpm");
+    assert_eq!(divergence.driver_speed_rpm, 7330.0);
+    assert!(divergence.floquet_max_multiplier < 1.0);
+    let message = divergence.to_string();
+    if divergence.direction == "up" {
+        assert_eq!(divergence.orbit_floquet_max_multiplier, None, "{message}");
+        assert_eq!(divergence.last_orbit_floquet_max_multiplier, Some(orbit[4]));
+        assert!(message.contains("fold"), "{message}");
+    }
 }

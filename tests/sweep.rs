@@ -25,6 +25,7 @@ fn model(te_amplitude: f64, backlash: Option<f64>) -> MeshModel {
         backlash,
         bearings: None,
         back_reflection: None,
+        force_law: None,
     };
     m.damping = m.damping_from_ratio(0.03);
     m
@@ -152,7 +153,8 @@ fn a_dynamic_force_beyond_the_contact_strength_is_warned_about() {
         separated: false,
         harmonics: [0.0; geardyn::sweep::HARMONICS],
         peaks: Vec::new(),
-        floquet: 0.5,
+        floquet_linear: 0.5,
+        floquet_orbit: Some(0.5),
         periods: 1,
         converged: true,
     };

@@ -34,7 +34,7 @@ pub mod schemes;
 
 use nalgebra::{DMatrix, SymmetricEigen};
 
-use crate::stiffness::{MeshStiffness, PeriodicTable};
+use crate::stiffness::{ForceLaw, MeshStiffness, PeriodicTable};
 
 /// How the pair is driven: the boundary condition of the relative coordinate p. (The case file
 /// and the command line spell it alike: `torque`, `speed`.)
@@ -77,6 +77,39 @@ impl Drive {
     }
 }
 
+/// The mesh force law of the lumped model.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum ForceLawKind {
+    /// The LTCA's own W(θ, δ), tabulated from first contact to 4.8 × the design torque
+    /// ([`crate::stiffness::ForceLaw`]): load-dependent stiffness, loaded contact ratio and
+    /// contact loss of relieved tips. Only the `ltca` stiffness source has it; the others give
+    /// one k(θ) and stay linear.
+    #[default]
+    LoadDependent,
+    /// W = k(θ)(δ − e(θ)) with the secant k(θ) at the design torque: right at that torque only.
+    Secant,
+}
+
+impl ForceLawKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            ForceLawKind::LoadDependent => "load-dependent",
+            ForceLawKind::Secant => "secant",
+        }
+    }
+}
+
 /// Translation of each gear along the line of action on its bearings (model (c)). The
 /// translations across the line of action are left out: a frictionless spur mesh force has no
 /// component there, so they are neither excited nor coupled (an exact reduction, not a
@@ -114,6 +147,10 @@ pub struct MeshModel {
     /// Where the back flanks' own k and e are read (see [`MeshModel::mesh_force`]):
     /// `Some(ρ)`: at the mirrored angle ρ − θ; `None`: at θ, with e a positional error.
     pub back_reflection: Option<f64>,
+    /// The load-dependent force law W(θ, δ) of the flanks (θ from the same origin as `mesh`);
+    /// `None`: the secant law k(θ)(δ − e(θ)) of `mesh`, linear in δ. `mesh` stays the secant at
+    /// the design load (the mean stiffness of the damping ratio and the natural frequency).
+    pub force_law: Option<ForceLaw>,
 }
 
 /// State of the lumped model: positions q = (p, y₁, y₂) [m] and their velocities [m/s]. Without
@@ -226,32 +263,56 @@ impl MeshModel {
     }
 
     /// Elastic mesh force at mesh deflection δ (≥ 0 on the drive side, < 0 on the back side).
-    /// Drive flanks: W = k(θ)(δ − e(θ)) while δ > e(θ). Back flanks, once the backlash j is
-    /// taken up: with [`MeshModel::back_reflection`] ρ, the back flanks are the drive flanks of
-    /// the mirrored pair (symmetric teeth and relief: mirroring about the centre line swaps the
-    /// flanks and turns θ into ρ − θ), so they carry their own stiffness k_b = k(ρ − θ) and their
-    /// own relief e_b = e(ρ − θ), which widens the gap: W = k_b (δ + j + e_b) while
-    /// δ + j + e_b < 0. Without it, the drive side's k(θ) and e read as a positional error
-    /// (shifting both flanks alike): W = k(θ)(δ − e + j).
+    /// Drive flanks: W = W_d(θ, δ), the secant law k(θ)(δ − e(θ)) while δ > e(θ), or the
+    /// [`MeshModel::force_law`]. Back flanks, once the backlash j is taken up: with
+    /// [`MeshModel::back_reflection`] ρ, the back flanks are the drive flanks of the mirrored
+    /// pair (symmetric teeth and relief: mirroring about the centre line swaps the flanks and
+    /// turns θ into ρ − θ), so they carry the drive flanks' law at ρ − θ with the approach
+    /// −(δ + j): W = −W_d(ρ − θ, −(δ + j)); for the secant law that is k_b (δ + j + e_b) while
+    /// δ + j + e_b < 0, with k_b = k(ρ − θ), e_b = e(ρ − θ) (the relief widens the gap). Without
+    /// it, the drive side's law reads e as a positional error (shifting both flanks alike):
+    /// W = −W_d(θ, 2e(θ) − δ − j).
     pub fn mesh_force(&self, theta: f64, deflection: f64) -> f64 {
-        let e = self.mesh.unloaded_te.at(theta);
-        let drive = deflection - e;
+        let drive = self.drive_force(theta, deflection);
         match self.backlash {
-            None => self.mesh.stiffness.at(theta) * drive,
-            Some(_) if drive > 0.0 => self.mesh.stiffness.at(theta) * drive,
-            Some(j) => match self.back_reflection {
-                Some(rho) => {
-                    let back = rho - theta;
-                    let gap = deflection + j + self.mesh.unloaded_te.at(back);
-                    if gap < 0.0 {
-                        self.mesh.stiffness.at(back) * gap
-                    } else {
-                        0.0
+            None => drive,
+            Some(_) if drive > 0.0 => drive,
+            Some(j) => {
+                let back = match self.back_reflection {
+                    Some(rho) => self.drive_force(rho - theta, -(deflection + j)),
+                    None => {
+                        let e = self.mesh.unloaded_te.at(theta);
+                        self.drive_force(theta, 2.0 * e - deflection - j)
                     }
+                };
+                -back.max(0.0)
+            }
+        }
+    }
+
+    /// The drive flanks' force at approach δ: the force law, or the secant law (which goes on
+    /// into tension below first contact; [`MeshModel::mesh_force`] decides what that means).
+    fn drive_force(&self, theta: f64, deflection: f64) -> f64 {
+        match &self.force_law {
+            Some(law) => {
+                let first = law.first_contact(theta);
+                if deflection > first || self.backlash.is_some() {
+                    law.force(theta, deflection)
+                } else {
+                    // The no-separation model: the law's first-contact slope into tension.
+                    law.force_and_slope(theta, first + 1e-12).1 * (deflection - first)
                 }
-                None if drive < -j => self.mesh.stiffness.at(theta) * (drive + j),
-                None => 0.0,
-            },
+            }
+            None => self.mesh.stiffness.at(theta) * (deflection - self.mesh.unloaded_te.at(theta)),
+        }
+    }
+
+    /// The mesh deflection δ under the static force F at roll angle θ, the bearings at rest:
+    /// the model's quasi-static transmission error along the line of action (W(θ, δ) = F).
+    pub fn quasi_static_deflection(&self, theta: f64) -> f64 {
+        match &self.force_law {
+            Some(law) if self.force > 0.0 => law.deflection_under(theta, self.force),
+            _ => self.mesh.unloaded_te.at(theta) + self.force / self.mesh.stiffness.at(theta),
         }
     }
 
@@ -330,15 +391,26 @@ impl MeshModel {
         d
     }
 
-    /// The linear model of the Floquet analysis: no load, no TE, no separation.
-    fn linearized(&self) -> MeshModel {
+    /// The linear model of the Floquet analysis: no load, no TE, no separation; with a force
+    /// law, the tangent stiffness dW/dδ about the quasi-static state under F (what small
+    /// vibrations about the loaded mesh feel), sampled as finely as the law.
+    pub(crate) fn linearized(&self) -> MeshModel {
+        let stiffness = match &self.force_law {
+            Some(law) => PeriodicTable::from_fn(self.mesh.period(), law.knots.len(), |theta| {
+                law.force_and_slope(theta, self.quasi_static_deflection(theta))
+                    .1
+            }),
+            None => self.mesh.stiffness.clone(),
+        };
         MeshModel {
             backlash: None,
             force: 0.0,
             mesh: MeshStiffness {
+                stiffness,
                 unloaded_te: PeriodicTable::constant(self.mesh.period(), 0.0),
                 ..self.mesh.clone()
             },
+            force_law: None,
             ..self.clone()
         }
     }
@@ -508,6 +580,150 @@ pub fn floquet_multipliers(
     }
     monodromy.complex_eigenvalues().iter().copied().collect()
 }
+
+/// The one-period map P of the model as it is integrated — load, unloaded TE, force law,
+/// separation and back flanks included — at `x` (θ = 0), and its Jacobian ∂P/∂x there by
+/// central differences of [`integrate_period`] (positions perturbed by 1e-5 of the static
+/// deflection, velocities by as much times the highest natural frequency ω). The Jacobian is in
+/// the balanced coordinates (q, v/ω) over the active components: same eigenvalues. Where a
+/// perturbed path crosses a contact switch the differences average the two sides' slopes (the
+/// saltation of a piecewise-smooth system, to the perturbation's size).
+fn period_map_jacobian(
+    model: &MeshModel,
+    driver_speed: f64,
+    steps_per_period: usize,
+    x: State,
+) -> (State, DMatrix<f64>) {
+    let active = model.active_components();
+    let n = active.len();
+    let scale = (model.force / model.mesh.mean()).abs().max(1e-9) * 1e-5;
+    let omega = model.highest_frequency();
+    let map = |s: State| integrate_period(model, driver_speed, steps_per_period, s, |_, _, _| {});
+    let mut jacobian = DMatrix::zeros(n, n);
+    for (column, &i) in active.iter().enumerate() {
+        let h = if i < 3 { scale } else { scale * omega };
+        let end = |sign: f64| {
+            let mut s = x;
+            if i < 3 {
+                s.q[i] += sign * h;
+            } else {
+                s.v[i - 3] += sign * h;
+            }
+            map(s)
+        };
+        let (plus, minus) = (end(1.0), end(-1.0));
+        for (row, &j) in active.iter().enumerate() {
+            let balance = match (j < 3, i < 3) {
+                (true, false) => omega,
+                (false, true) => 1.0 / omega,
+                _ => 1.0,
+            };
+            jacobian[(row, column)] =
+                (plus.component(j) - minus.component(j)) / (2.0 * h) * balance;
+        }
+    }
+    (map(x), jacobian)
+}
+
+/// A period-one orbit of the integrated model and its Floquet multipliers.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PeriodicOrbit {
+    /// The state at θ = 0 that returns to itself after one mesh period.
+    pub start: State,
+    /// Eigenvalues of the one-period map's Jacobian at `start`.
+    pub multipliers: Vec<nalgebra::Complex<f64>>,
+    /// Newton iterations the shooting took (0: `start` was given on the orbit).
+    pub iterations: usize,
+}
+
+impl PeriodicOrbit {
+    /// The largest |λ| (> 1: the periodic response is unstable and the motion leaves it).
+    pub fn max_multiplier(&self) -> f64 {
+        self.multipliers
+            .iter()
+            .map(|l| l.norm())
+            .fold(0.0, f64::max)
+    }
+}
+
+/// Shooting: the period-one orbit of the integrated model near `guess`, by Newton on
+/// r(x) = P(x) − x = 0 with the Jacobian of [`period_map_jacobian`], stopped when the state
+/// returns to `tolerance` of the static deflection (velocities over ω). It finds unstable orbits
+/// too, which forward integration never settles on. The steps are damped (halved until |r|
+/// falls, at most [`SHOOTING_HALVINGS`] times): near a contact switch or a multiplier close to
+/// 1 the full Newton step overshoots. `None` when Newton does not converge in
+/// [`SHOOTING_ITERATIONS`] or no damped step lowers |r| (no period-one orbit near the guess, or
+/// a switch too sharp for the differences), or the motion leaves the model's range.
+pub fn periodic_orbit(
+    model: &MeshModel,
+    driver_speed: f64,
+    steps_per_period: usize,
+    guess: State,
+    tolerance: f64,
+) -> Option<PeriodicOrbit> {
+    let active = model.active_components();
+    let n = active.len();
+    let omega = model.highest_frequency();
+    let static_deflection = (model.force / model.mesh.mean()).abs().max(1e-9);
+    let map = |s: State| integrate_period(model, driver_speed, steps_per_period, s, |_, _, _| {});
+    // r in the balanced coordinates (q, v/ω), over the active components.
+    let residual = |x: &State, end: &State| {
+        nalgebra::DVector::from_iterator(
+            n,
+            active.iter().map(|&i| {
+                let scale = if i < 3 { 1.0 } else { 1.0 / omega };
+                (end.component(i) - x.component(i)) * scale
+            }),
+        )
+    };
+    let moved = |x: &State, step: &nalgebra::DVector<f64>, alpha: f64| {
+        let mut y = *x;
+        for (k, &i) in active.iter().enumerate() {
+            if i < 3 {
+                y.q[i] -= alpha * step[k];
+            } else {
+                y.v[i - 3] -= alpha * step[k] * omega;
+            }
+        }
+        y
+    };
+    let mut x = guess;
+    for iteration in 0..=SHOOTING_ITERATIONS {
+        let (end, jacobian) = period_map_jacobian(model, driver_speed, steps_per_period, x);
+        if model.has_diverged(&end) {
+            return None;
+        }
+        let r = residual(&x, &end);
+        if r.amax() <= tolerance * static_deflection {
+            return Some(PeriodicOrbit {
+                start: x,
+                multipliers: jacobian.complex_eigenvalues().iter().copied().collect(),
+                iterations: iteration,
+            });
+        }
+        let step = (jacobian - DMatrix::identity(n, n)).lu().solve(&r)?;
+        let norm = r.norm();
+        let mut alpha = 1.0;
+        let mut accepted = None;
+        for _ in 0..=SHOOTING_HALVINGS {
+            let trial = moved(&x, &step, alpha);
+            let end = map(trial);
+            if !model.has_diverged(&end) && residual(&trial, &end).norm() < norm {
+                accepted = Some(trial);
+                break;
+            }
+            alpha *= 0.5;
+        }
+        x = accepted?;
+    }
+    None
+}
+
+/// Halvings of a Newton step [`periodic_orbit`] tries before it gives up.
+pub const SHOOTING_HALVINGS: usize = 12;
+
+/// Newton iterations of [`periodic_orbit`] before it gives up.
+pub const SHOOTING_ITERATIONS: usize = 30;
 
 /// The lowest Floquet frequency of the linear model at driver speed Ω₁ [rad/s]: the imaginary
 /// part of the characteristic exponent μ = ln λ / T_m, which is fixed only modulo the mesh

@@ -20,7 +20,6 @@
 //! a separating response shows what that costs each scheme.
 
 use super::{reference_periods, rk4_step, MeshModel, State};
-use crate::stiffness::{MeshStiffness, PeriodicTable};
 
 /// The fixed-step schemes compared.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -151,14 +150,8 @@ fn newmark_step(model: &MeshModel, driver_speed: f64, t: f64, s: &State, h: f64)
 /// to 2(√(1+ζ²) − ζ).)
 pub fn observed_amplification(scheme: Scheme, model: &MeshModel, h: f64) -> (f64, f64) {
     let free = MeshModel {
-        force: 0.0,
         damping: 0.0,
-        backlash: None,
-        mesh: MeshStiffness {
-            unloaded_te: PeriodicTable::constant(model.mesh.period(), 0.0),
-            ..model.mesh.clone()
-        },
-        ..model.clone()
+        ..model.linearized()
     };
     let column = |s: State| {
         let n = scheme.step(&free, 0.0, 0.0, &s, h);

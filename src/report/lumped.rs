@@ -55,7 +55,15 @@ pub fn write_sweep(out: OutputDir, case: &Case, study: &SweepStudy) -> Result<()
     .map(|s| s.to_string())
     .collect();
     header.extend((1..=HARMONICS).map(|h| format!("h{h}_um")));
-    header.extend(["floquet_max_multiplier", "periods_up", "converged_up"].map(String::from));
+    header.extend(
+        [
+            "floquet_max_multiplier_linear",
+            "floquet_max_multiplier_orbit",
+            "periods_up",
+            "converged_up",
+        ]
+        .map(String::from),
+    );
     for k in 1..=PEAKS {
         header.extend([format!("peak{k}_hz"), format!("peak{k}_um")]);
     }
@@ -72,7 +80,9 @@ pub fn write_sweep(out: OutputDir, case: &Case, study: &SweepStudy) -> Result<()
         ];
         row.extend(u.harmonics.iter().map(|h| format!("{:.6}", h * 1e6)));
         row.extend([
-            format!("{:.6}", u.floquet),
+            format!("{:.6}", u.floquet_linear),
+            u.floquet_orbit
+                .map_or_else(String::new, |m| format!("{m:.6}")),
             u.periods.to_string(),
             u.converged.to_string(),
         ]);
@@ -128,7 +138,16 @@ pub fn write_sweep(out: OutputDir, case: &Case, study: &SweepStudy) -> Result<()
         (
             "stability",
             "largest Floquet multiplier |lambda| (> 1 unstable)",
-            vec![("max |lambda|".to_string(), curve(up, &|p| p.floquet))],
+            vec![
+                (
+                    "periodic orbit of the integrated model".to_string(),
+                    curve(up, &|p| p.floquet_orbit.unwrap_or(f64::NAN)),
+                ),
+                (
+                    "drive flanks linearized".to_string(),
+                    curve(up, &|p| p.floquet_linear),
+                ),
+            ],
         ),
     ];
     for (stem, label, series) in plots {
@@ -262,14 +281,23 @@ pub fn write_stability(
     let rpms = &study.rpms;
     out.csv(
         "stability.csv",
-        &["driver_rpm", "mesh_hz", "floquet_max_multiplier"],
-        rpms.iter().zip(&study.multipliers).map(|(r, m)| {
-            vec![
-                format!("{r:.3}"),
-                format!("{:.3}", r / 60.0 * z1),
-                format!("{m:.8}"),
-            ]
-        }),
+        &[
+            "driver_rpm",
+            "mesh_hz",
+            "floquet_max_multiplier_orbit",
+            "floquet_max_multiplier_linear",
+        ],
+        rpms.iter()
+            .zip(&study.multipliers)
+            .zip(&study.linear_multipliers)
+            .map(|((r, m), l)| {
+                vec![
+                    format!("{r:.3}"),
+                    format!("{:.3}", r / 60.0 * z1),
+                    m.map_or_else(String::new, |m| format!("{m:.8}")),
+                    format!("{l:.8}"),
+                ]
+            }),
     )?;
     out.chart(
         "stability",
@@ -284,10 +312,17 @@ pub fn write_stability(
             y_label: "largest Floquet multiplier |lambda|".into(),
             series: vec![
                 (
-                    "max |lambda|".into(),
+                    "periodic orbit of the integrated model".into(),
                     rpms.iter()
                         .copied()
-                        .zip(study.multipliers.iter().copied())
+                        .zip(study.multipliers.iter().map(|m| m.unwrap_or(f64::NAN)))
+                        .collect(),
+                ),
+                (
+                    "drive flanks linearized".into(),
+                    rpms.iter()
+                        .copied()
+                        .zip(study.linear_multipliers.iter().copied())
                         .collect(),
                 ),
                 (
@@ -304,15 +339,25 @@ pub fn write_stability(
 pub fn stability_console(study: &StabilityStudy) -> String {
     let s = &study.summary;
     format!(
-        "{} speeds in {:.3} s; unstable ranges {:?} rpm; principal regions expected near {:?} rpm; max |lambda| {:.4}\n",
+        "{} speeds in {:.3} s; unstable ranges {:?} rpm (the integrated model's periodic orbit; drive flanks linearized: {:?}); principal regions expected near {:?} rpm; max |lambda| {:.4} (linearized {:.4}){}\n",
         s.points,
         s.wall_s,
         s.unstable_rpm_ranges,
+        s.linear_unstable_rpm_ranges,
         s.parametric_region_centres_rpm
             .iter()
             .map(|r| r.round())
             .collect::<Vec<_>>(),
-        s.max_multiplier
+        s.max_multiplier,
+        s.max_multiplier_linear,
+        if s.no_orbit_rpm_ranges.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "; no periodic response found in {:?} rpm (past a fold: a sweep at zero backlash diverges there)",
+                s.no_orbit_rpm_ranges
+            )
+        }
     )
 }
 

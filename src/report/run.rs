@@ -227,7 +227,11 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
             .iter()
             .all(|key| s.get(key).is_none_or(|d| d.is_null()))
     });
-    let checks = self_checks(&[("ltca/", &ltca), (&format!("{fe_run}/"), &fe)]);
+    let checks = self_checks(&[
+        ("ltca/", &ltca),
+        (&format!("{fe_run}/"), &fe),
+        ("sweep-ltca/", &sweep_ltca),
+    ]);
     let failed = |warning: bool| {
         checks
             .iter()
@@ -415,8 +419,9 @@ fn self_check_section(checks: &[StageCheck]) -> Section {
         text: vec![format!(
             "Each stage checks its own answer: the LTCA its periodicity over a base pitch, the \
              contact conditions, the torque balance, the unloaded geometry's expectations and its \
-             mesh against the Hertzian contact; the explicit FE its k(θ) and DTE against the LTCA \
-             on its own mesh. {verdict}"
+             mesh against the Hertzian contact; the explicit FE its k(θ) and static TE against the \
+             LTCA on its own mesh; the lumped model its quasi-static response against the LTCA \
+             from 25 to 300 % of the design torque. {verdict}"
         )],
         tables: vec![Table {
             name: "self_checks",
@@ -709,13 +714,20 @@ fn sections(
         ],
     });
     let mut sweep_text = vec![format!(
-        "Lumped model on the LTCA's k(θ): primary resonance {} rpm, max dynamic factor {}; on the FE's: {} rpm, {}. Largest Floquet multiplier {} (ζ = {}).",
+        "Lumped model on the LTCA's force law: primary resonance {} rpm, max dynamic factor {}; on the FE's k(θ): {} rpm, {}. Largest Floquet multiplier of the model's periodic orbit {} (ζ = {}; drive flanks linearized {}){}.",
         show(number(sweep_ltca, &["primary_resonance_rpm"]), 0),
         show(number(sweep_ltca, &["max_dynamic_factor"]), 2),
         show(s.primary_resonance_rpm_fe, 0),
         show(s.max_dynamic_factor_fe, 2),
         show(number(stability, &["max_multiplier"]), 3),
         show(number(stability, &["damping_ratio"]), 3),
+        show(number(stability, &["max_multiplier_linear"]), 3),
+        field(stability, &["no_orbit_rpm_ranges"])
+            .filter(|r| r.as_array().is_some_and(|a| !a.is_empty()))
+            .map_or_else(String::new, |r| format!(
+                "; no period-one response found in {} rpm (past a fold, or sub-harmonic)",
+                ranges(Some(r))
+            )),
     )];
     sweep_text.extend(s.sweep_warnings.iter().map(|w| format!("Warning, {w}.")));
     out.push(Section {

@@ -15,9 +15,11 @@
 //! face width b they are in N/µm. The standard's model is a solid steel disc gear; it ignores
 //! the bore and the rim/web compliance the FE carries down to the bore.
 
+pub mod force_law;
 pub mod mesh;
 pub mod potential_energy;
 
+pub use force_law::ForceLaw;
 pub use mesh::{MeshStiffness, PeriodicTable};
 
 use crate::geometry::GearPair;

@@ -278,6 +278,7 @@ pub fn lumped_twin(
         force: torque / rb[1],
         backlash: Some(pair.backlash_normal.max(0.0)),
         bearings: None,
+        force_law: None,
     }
 }
 

@@ -7,9 +7,11 @@
 //! c = 2ζ√(k̄ m_e), or the case's coefficient when it gives one.
 
 use crate::case::{Case, Override, StiffnessSource};
-use crate::lumped::{Bearings, Drive, MeshModel};
-use crate::stiffness::{self, potential_energy, MeshStiffness};
+use crate::ltca::{LtcaModel, PositionResult};
+use crate::lumped::{Bearings, Drive, ForceLawKind, MeshModel};
+use crate::stiffness::{self, potential_energy, ForceLaw, MeshStiffness};
 
+use super::checks::{Check, CheckKind};
 use super::{load_torque, StudyError};
 
 /// The lumped commands' flags (`sweep`, `stability`, `validate`), each a shorthand for an
@@ -73,6 +75,28 @@ impl LumpedShorthands {
 /// Mesh positions of the stiffness tables the lumped model is built on.
 pub const POSITIONS: usize = 64;
 
+/// The loads of the force law's knots, as fractions of the design torque: a geometric ladder
+/// of ratio [`FORCE_LAW_LOAD_RATIO`] from 0.035 to 4.8, the design load one of them (so the law
+/// and the secant agree there). None of [`QUASI_STATIC_LOADS`] but 100 % is a knot, so the
+/// quasi-static check tests the interpolation between knots.
+pub fn force_law_loads() -> Vec<f64> {
+    (-15..=7).map(|k| FORCE_LAW_LOAD_RATIO.powi(k)).collect()
+}
+
+/// The ratio of neighbouring loads of the force law's knots. A new tooth pair coming into
+/// contact puts a corner into W(δ) between two knots that the interpolation rounds off; at 1.6
+/// the quasi-static TE of the paper pair missed the LTCA's by 1.6 % there, at 1.25 by at most
+/// 0.35 % (25–300 % of the design torque).
+pub const FORCE_LAW_LOAD_RATIO: f64 = 1.25;
+
+/// The loads at which the lumped model's quasi-static response is checked against the LTCA,
+/// as fractions of the design torque.
+pub const QUASI_STATIC_LOADS: [f64; 6] = [0.25, 0.5, 1.0, 1.5, 2.0, 3.0];
+
+/// The largest difference allowed between the lumped model's quasi-static TE and the LTCA's
+/// STE at the same torque, over the mean loaded deflection: 1 %.
+pub const QUASI_STATIC_TOLERANCE: f64 = 0.01;
+
 /// The lumped model of a case and what it was built from.
 #[derive(Debug, Clone)]
 pub struct LumpedSetup {
@@ -88,6 +112,9 @@ pub struct LumpedSetup {
     pub natural_frequency_hz: f64,
     /// One line saying which model was used and what it leaves out.
     pub model_note: String,
+    /// The model's checks of its own answer: its quasi-static response against the LTCA
+    /// ([`quasi_static_checks`]); empty for sources other than the LTCA.
+    pub self_checks: Vec<Check>,
 }
 
 /// Rotary inertias of the gears [kg·m²]: the case's, or ρ b ∫r² dA of the bodies.
@@ -142,31 +169,71 @@ pub fn back_reflection(pair: &crate::geometry::GearPair, mesh: &MeshStiffness) -
     pair.back_flank_reflection() - 2.0 * mesh.origin
 }
 
-/// Builds the case's lumped model (`[lumped]`, the first operating point's torque).
+/// Builds the case's lumped model (`[lumped]`, the first operating point's torque). With the
+/// `ltca` source the LTCA is solved at [`force_law_loads`] and [`QUASI_STATIC_LOADS`] at once:
+/// the first give the force law (`lumped.force_law = "load-dependent"`) and the secant k(θ) at
+/// the design torque, the second check the model's quasi-static response.
 pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
     let settings = &case.lumped;
     let torque = load_torque(case)?;
     let started = std::time::Instant::now();
-    let mut mesh = mesh_stiffness(case, &settings.stiffness, torque)?;
+    let (mut mesh, mut force_law, reference) = match &settings.stiffness {
+        StiffnessSource::Ltca => {
+            let variant = super::relief_variant(case, settings.relief.as_deref())?;
+            let ltca = super::ltca::model(case, &variant.modifications)?;
+            let source = format!("ltca (relief {})", variant.name);
+            let (mesh, law, reference) = ltca_tables(case, &ltca, torque, &source)?;
+            let law = (settings.force_law == ForceLawKind::LoadDependent).then_some(law);
+            (mesh, law, Some(reference))
+        }
+        source => (mesh_stiffness(case, source, torque)?, None, None),
+    };
     let stiffness_wall_s = started.elapsed().as_secs_f64();
     let mut rims_note = String::new();
+    let mut twist = 0.0;
     if settings.rims {
+        twist = super::compare::twist_behind_free_hubs(case, settings.drive);
         mesh = rims(case, &settings.stiffness, mesh)?;
+        if let Some(law) = force_law {
+            force_law = Some(law.without_series_compliance(twist).ok_or_else(|| {
+                StudyError::Input(format!(
+                    "the gear bodies' twist ({twist:.3e} m/N) is not below the mesh's tangent \
+                     compliance at every load of the force law: check bore_radius_mm, or drop \
+                     lumped.rims"
+                ))
+            })?);
+        }
         rims_note = format!(
-            "; rims: the free bodies' twist ({:.3e} m/N) taken out of the hub-to-hub k",
-            super::compare::twist_behind_free_hubs(case, settings.drive)
+            "; rims: the free bodies' twist ({twist:.3e} m/N) taken out of the hub-to-hub k"
         );
     }
     let inertias = gear_inertias(case);
-    let (model, damping_ratio) = model_on(case, mesh, torque);
+    let (mut model, damping_ratio) = model_on(case, mesh, torque);
+    let law_note = match (&force_law, &settings.stiffness) {
+        (Some(law), _) => format!(
+            "; mesh force law W(θ, δ) from the LTCA at {} loads, {:.3}–{:.3} × the design torque (load-dependent stiffness and loaded contact ratio; beyond them the last tangent)",
+            law.torques.len(),
+            law.torques[0] / torque,
+            law.torques[law.torques.len() - 1] / torque
+        ),
+        (None, StiffnessSource::Ltca) => {
+            "; secant mesh force law k(θ)(δ − e) at the design torque (lumped.force_law = \"secant\": right at that torque only)".to_string()
+        }
+        (None, _) => "; mesh force linear in the approach, k(θ)(δ − e) (the source gives one k(θ))".to_string(),
+    };
+    model.force_law = force_law;
     let natural_frequency_hz = model.natural_frequency() / std::f64::consts::TAU;
+    let self_checks = match &reference {
+        Some(reference) => quasi_static_checks(case, &model, twist, reference),
+        None => Vec::new(),
+    };
     let drive = settings.drive.name();
     let model_note = match &model.bearings {
         None => format!(
-            "1-DOF along the line of action ({drive} drive; the torsional 2-DOF with rigid shafts and bearings reduced exactly: torque drive -> relative coordinate, speed drive -> driven gear only); mesh stiffness periodic in the driver roll angle{rims_note}"
+            "1-DOF along the line of action ({drive} drive; the torsional 2-DOF with rigid shafts and bearings reduced exactly: torque drive -> relative coordinate, speed drive -> driven gear only); mesh stiffness periodic in the driver roll angle{law_note}{rims_note}"
         ),
         Some(b) => format!(
-            "3-DOF: relative rotation along the line of action ({drive} drive) + each gear's translation on its bearings along the line of action (k_b = {:.3e} / {:.3e} N/m, m = {:.3} / {:.3} kg); translations across the line of action left out (a frictionless spur mesh force does not excite them)",
+            "3-DOF: relative rotation along the line of action ({drive} drive) + each gear's translation on its bearings along the line of action (k_b = {:.3e} / {:.3e} N/m, m = {:.3} / {:.3} kg); translations across the line of action left out (a frictionless spur mesh force does not excite them){law_note}",
             b.stiffness[0], b.stiffness[1], b.mass[0], b.mass[1]
         ) + &rims_note,
     };
@@ -179,7 +246,98 @@ pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
         damping_ratio,
         natural_frequency_hz,
         model_note,
+        self_checks,
     })
+}
+
+/// The LTCA's cycles at [`QUASI_STATIC_LOADS`] × the design torque (`torques`, `cycles`).
+pub struct QuasiStaticReference {
+    pub torques: Vec<f64>,
+    pub cycles: Vec<Vec<PositionResult>>,
+}
+
+/// The LTCA of `ltca` at [`force_law_loads`] and [`QUASI_STATIC_LOADS`] × `torque`, solved at
+/// once: the secant k(θ) at `torque`, the force law, and the quasi-static reference.
+pub fn ltca_tables(
+    case: &Case,
+    ltca: &LtcaModel,
+    torque: f64,
+    source: &str,
+) -> Result<(MeshStiffness, ForceLaw, QuasiStaticReference), StudyError> {
+    let loads = force_law_loads();
+    let law_torques: Vec<f64> = loads.iter().map(|f| f * torque).collect();
+    let check_torques: Vec<f64> = QUASI_STATIC_LOADS.iter().map(|f| f * torque).collect();
+    let all: Vec<f64> = law_torques.iter().chain(&check_torques).copied().collect();
+    let mut cycles = ltca.run_torques(POSITIONS, &all)?;
+    let check_cycles = cycles.split_off(law_torques.len());
+    let design = loads
+        .iter()
+        .position(|f| *f == 1.0)
+        .expect("the design load is a knot");
+    let mesh = stiffness::from_ltca(&case.pair, &cycles[design], torque, source)
+        .map_err(StudyError::Input)?;
+    let law = ForceLaw::from_ltca(&case.pair, &law_torques, &cycles, source)
+        .map_err(StudyError::Input)?;
+    Ok((
+        mesh,
+        law,
+        QuasiStaticReference {
+            torques: check_torques,
+            cycles: check_cycles,
+        },
+    ))
+}
+
+/// The model's quasi-static TE (W(θ, δ) = T/r_b2, bearings at rest; plus the body twist c·W
+/// taken out for rims) against the LTCA's STE r_b2 φ at each torque of `reference`: the
+/// largest difference over the cycle, over the mean loaded deflection r_b2 (φ − φ₀), within
+/// [`QUASI_STATIC_TOLERANCE`]. An error for the load-dependent law (the table must hold the
+/// LTCA's answer between its knots) and for any law at the design torque; a warning for the
+/// secant law elsewhere (right at one torque only, by construction).
+pub fn quasi_static_checks(
+    case: &Case,
+    model: &MeshModel,
+    series_compliance: f64,
+    reference: &QuasiStaticReference,
+) -> Vec<Check> {
+    let rb2 = case.pair.gears[1].base_radius;
+    let design = model.force * rb2;
+    reference
+        .torques
+        .iter()
+        .zip(&reference.cycles)
+        .map(|(&torque, cycle)| {
+            let force = torque / rb2;
+            let loaded = MeshModel {
+                force,
+                ..model.clone()
+            };
+            let mut worst: f64 = 0.0;
+            let mut deflection = 0.0;
+            for r in cycle {
+                let theta = r.roll_angle - model.mesh.origin;
+                let lumped = loaded.quasi_static_deflection(theta) + series_compliance * force;
+                worst = crate::signal::largest([worst, (lumped - rb2 * r.ste).abs()]);
+                deflection += rb2 * (r.ste - r.unloaded_te) / cycle.len() as f64;
+            }
+            let check = Check::new(
+                "lumped",
+                format!(
+                    "quasi-static TE at {:.0} % of the design torque: largest difference from the LTCA's STE over the mean loaded deflection",
+                    100.0 * torque / design
+                ),
+                (worst / deflection, 0.0),
+                format!("the LTCA at {torque:.4} N·m on the same mesh"),
+                (CheckKind::Absolute, QUASI_STATIC_TOLERANCE),
+            );
+            let at_design = (torque / design - 1.0).abs() < 1e-9;
+            if model.force_law.is_none() && !at_design {
+                check.warning()
+            } else {
+                check
+            }
+        })
+        .collect()
 }
 
 /// `mesh` (a hub-to-hub stiffness from `source`) with the bodies' twist behind free hubs taken
@@ -244,6 +402,7 @@ pub fn model_on(case: &Case, mesh: MeshStiffness, torque: f64) -> (MeshModel, f6
         force: torque / base_radii[1],
         backlash,
         bearings,
+        force_law: None,
     };
     // A coefficient in the case wins over its ratio (`--damping-ratio` removes the coefficient).
     let damping_ratio = match settings.mesh_damping {

@@ -13,8 +13,10 @@
 //!   position (driver rotation θ ↔ −θ′: the contact runs the path the other way): the mean within
 //!   0.5 %, every position within 2 % (the node-to-surface contact's own jitter between
 //!   neighbouring positions is about 1 %: which gear's nodes are the candidates changes);
-//! * the lumped sweep on the LTCA's k(θ) (its outcome is reported, not judged: a zero-backlash
-//!   pair may leave the model near resonance, issue 29);
+//! * the lumped model on the LTCA's force law: its quasi-static TE against the LTCA from 25 to
+//!   300 % of the design torque ([`super::lumped::quasi_static_checks`], judged), and its sweep
+//!   (the outcome reported, not judged: a zero-backlash pair may leave the model near
+//!   resonance);
 //! * the relief optimizer with its defaults: the optimum's robust STE peak-to-peak at most the
 //!   better of its starts (no relief, the classic rule long);
 //! * optionally (the binary's `--fe`) the explicit FE's stiffness scene against the LTCA on its
@@ -174,11 +176,12 @@ pub fn row(pair: &MatrixPair, progress: Progress) -> Result<PairRow, StudyError>
     );
     progress(&stage, 3, 5);
 
-    let (sweep_outcome, sweep_max_dynamic_factor, sweep_primary_resonance_rpm) =
+    let (sweep_outcome, sweep_max_dynamic_factor, sweep_primary_resonance_rpm, lumped_checks) =
         sweep_outcome(&case)?;
     progress(&stage, 4, 5);
 
     let mut checks: Vec<Check> = ltca.summary.self_checks.clone();
+    checks.extend(lumped_checks);
     // The relief optimizer with its defaults (LTCA only): its optimum at most the better of
     // its two starts' objectives (no relief, the classic rule long), which it begins from.
     let (optimize_none, optimize_optimum) = match super::optimize::run(
@@ -329,10 +332,13 @@ pub fn failed_row(pair: &MatrixPair, message: &str) -> PairRow {
     }
 }
 
-/// The lumped sweep of the case on its LTCA k(θ) over 0.3 … 1.5 × the primary resonance speed
-/// (120 speeds): its outcome, largest dynamic factor and primary resonance.
-fn sweep_outcome(case: &Case) -> Result<(String, Option<f64>, Option<f64>), StudyError> {
+/// The lumped sweep of the case on its LTCA force law over 0.3 … 1.5 × the primary resonance
+/// speed (120 speeds): its outcome, largest dynamic factor and primary resonance, and the
+/// model's quasi-static checks against the LTCA.
+type SweepOutcome = (String, Option<f64>, Option<f64>, Vec<Check>);
+fn sweep_outcome(case: &Case) -> Result<SweepOutcome, StudyError> {
     let setup = super::lumped::setup(case)?;
+    let checks = setup.self_checks.clone();
     let primary = super::lumped::speed_for_mesh_frequency(case, setup.natural_frequency_hz);
     let rpm = super::RpmRange(
         (0..120)
@@ -349,24 +355,28 @@ fn sweep_outcome(case: &Case) -> Result<(String, Option<f64>, Option<f64>), Stud
             "completed".into(),
             Some(study.summary.max_dynamic_factor),
             study.summary.primary_resonance_rpm,
+            checks,
         ),
         super::sweep::SweepRun::Diverged(checkpoint) => (
             checkpoint.progress.diverged.map_or_else(
                 || "diverged".into(),
                 |d| {
                     format!(
-                        "diverged at {:.0} rpm ({}; backlash {:.0} µm, Floquet {:.3})",
+                        "diverged at {:.0} rpm ({}; backlash {:.0} µm, Floquet: orbit {}, drive flanks linearized {:.3})",
                         d.driver_speed_rpm,
                         d.direction,
                         d.backlash_m * 1e6,
+                        d.orbit_floquet_max_multiplier
+                            .map_or_else(|| "none found".into(), |m| format!("{m:.3}")),
                         d.floquet_max_multiplier
                     )
                 },
             ),
             None,
             None,
+            checks,
         ),
-        super::sweep::SweepRun::Interrupted(_) => ("interrupted".into(), None, None),
+        super::sweep::SweepRun::Interrupted(_) => ("interrupted".into(), None, None, checks),
     })
 }
 

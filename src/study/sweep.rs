@@ -102,6 +102,8 @@ pub struct SweepSummary {
     /// Where the `--run-up-s` transient diverged, the cause and the remedy.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub run_up_diverged: Option<String>,
+    /// The model's checks of its own answer (its quasi-static response against the LTCA).
+    pub self_checks: Vec<super::checks::Check>,
 }
 
 /// The study's result.
@@ -250,7 +252,7 @@ pub fn run(case: &Case, options: &SweepOptions) -> Result<SweepRun, StudyError> 
         separation_rpm_ranges: separation_ranges,
         unstable_rpm: up
             .iter()
-            .filter(|p| p.floquet > 1.0)
+            .filter(|p| p.floquet_orbit.is_some_and(|m| m > 1.0))
             .map(|p| p.driver_speed_rpm)
             .collect(),
         points: rpms.len(),
@@ -262,6 +264,7 @@ pub fn run(case: &Case, options: &SweepOptions) -> Result<SweepRun, StudyError> 
         model: setup.model_note.clone(),
         warnings,
         run_up_diverged,
+        self_checks: setup.self_checks.clone(),
     };
     Ok(SweepRun::Done(Box::new(SweepStudy {
         setup,

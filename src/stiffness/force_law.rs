@@ -1,0 +1,363 @@
+//! The load-dependent mesh force law W(θ, δ) of one set of flanks: the quasi-static mesh force
+//! along the line of action as a function of the driver roll angle θ and the approach δ (the
+//! transmission error along the line of action), tabulated by the LTCA from first contact up
+//! to several times the design load.
+//!
+//! A secant k(θ) taken at one torque ([`super::MeshStiffness`]) gives W = k(θ)(δ − e(θ)): right
+//! at that torque only. A real pair stiffens with load (more contact points close on the curved
+//! flanks, relieved tips come into contact, the loaded contact ratio grows), so its quasi-static
+//! answer at another torque is not the secant's. The table holds the LTCA's own answers.
+//!
+//! # Table and interpolation
+//! At each position j of a uniform grid over one mesh period the LTCA gives, for torques T_k,
+//! the approach δ_jk = r_b2 φ_jk, the normal force W_jk = Σ F (= T_k / r_b2 without friction)
+//! and the tangent stiffness m_jk = dW/dδ on the active set; the first knot is first contact,
+//! δ_j0 = e(θ_j) (the unloaded TE, r_b2 φ₀), W_j0 = 0. Between knots W_j(δ) is the cubic
+//! Hermite interpolant (C¹ in δ, as RK4 and the linearizations need) with slopes limited to
+//! three times the adjacent secants, the Fritsch–Carlson condition that keeps it monotone
+//! (Fritsch & Carlson 1980, *SIAM J. Numer. Anal.* 17(2)); the first knot's slope is the
+//! quadratic end condition 2Δ₀ − m₁ clipped to [0, 3Δ₀]. Below first contact W = 0; above the
+//! last knot W continues with the last tangent. Between positions W(θ, δ) = (1 − t) W_j(δ) +
+//! t W_{j+1}(δ), periodic over the mesh period, so W stays monotone in δ.
+
+use crate::geometry::GearPair;
+use crate::ltca::PositionResult;
+
+/// One knot of a position's force law: approach δ [m], force W [N], slope dW/dδ [N/m].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Knot {
+    pub deflection: f64,
+    pub force: f64,
+    pub slope: f64,
+}
+
+/// The mesh force law W(θ, δ) of one set of flanks over one mesh period (see the module doc).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ForceLaw {
+    /// Where it comes from, for outputs.
+    pub source: String,
+    /// Period in driver roll angle [rad].
+    pub period: f64,
+    /// Driver roll angle of the first position [rad] (θ = 0 of [`ForceLaw::force`]).
+    pub origin: f64,
+    /// Load torques on the driven gear the knots were solved at [N·m], ascending.
+    pub torques: Vec<f64>,
+    /// Knots of each position (uniform over one period), first contact first.
+    pub knots: Vec<Vec<Knot>>,
+}
+
+impl ForceLaw {
+    /// The law from the LTCA's cycles at ascending `torques` (`cycles[k][j]`: torque k,
+    /// position j, the positions uniform over one base pitch). Errors say what is wrong.
+    pub fn from_ltca(
+        pair: &GearPair,
+        torques: &[f64],
+        cycles: &[Vec<PositionResult>],
+        source: impl Into<String>,
+    ) -> Result<Self, String> {
+        if torques.is_empty() || torques.len() != cycles.len() {
+            return Err(format!(
+                "{} torques and {} LTCA cycles: give one cycle per torque, at least one",
+                torques.len(),
+                cycles.len()
+            ));
+        }
+        if torques.windows(2).any(|w| !(w[1] > w[0])) || !(torques[0] > 0.0) {
+            return Err("the force law's torques must be positive and ascending".into());
+        }
+        let positions = cycles[0].len();
+        if positions == 0 || cycles.iter().any(|c| c.len() != positions) {
+            return Err("every LTCA cycle of the force law needs the same positions".into());
+        }
+        let rb2 = pair.gears[1].base_radius;
+        let mut knots = Vec::with_capacity(positions);
+        for j in 0..positions {
+            let first = &cycles[0][j];
+            let mut position = vec![Knot {
+                deflection: rb2 * first.unloaded_te,
+                force: 0.0,
+                slope: f64::NAN,
+            }];
+            for (cycle, torque) in cycles.iter().zip(torques) {
+                let r = &cycle[j];
+                let knot = Knot {
+                    deflection: rb2 * r.ste,
+                    force: r.total_force,
+                    slope: r.tangent_stiffness,
+                };
+                let last = position.last().expect("first contact");
+                if !(knot.deflection > last.deflection && knot.force > last.force) {
+                    return Err(format!(
+                        "the LTCA's approach does not grow with the load at position {j} \
+                         (torque {torque:.4} N·m: δ {:.6e} m after {:.6e} m): the force law \
+                         needs a monotone load-deflection curve",
+                        knot.deflection, last.deflection
+                    ));
+                }
+                position.push(knot);
+            }
+            limit_slopes(&mut position);
+            knots.push(position);
+        }
+        Ok(Self {
+            source: source.into(),
+            period: pair.gears[0].angular_pitch(),
+            origin: cycles[0][0].roll_angle,
+            torques: torques.to_vec(),
+            knots,
+        })
+    }
+
+    /// The law with a compliance `c` [m/N] taken out of series: each knot's approach less c W,
+    /// its slope 1/(1/m − c). `None` when c is not below every knot's 1/m (the rest would not
+    /// be a stiffness).
+    pub fn without_series_compliance(&self, c: f64) -> Option<Self> {
+        let mut out = self.clone();
+        for knot in out.knots.iter_mut().flatten() {
+            knot.deflection -= c * knot.force;
+            if knot.slope > 0.0 {
+                let rest = 1.0 / knot.slope - c;
+                if !(rest > 0.0) {
+                    return None;
+                }
+                knot.slope = 1.0 / rest;
+            }
+        }
+        for position in &mut out.knots {
+            if position
+                .windows(2)
+                .any(|w| !(w[1].deflection > w[0].deflection))
+            {
+                return None;
+            }
+            limit_slopes(position);
+        }
+        out.source = format!("{} without {c:.3e} m/N body twist", self.source);
+        Some(out)
+    }
+
+    /// The positions' indices and weight around θ (measured from [`ForceLaw::origin`]).
+    fn bracket(&self, theta: f64) -> (usize, usize, f64) {
+        let n = self.knots.len();
+        let u = (theta / self.period).rem_euclid(1.0) * n as f64;
+        let i = (u.floor() as usize).min(n - 1);
+        (i, (i + 1) % n, u - i as f64)
+    }
+
+    /// Mesh force W(θ, δ) [N] and its slope dW/dδ [N/m] at driver roll angle θ from the origin
+    /// and approach δ [m]; zero below first contact.
+    pub fn force_and_slope(&self, theta: f64, deflection: f64) -> (f64, f64) {
+        let (i, j, t) = self.bracket(theta);
+        let (wi, si) = position_force(&self.knots[i], deflection);
+        let (wj, sj) = position_force(&self.knots[j], deflection);
+        (wi * (1.0 - t) + wj * t, si * (1.0 - t) + sj * t)
+    }
+
+    /// Mesh force W(θ, δ) [N].
+    pub fn force(&self, theta: f64, deflection: f64) -> f64 {
+        self.force_and_slope(theta, deflection).0
+    }
+
+    /// First contact, the approach where W starts to grow at θ [m] (the unloaded TE).
+    pub fn first_contact(&self, theta: f64) -> f64 {
+        let (i, j, t) = self.bracket(theta);
+        // The blend grows as soon as either weighted position does.
+        let (a, b) = (self.knots[i][0].deflection, self.knots[j][0].deflection);
+        match t {
+            0.0 => a,
+            _ if t >= 1.0 => b,
+            _ => a.min(b),
+        }
+    }
+
+    /// The quasi-static approach under mesh force W > 0 at θ: the δ with W(θ, δ) = W [m]
+    /// (W is monotone in δ; bisection to 1e-12 of the bracket, then a Newton step).
+    pub fn deflection_under(&self, theta: f64, force: f64) -> f64 {
+        let mut low = self.first_contact(theta);
+        let top = |i: usize| *self.knots[i].last().expect("knots");
+        let (i, j, _) = self.bracket(theta);
+        let reach = top(i).deflection.max(top(j).deflection);
+        let slope = top(i).slope.min(top(j).slope).max(1.0);
+        // Past the last knot W grows at least with the smaller last slope.
+        let mut high = reach + (force / slope).max(0.0);
+        while self.force(theta, high) < force {
+            high += high - low;
+        }
+        for _ in 0..200 {
+            let mid = 0.5 * (low + high);
+            if self.force(theta, mid) < force {
+                low = mid;
+            } else {
+                high = mid;
+            }
+            if high - low <= 1e-12 * high.abs().max(1e-9) {
+                break;
+            }
+        }
+        let mid = 0.5 * (low + high);
+        let (w, s) = self.force_and_slope(theta, mid);
+        if s > 0.0 {
+            (mid - (w - force) / s).clamp(low, high)
+        } else {
+            mid
+        }
+    }
+
+    /// The secant stiffness W/(δ − e) under mesh force `force` at each of `positions` uniform
+    /// positions of one period (the [`super::MeshStiffness`] this law gives at that load).
+    pub fn secant_stiffness(&self, force: f64, positions: usize) -> Vec<f64> {
+        (0..positions)
+            .map(|j| {
+                let theta = j as f64 * self.period / positions as f64;
+                force / (self.deflection_under(theta, force) - self.first_contact(theta))
+            })
+            .collect()
+    }
+}
+
+/// Limits the loaded knots' slopes to three times the adjacent secants (monotone Hermite) and
+/// sets the first knot's slope by the quadratic end condition.
+fn limit_slopes(knots: &mut [Knot]) {
+    let secant = |a: &Knot, b: &Knot| (b.force - a.force) / (b.deflection - a.deflection);
+    let n = knots.len();
+    let secants: Vec<f64> = knots.windows(2).map(|w| secant(&w[0], &w[1])).collect();
+    for k in 1..n {
+        let mut slope = knots[k].slope;
+        if !(slope.is_finite() && slope > 0.0) {
+            slope = secants[k - 1];
+        }
+        let mut bound = 3.0 * secants[k - 1];
+        if k + 1 < n {
+            bound = bound.min(3.0 * secants[k]);
+        }
+        knots[k].slope = slope.min(bound);
+    }
+    let next = if n > 1 { knots[1].slope } else { 0.0 };
+    knots[0].slope = if n > 1 {
+        (2.0 * secants[0] - next).clamp(0.0, 3.0 * secants[0])
+    } else {
+        0.0
+    };
+}
+
+/// One position's W(δ) and dW/dδ: zero below first contact, cubic Hermite between knots, linear
+/// past the last.
+fn position_force(knots: &[Knot], deflection: f64) -> (f64, f64) {
+    let first = knots[0];
+    if deflection <= first.deflection {
+        return (0.0, 0.0);
+    }
+    let last = *knots.last().expect("knots");
+    if deflection >= last.deflection {
+        return (
+            last.force + last.slope * (deflection - last.deflection),
+            last.slope,
+        );
+    }
+    let k = knots.partition_point(|knot| knot.deflection <= deflection) - 1;
+    let (a, b) = (knots[k], knots[k + 1]);
+    let h = b.deflection - a.deflection;
+    let t = (deflection - a.deflection) / h;
+    let (t2, t3) = (t * t, t * t * t);
+    let h00 = 2.0 * t3 - 3.0 * t2 + 1.0;
+    let h10 = t3 - 2.0 * t2 + t;
+    let h01 = -2.0 * t3 + 3.0 * t2;
+    let h11 = t3 - t2;
+    let force = h00 * a.force + h10 * h * a.slope + h01 * b.force + h11 * h * b.slope;
+    let d00 = (6.0 * t2 - 6.0 * t) / h;
+    let d10 = 3.0 * t2 - 4.0 * t + 1.0;
+    let d01 = (-6.0 * t2 + 6.0 * t) / h;
+    let d11 = 3.0 * t2 - 2.0 * t;
+    let slope = d00 * a.force + d10 * a.slope + d01 * b.force + d11 * b.slope;
+    (force, slope)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn law_of(knots: Vec<Vec<Knot>>) -> ForceLaw {
+        ForceLaw {
+            source: "synthetic".into(),
+            period: 1.0,
+            origin: 0.0,
+            torques: vec![],
+            knots,
+        }
+    }
+
+    /// Knots of W = c (δ − e)^p at `loads`, slopes exact, then limited as the LTCA's are.
+    fn power_law(c: f64, p: f64, e: f64, loads: &[f64]) -> Vec<Knot> {
+        let mut knots = vec![Knot {
+            deflection: e,
+            force: 0.0,
+            slope: f64::NAN,
+        }];
+        for &w in loads {
+            let d = (w / c).powf(1.0 / p);
+            knots.push(Knot {
+                deflection: e + d,
+                force: w,
+                slope: c * p * d.powf(p - 1.0),
+            });
+        }
+        limit_slopes(&mut knots);
+        knots
+    }
+
+    /// A linear law is reproduced exactly (Hermite with exact slopes), past the last knot too,
+    /// and is zero below first contact.
+    #[test]
+    fn a_linear_law_is_reproduced_exactly() {
+        let law = law_of(vec![power_law(2e8, 1.0, 1e-6, &[100.0, 400.0, 2000.0])]);
+        for d in [0.5e-6f64, 1e-6, 1.3e-6, 3e-6, 9e-6, 30e-6] {
+            let expected = (2e8 * (d - 1e-6)).max(0.0);
+            let (w, s) = law.force_and_slope(0.3, d);
+            assert!(
+                (w - expected).abs() <= 1e-9 * 2000.0,
+                "{d}: {w} vs {expected}"
+            );
+            let slope = if d > 1e-6 { 2e8 } else { 0.0 };
+            assert!((s - slope).abs() <= 1e-6 * 2e8, "{d}: {s}");
+        }
+    }
+
+    /// A stiffening law (W ∝ δ^1.3, between Hertz's 1.5 and linear) at loads a factor 1.6 apart:
+    /// the interpolated approach within 0.2 % of the exact one between the knots, and the law
+    /// monotone.
+    #[test]
+    fn a_stiffening_law_interpolates_within_its_knots() {
+        let loads: Vec<f64> = (-7..=3).map(|k| 1000.0 * 1.6f64.powi(k)).collect();
+        let (c, p) = (5e12, 1.3);
+        let law = law_of(vec![power_law(c, p, 0.0, &loads)]);
+        for w in [250.0, 500.0, 1500.0, 2000.0, 3000.0] {
+            let exact = (w / c).powf(1.0 / p);
+            let got = law.deflection_under(0.0, w);
+            assert!((got / exact - 1.0).abs() < 2e-3, "{w}: {got} vs {exact}");
+        }
+        let mut last = 0.0;
+        for i in 1..2000 {
+            let w = law.force(0.0, i as f64 * 1e-8);
+            assert!(w >= last, "not monotone at {i}");
+            last = w;
+        }
+    }
+
+    /// Between two positions the law blends, and the inverse solves it.
+    #[test]
+    fn positions_blend_and_the_inverse_solves_the_law() {
+        let a = power_law(2e8, 1.0, 0.0, &[1000.0]);
+        let b = power_law(4e8, 1.0, 1e-6, &[1000.0]);
+        let law = law_of(vec![a, b]);
+        // Half way from position 0 (θ = 0) to position 1 (θ = 0.5 of the unit period).
+        let theta = 0.25;
+        let d = law.deflection_under(theta, 500.0);
+        let expected = 0.5 * 2e8 * d + 0.5 * 4e8 * (d - 1e-6);
+        assert!((expected - 500.0).abs() < 1e-6, "{d}: {expected}");
+        assert_eq!(law.first_contact(theta), 0.0);
+        assert_eq!(law.force(theta, 0.0), 0.0);
+        assert!(law.force(theta, 1e-9) > 0.0);
+        // Periodic: one period on is the same place.
+        assert_eq!(law.force(theta + 1.0, 2e-6), law.force(theta, 2e-6));
+    }
+}

@@ -138,7 +138,7 @@ pub struct LumpedSection {
     /// The relief variant whose LTCA k(θ) and unloaded TE the `ltca` source takes; default:
     /// the case's first.
     pub relief: Option<String>,
-    /// "load-dependent" (the LTCA's own W(θ, δ) over 0.035–4.8 × the design torque; the `ltca`
+    /// "load-dependent" (the LTCA's own W(θ, δ) over 0.039–8.3 × the design torque; the `ltca`
     /// source only) or "secant" (k(θ) at the design torque, linear in the approach).
     #[serde(default)]
     pub force_law: ForceLawKind,

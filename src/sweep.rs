@@ -125,7 +125,8 @@ impl std::fmt::Display for SweepDivergence {
                  included) was found here (shooting); at the last speed that settled its largest \
                  Floquet multiplier was {last:.4}{}",
                 if last > 0.9 {
-                    ", near 1: the periodic response ends at a fold between the two speeds"
+                    ", near 1: the periodic response ends between the two speeds (a fold or \
+                     another bifurcation of the orbit)"
                 } else {
                     ""
                 }

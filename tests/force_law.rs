@@ -6,7 +6,7 @@
 use geardyn::case::{Case, Override};
 use geardyn::lumped::{steady_state, MeshModel};
 use geardyn::samples;
-use geardyn::study::lumped::{setup, QUASI_STATIC_LOADS, QUASI_STATIC_TOLERANCE};
+use geardyn::study::lumped::{force_law_loads, setup, QUASI_STATIC_LOADS, QUASI_STATIC_TOLERANCE};
 
 fn with(case: Case, overrides: &[Override]) -> Case {
     let path = std::env::temp_dir().join(format!(
@@ -20,27 +20,39 @@ fn with(case: Case, overrides: &[Override]) -> Case {
     out
 }
 
-/// The load-dependent law holds the LTCA's STE at every checked torque (the knots are a 1.25
-/// ladder that misses all of them but 100 %), on the paper pair and on 24/40.
+/// The load-dependent law holds the LTCA's STE at every checked torque, on the law's positions
+/// and half-way between them (the knots are a 1.25 ladder half a step off the design load, so
+/// every checked load falls between two of them), on the paper pair and on 24/40: rms within
+/// 1 % of the deflection (measured ≤ 0.21 %), no position beyond 10 % (measured ≤ 2.4 %).
 #[test]
 fn the_load_dependent_law_holds_the_ltca_from_25_to_300_percent_torque() {
+    let loads = force_law_loads();
+    for load in QUASI_STATIC_LOADS {
+        assert!(
+            !loads.iter().any(|k| (k / load - 1.0).abs() < 0.05),
+            "{load} is a knot"
+        );
+    }
     for case in [
         samples::paper36_case(),
         samples::matrix_pair("24-40").unwrap().case().unwrap(),
     ] {
         let setup = setup(&case).unwrap();
         assert!(setup.model.force_law.is_some());
-        assert_eq!(setup.self_checks.len(), QUASI_STATIC_LOADS.len());
+        assert_eq!(setup.self_checks.len(), 2 * QUASI_STATIC_LOADS.len());
         for check in &setup.self_checks {
             assert!(check.passed, "{}: {}", case.name(), check.line());
-            assert!(check.value.is_finite() && check.value < QUASI_STATIC_TOLERANCE);
+            assert!(check.value.is_finite(), "{}", check.line());
+        }
+        for rms in setup.self_checks.iter().step_by(2) {
+            assert!(rms.value < QUASI_STATIC_TOLERANCE && !rms.warning_only);
         }
     }
 }
 
-/// The secant law is the LTCA's answer at its own torque only: the same check shows it 10 %
-/// and more off at a quarter and at three times the load (a warning, as documented), so the
-/// check is one that can fail.
+/// The secant law is the LTCA's answer at its own torque only: the same check shows it rms 2 %
+/// and more off at every other torque (5 % and 7 % at a quarter and three times the load on the
+/// paper pair; a warning, as documented), so the check is one that can fail.
 #[test]
 fn the_secant_law_misses_the_ltca_away_from_its_torque() {
     let case = with(
@@ -49,19 +61,13 @@ fn the_secant_law_misses_the_ltca_away_from_its_torque() {
     );
     let setup = setup(&case).unwrap();
     assert!(setup.model.force_law.is_none());
-    let by_load: Vec<(f64, &geardyn::study::checks::Check)> = QUASI_STATIC_LOADS
-        .iter()
-        .copied()
-        .zip(&setup.self_checks)
-        .collect();
-    for (load, check) in by_load {
-        if load == 1.0 {
+    let rms: Vec<&geardyn::study::checks::Check> = setup.self_checks.iter().step_by(2).collect();
+    for (load, check) in QUASI_STATIC_LOADS.iter().zip(rms) {
+        if *load == 1.0 {
             assert!(check.passed && !check.warning_only, "{}", check.line());
         } else {
             assert!(!check.passed && check.warning_only, "{}", check.line());
-        }
-        if load == 0.25 || load == 3.0 {
-            assert!(check.value > 0.1, "{}", check.line());
+            assert!(check.value > 0.02, "{}", check.line());
         }
     }
 }

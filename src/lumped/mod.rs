@@ -91,7 +91,7 @@ impl Drive {
 )]
 #[serde(rename_all = "kebab-case")]
 pub enum ForceLawKind {
-    /// The LTCA's own W(θ, δ), tabulated from first contact to 4.8 × the design torque
+    /// The LTCA's own W(θ, δ), tabulated from first contact to 8.3 × the design torque
     /// ([`crate::stiffness::ForceLaw`]): load-dependent stiffness, loaded contact ratio and
     /// contact loss of relieved tips. Only the `ltca` stiffness source has it; the others give
     /// one k(θ) and stay linear.
@@ -253,11 +253,13 @@ impl MeshModel {
     }
 
     /// The highest natural frequency the integration must resolve: at the largest mesh
-    /// stiffness (adding stiffness never lowers an eigenvalue, so this bounds every contact
-    /// state, separation included).
+    /// stiffness, the secant's or, with a force law, the largest slope of its knots (adding
+    /// stiffness never lowers an eigenvalue, so this bounds every contact state the law
+    /// tabulates, separation included; past its last knot the law keeps that knot's slope).
     pub fn highest_frequency(&self) -> f64 {
+        let law = self.force_law.as_ref().map_or(0.0, |law| law.max_slope());
         *self
-            .mode_frequencies(self.mesh.max())
+            .mode_frequencies(self.mesh.max().max(law))
             .last()
             .expect("at least one mode")
     }

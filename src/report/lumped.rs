@@ -354,7 +354,7 @@ pub fn stability_console(study: &StabilityStudy) -> String {
             String::new()
         } else {
             format!(
-                "; no periodic response found in {:?} rpm (past a fold: a sweep at zero backlash diverges there)",
+                "; no period-one response found in {:?} rpm (past a fold, where a sweep at zero backlash diverges, or sub-harmonic)",
                 s.no_orbit_rpm_ranges
             )
         }

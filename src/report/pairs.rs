@@ -34,6 +34,9 @@ pub fn write(dir: OutputDir, result: &PairsValidation) -> Result<String, ReportE
             "sweep_outcome",
             "sweep_max_dynamic_factor",
             "fe_stiffness_mean_rel",
+            "run_self_check_errors",
+            "run_self_check_warnings",
+            "run_wall_s",
             "optimize_ste_pp_none_um",
             "optimize_ste_pp_optimum_um",
             "passed",
@@ -64,6 +67,11 @@ pub fn write(dir: OutputDir, result: &PairsValidation) -> Result<String, ReportE
                 r.sweep_outcome.clone(),
                 opt(r.sweep_max_dynamic_factor, 4),
                 opt(r.fe_stiffness_mean_rel, 5),
+                r.run
+                    .map_or(String::new(), |o| o.self_check_errors.to_string()),
+                r.run
+                    .map_or(String::new(), |o| o.self_check_warnings.to_string()),
+                opt(r.run.map(|o| o.wall_s), 1),
                 format!("{:.4}", r.optimize_ste_pp_none_um),
                 format!("{:.4}", r.optimize_ste_pp_optimum_um),
                 r.passed.to_string(),
@@ -94,8 +102,8 @@ pub fn write(dir: OutputDir, result: &PairsValidation) -> Result<String, ReportE
         }),
     )?;
     let mut md = String::from(
-        "| pair | z1/z2 | m [mm] | α [°] | ε_α | pairs | k̄ [N/m] | STE p-p [µm] | ε_load | periodic (STE) | k̄(h)/k̄(h/4) − 1 | swap mean / max | sweep | relief: robust STE p-p none → optimum [µm] | FE k̄/LTCA − 1 | |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| pair | z1/z2 | m [mm] | α [°] | ε_α | pairs | k̄ [N/m] | STE p-p [µm] | ε_load | periodic (STE) | k̄(h)/k̄(h/4) − 1 | swap mean / max | sweep | relief: robust STE p-p none → optimum [µm] | FE k̄/LTCA − 1 | run: errors / warnings | |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in &result.rows {
         let failed: Vec<&str> = r
@@ -105,7 +113,7 @@ pub fn write(dir: OutputDir, result: &PairsValidation) -> Result<String, ReportE
             .map(|c| c.quantity.as_str())
             .collect();
         md += &format!(
-            "| {} | {}/{} | {} | {} | {:.3} | {} | {:.4e} | {:.3} | {:.3} | {:.1e} | {:+.2} % | {:.2} % / {:.2} % | {} | {:.3} → {:.3} | {} | {} |\n",
+            "| {} | {}/{} | {} | {} | {:.3} | {} | {:.4e} | {:.3} | {:.3} | {:.1e} | {:+.2} % | {:.2} % / {:.2} % | {} | {:.3} → {:.3} | {} | {} | {} |\n",
             r.name,
             r.teeth[0],
             r.teeth[1],
@@ -128,6 +136,10 @@ pub fn write(dir: OutputDir, result: &PairsValidation) -> Result<String, ReportE
             r.optimize_ste_pp_optimum_um,
             r.fe_stiffness_mean_rel
                 .map_or("—".into(), |v| format!("{:+.2} %", 100.0 * v)),
+            r.run.map_or("—".into(), |o| format!(
+                "{} / {} ({:.0} s)",
+                o.self_check_errors, o.self_check_warnings, o.wall_s
+            )),
             if r.passed {
                 if failed.is_empty() {
                     "ok".to_string()

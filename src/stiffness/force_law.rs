@@ -10,8 +10,9 @@
 //!
 //! # Table and interpolation
 //! At each position j of a uniform grid over one mesh period the LTCA gives, for torques T_k,
-//! the approach δ_jk = r_b2 φ_jk, the normal force W_jk = Σ F (= T_k / r_b2 without friction)
-//! and the tangent stiffness m_jk = dW/dδ on the active set; the first knot is first contact,
+//! the approach δ_jk = r_b2 φ_jk, the mesh force W_jk = T_k / r_b2 (the force the 1-DOF model
+//! balances; Σ F equals it where the normals lie on the line of action) and the tangent stiffness
+//! m_jk = dW/dδ = aᵀC_AA⁻¹a / r_b2² on the active set; the first knot is first contact,
 //! δ_j0 = e(θ_j) (the unloaded TE, r_b2 φ₀), W_j0 = 0. Between knots W_j(δ) is the cubic
 //! Hermite interpolant (C¹ in δ, as RK4 and the linearizations need) with slopes limited to
 //! three times the adjacent secants, the Fritsch–Carlson condition that keeps it monotone
@@ -80,9 +81,12 @@ impl ForceLaw {
             }];
             for (cycle, torque) in cycles.iter().zip(torques) {
                 let r = &cycle[j];
+                // The 1-DOF mesh force is the torque over the base radius (what the lumped
+                // model balances); ΣF differs from it where relief turns the normals off the
+                // line of action. The tangent stiffness is d(T/r_b2)/dδ already.
                 let knot = Knot {
                     deflection: rb2 * r.ste,
-                    force: r.total_force,
+                    force: torque / rb2,
                     slope: r.tangent_stiffness,
                 };
                 let last = position.last().expect("first contact");
@@ -151,6 +155,17 @@ impl ForceLaw {
         let (wi, si) = position_force(&self.knots[i], deflection);
         let (wj, sj) = position_force(&self.knots[j], deflection);
         (wi * (1.0 - t) + wj * t, si * (1.0 - t) + sj * t)
+    }
+
+    /// The largest slope dW/dδ of any knot [N/m]: the stiffest the law gets (between knots the
+    /// Hermite slope stays within three times the secants, which the knots' slopes bound on a
+    /// stiffening curve; past the last knot the law keeps its slope).
+    pub fn max_slope(&self) -> f64 {
+        self.knots
+            .iter()
+            .flatten()
+            .map(|k| k.slope)
+            .fold(0.0, f64::max)
     }
 
     /// Mesh force W(θ, δ) [N].
@@ -335,12 +350,44 @@ mod tests {
             let got = law.deflection_under(0.0, w);
             assert!((got / exact - 1.0).abs() < 2e-3, "{w}: {got} vs {exact}");
         }
+        let reach = law.knots[0].last().unwrap().deflection * 1.2;
         let mut last = 0.0;
         for i in 1..2000 {
-            let w = law.force(0.0, i as f64 * 1e-8);
+            let w = law.force(0.0, i as f64 / 2000.0 * reach);
             assert!(w >= last, "not monotone at {i}");
             last = w;
         }
+    }
+
+    /// Slopes far steeper than the secants (a contact closing just past a knot) are limited to
+    /// three times the adjacent secants, so the interpolant stays monotone; without the limit the
+    /// same knots give a curve that dips.
+    #[test]
+    fn steep_slopes_are_limited_so_the_law_stays_monotone() {
+        let knot = |deflection: f64, force: f64, slope: f64| Knot {
+            deflection,
+            force,
+            slope,
+        };
+        let raw = vec![
+            knot(0.0, 0.0, f64::NAN),
+            knot(1e-6, 100.0, 1e8),
+            knot(2e-6, 110.0, 5e9),
+            knot(3e-6, 500.0, 4e8),
+        ];
+        let dips = |knots: &[Knot]| {
+            (1..3000).any(|i| {
+                let d = i as f64 * 1e-9;
+                position_force(knots, d).0 < position_force(knots, d - 1e-9).0 - 1e-9
+            })
+        };
+        let mut unlimited = raw.clone();
+        unlimited[0].slope = 0.0;
+        assert!(dips(&unlimited), "the test's knots must need the limiter");
+        let mut limited = raw;
+        limit_slopes(&mut limited);
+        assert!(limited[2].slope <= 3.0 * 10.0 / 1e-6 + 1e-6);
+        assert!(!dips(&limited));
     }
 
     /// Between two positions the law blends, and the inverse solves it.

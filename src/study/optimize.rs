@@ -627,7 +627,16 @@ fn judge(
     let ste: Vec<f64> = at_design.iter().map(|r| r.ste * rb2 * 1e6).collect();
     let mesh_stiffness = stiffness::from_ltca(pair, &at_design, torque, format!("ltca ({name})"))
         .map_err(StudyError::Input)?;
-    let (lumped, _) = super::lumped::model_on(case, mesh_stiffness.clone(), torque);
+    // The sweep stage's model: with the load-dependent law, the candidate's own.
+    let (mut lumped, _) = super::lumped::model_on(case, mesh_stiffness.clone(), torque);
+    if case.lumped.force_law == crate::lumped::ForceLawKind::LoadDependent {
+        lumped.force_law = Some(super::lumped::force_law_of(
+            case,
+            &model.with_relief(&modifications),
+            torque,
+            &format!("ltca ({name})"),
+        )?);
+    }
     // A diverged sweep does not end the study: the candidate keeps the speeds before it.
     let progress = sweep::continue_sweep(
         &lumped,

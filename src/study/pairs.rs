@@ -78,6 +78,8 @@ pub struct PairRow {
     /// relief and at its optimum [µm].
     pub optimize_ste_pp_none_um: f64,
     pub optimize_ste_pp_optimum_um: f64,
+    /// `geardyn run` end to end, with `--run`.
+    pub run: Option<RunOutcome>,
     pub checks: Vec<Check>,
     pub passed: bool,
     pub wall_s: f64,
@@ -277,6 +279,7 @@ pub fn row(pair: &MatrixPair, progress: Progress) -> Result<PairRow, StudyError>
         fe_static_te_mean_rel: None,
         optimize_ste_pp_none_um: optimize_none,
         optimize_ste_pp_optimum_um: optimize_optimum,
+        run: None,
         checks,
         passed,
         wall_s: started.elapsed().as_secs_f64(),
@@ -320,6 +323,7 @@ pub fn failed_row(pair: &MatrixPair, message: &str) -> PairRow {
         fe_static_te_mean_rel: None,
         optimize_ste_pp_none_um: nan,
         optimize_ste_pp_optimum_um: nan,
+        run: None,
         checks: vec![Check::new(
             "pairs",
             format!("the row's studies: {message}"),
@@ -396,6 +400,35 @@ pub fn add_fe(row: &mut PairRow, fe: Result<&super::fe::FeSummary, String>) {
         }
         Err(message) => row.checks.push(fe_failure(&message)),
     }
+    row.passed = row.checks.iter().all(|c| !c.is_error());
+}
+
+/// What `geardyn run` on a pair left in its summary.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RunOutcome {
+    pub self_check_errors: usize,
+    pub self_check_warnings: usize,
+    pub wall_s: f64,
+}
+
+/// Adds `geardyn run` end to end on the row's pair (the binary's `--run`): its self-check
+/// errors must be none, or the run's failure fails the row.
+pub fn add_run(row: &mut PairRow, run: Result<RunOutcome, String>) {
+    let (errors, why) = match &run {
+        Ok(outcome) => (
+            outcome.self_check_errors as f64,
+            "self-check errors".to_string(),
+        ),
+        Err(message) => (f64::NAN, format!("failed: {message}")),
+    };
+    row.run = run.as_ref().ok().copied();
+    row.checks.push(Check::new(
+        "pairs",
+        format!("geardyn run end to end at coarse settings: {why}"),
+        (errors, 0.0),
+        "every stage's self-checks in the run's summary",
+        (CheckKind::Absolute, 0.0),
+    ));
     row.passed = row.checks.iter().all(|c| !c.is_error());
 }
 

@@ -252,7 +252,9 @@ pub fn run(case: &Case, options: &SweepOptions) -> Result<SweepRun, StudyError> 
         separation_rpm_ranges: separation_ranges,
         unstable_rpm: up
             .iter()
-            .filter(|p| p.floquet_orbit.is_some_and(|m| m > 1.0))
+            // A speed that settled sits on a stable orbit (a multiplier a hair above 1 there is
+            // the differences' noise at a fold); one that did not, on an unstable one.
+            .filter(|p| !p.converged && p.floquet_orbit.is_some_and(|m| m > 1.0))
             .map(|p| p.driver_speed_rpm)
             .collect(),
         points: rpms.len(),

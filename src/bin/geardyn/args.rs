@@ -207,6 +207,10 @@ pub enum Command {
         /// (about two minutes a pair on 2 cores).
         #[arg(long)]
         fe: bool,
+        /// `pairs`: also `geardyn run` end to end on each pair at coarse settings (the stiffness
+        /// scene 4 ms with a 2 ms ramp), its self-checks held (a few minutes a pair).
+        #[arg(long)]
+        run: bool,
     },
     /// Prints a case file: the given one, or the embedded default (start your own from it:
     /// `geardyn case > my.toml`); with --set, the effective case.

@@ -107,8 +107,9 @@ fn main() -> ExitCode {
             common,
             only,
             fe,
+            run,
             ..
-        } => validate_pairs(&common, &only, fe),
+        } => validate_pairs(&common, &only, fe, run),
         Command::Validate {
             study: ValidationStudy::MassScaling,
             common,

@@ -96,7 +96,12 @@ pub fn validate_mass_scaling(args: &CommonArgs, scene: &str) -> Result<()> {
     Ok(())
 }
 
-pub fn validate_pairs(args: &CommonArgs, only: &[String], with_fe: bool) -> Result<()> {
+pub fn validate_pairs(
+    args: &CommonArgs,
+    only: &[String],
+    with_fe: bool,
+    with_run: bool,
+) -> Result<()> {
     if args.case.is_some() || !args.set.is_empty() {
         anyhow::bail!(
             "validate pairs runs its own matrix of pairs (geardyn::samples::PAIR_MATRIX): give no case file or --set; choose pairs with --only"
@@ -145,6 +150,11 @@ pub fn validate_pairs(args: &CommonArgs, only: &[String], with_fe: bool) -> Resu
                 run.as_ref().map(|r| &r.summary).map_err(crate::error_text),
             );
         }
+        if with_run && row.mesh_stiffness_mean_n_per_m.is_finite() {
+            bar.suspend(|| eprintln!("pair {}: geardyn run at coarse settings", pair.name));
+            let outcome = bar.suspend(|| run_chain(pair, &dir.join(pair.name)));
+            study::pairs::add_run(&mut row, outcome.map_err(|e| error_text(&e)));
+        }
         bar.suspend(|| {
             eprintln!(
                 "pair {}: {} ({:.0} s)",
@@ -170,4 +180,46 @@ pub fn validate_pairs(args: &CommonArgs, only: &[String], with_fe: bool) -> Resu
         dir.display()
     );
     Ok(())
+}
+
+/// The coarse settings `validate pairs --run` runs the chain at: the FE stiffness scene
+/// shortened to 4 ms with a 2 ms ramp (a few mesh periods at its low speed; the rest as the
+/// case gives it).
+pub const RUN_COARSE_SETTINGS: [&str; 2] = [
+    "scene[stiffness].duration_s=0.004",
+    "scene[stiffness].ramp_s=0.002",
+];
+
+/// `geardyn run` on a matrix pair in `dir`/run (its case written to `dir`/case.toml): the
+/// summary's self-check errors and warnings and its wall time.
+fn run_chain(
+    pair: &geardyn::samples::MatrixPair,
+    dir: &std::path::Path,
+) -> Result<study::pairs::RunOutcome> {
+    let case = pair.case()?;
+    std::fs::create_dir_all(dir)?;
+    let path = dir.join("case.toml");
+    std::fs::write(&path, &case.text)?;
+    let args = CommonArgs {
+        case: Some(path),
+        out: Some(dir.join("run")),
+        force: false,
+        checkpoint_every_s: 600.0,
+        set: RUN_COARSE_SETTINGS
+            .iter()
+            .map(|s| s.parse())
+            .collect::<Result<_, _>>()
+            .map_err(|e| anyhow::anyhow!("{e}"))?,
+    };
+    let started = std::time::Instant::now();
+    super::chain::run(&args, false, false)?;
+    let text = std::fs::read_to_string(dir.join("run").join("summary.json"))?;
+    let summary: serde_json::Value = serde_json::from_str(&text)?;
+    let count = |key: &str| summary[key].as_u64().map(|n| n as usize);
+    Ok(study::pairs::RunOutcome {
+        self_check_errors: count("self_check_errors")
+            .context("the run's summary has no self_check_errors")?,
+        self_check_warnings: count("self_check_warnings").unwrap_or(0),
+        wall_s: started.elapsed().as_secs_f64(),
+    })
 }

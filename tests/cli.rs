@@ -927,8 +927,8 @@ fn fe_writes_histories_summary_and_keeps_a_diverged_run() {
 /// entering tooth −2 fine too: 14 082 → 15 200 elements, the mean stiffness −7e-6; the short
 /// fe scene's window now refines three teeth instead of four); the sweep's `max_dynamic_factor`
 /// again at issue 29, when the lumped model took the LTCA's load-dependent force law W(θ, δ)
-/// instead of the secant k(θ) at the design torque (3.834 → 3.625: the stiffening with load
-/// detunes the resonance). The computation is deterministic (ordered reductions), so 1e-9 relative leaves room only for the
+/// instead of the secant k(θ) at the design torque (3.834 → 3.628: the stiffening with load
+/// detunes the resonance), and its LTCA tables went from 64 to 256 positions (k̄ −7e-5). The computation is deterministic (ordered reductions), so 1e-9 relative leaves room only for the
 /// last bits of a reordered sum, not for a changed model: a deliberate change of the numbers
 /// re-records the fixture and says why.
 #[test]

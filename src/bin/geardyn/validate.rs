@@ -128,6 +128,12 @@ pub fn validate_pairs(
     let bar = staged_bar();
     let mut rows = Vec::new();
     for pair in pairs {
+        // A stop request (Ctrl-C, SIGTERM) ends the matrix after the row it came in; the table
+        // of the rows done is written below.
+        if geardyn::interrupt::stop_requested() {
+            bar.suspend(|| eprintln!("stopped on request before pair {}", pair.name));
+            break;
+        }
         // A row that stops with an error (not periodic, a refused case) fails itself, not
         // the matrix.
         let mut row = match study::pairs::row(pair, &stage(&bar)) {
@@ -172,6 +178,12 @@ pub fn validate_pairs(
     let result = study::pairs::table(rows, started.elapsed().as_secs_f64());
     print!("{}", report::pairs::write(OutputDir(&dir), &result)?);
     println!("wrote {}", dir.display());
+    anyhow::ensure!(
+        !geardyn::interrupt::stop_requested(),
+        "stopped on request after {} pairs; the table of those is in {}",
+        result.rows.len(),
+        dir.display()
+    );
     anyhow::ensure!(
         result.failed == 0,
         "{} of {} pairs failed a check (pairs.md and checks.csv in {})",

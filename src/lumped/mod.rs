@@ -17,6 +17,9 @@
 //! ```
 //! e(θ) is the unloaded transmission error (relief). The viscous mesh damper acts also while the
 //! teeth are apart (the usual lumped-model convention, Kahraman & Singh 1990); it is small.
+//! With a [`MeshModel::force_law`] (the LTCA's W(θ, δ), [`crate::stiffness::ForceLaw`]) the
+//! elastic force k(θ) f(δ − e(θ)) is replaced by W(θ, δ) on the drive flanks and −W(ρ − θ,
+//! −(δ + j)) on the back flanks: the stiffness grows with the load as the LTCA's does.
 //! Integration: classical Runge–Kutta 4 with an integer number of steps per mesh period, so every
 //! step lands on the same stiffness samples and the periodic steady state is detected from the
 //! state at period boundaries (Poincaré map); an adaptive Dormand–Prince 5(4) integration
@@ -24,7 +27,11 @@
 //! backlash law. [`schemes`] measures where fixed-step schemes fail.
 //!
 //! # Stability (Floquet)
-//! For the linear model (no separation, no TE, no load) the monodromy matrix Φ over one mesh
+//! Of the model as integrated ([`periodic_orbit`]): the period-one orbit x* = P(x*) of the
+//! one-period map P, found by damped Newton shooting, and the eigenvalues of ∂P/∂x at it (central
+//! differences) — separation, back flanks and the force law included. Of the linearized drive
+//! flanks ([`floquet_multipliers`]):
+//! for the linear model (no separation, no TE, no load) the monodromy matrix Φ over one mesh
 //! period T_m, from the unit initial states, has eigenvalues λ (the Floquet multipliers); the
 //! motion is parametrically unstable when max |λ| > 1. For k = k̄(1 + ε cos Ω_m t) the first
 //! instability region lies around Ω_m = 2ω_n with edges Ω_m ≈ 2ω_n(1 ± ε/4) for small ε

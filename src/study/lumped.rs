@@ -179,9 +179,9 @@ pub fn back_reflection(pair: &crate::geometry::GearPair, mesh: &MeshStiffness) -
 }
 
 /// Builds the case's lumped model (`[lumped]`, the first operating point's torque). With the
-/// `ltca` source the LTCA is solved at [`force_law_loads`] and [`QUASI_STATIC_LOADS`] at once:
-/// the first give the force law (`lumped.force_law = "load-dependent"`) and the secant k(θ) at
-/// the design torque, the second check the model's quasi-static response.
+/// `ltca` source the LTCA is solved at [`force_law_loads`] (the force law, used with
+/// `lumped.force_law = "load-dependent"`) and at [`QUASI_STATIC_LOADS`] (the secant k(θ) at the
+/// design torque, and the reference of the model's quasi-static checks).
 pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
     let settings = &case.lumped;
     let torque = load_torque(case)?;

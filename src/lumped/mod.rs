@@ -558,10 +558,12 @@ pub fn floquet_max_multiplier(
     driver_speed: f64,
     steps_per_period: usize,
 ) -> f64 {
-    floquet_multipliers(model, driver_speed, steps_per_period)
-        .iter()
-        .map(|l| l.norm())
-        .fold(0.0, f64::max)
+    largest_modulus(&floquet_multipliers(model, driver_speed, steps_per_period))
+}
+
+/// The largest |λ| of a set of Floquet multipliers.
+fn largest_modulus(multipliers: &[nalgebra::Complex<f64>]) -> f64 {
+    multipliers.iter().map(|l| l.norm()).fold(0.0, f64::max)
 }
 
 /// The Floquet multipliers λ of the linear model at driver speed Ω₁: the eigenvalues of the
@@ -648,10 +650,7 @@ pub struct PeriodicOrbit {
 impl PeriodicOrbit {
     /// The largest |λ| (> 1: the periodic response is unstable and the motion leaves it).
     pub fn max_multiplier(&self) -> f64 {
-        self.multipliers
-            .iter()
-            .map(|l| l.norm())
-            .fold(0.0, f64::max)
+        largest_modulus(&self.multipliers)
     }
 }
 

@@ -145,14 +145,16 @@ pub fn mesh_stiffness(
     let pair = &case.pair;
     Ok(match source {
         StiffnessSource::Ltca => {
+            // The secant of the force law's LTCA tables, the one the sweeps are built on.
             let variant = super::relief_variant(case, case.lumped.relief.as_deref())?;
-            super::ltca::mesh_stiffness(
+            let ltca = super::ltca::model(case, &variant.modifications)?;
+            ltca_tables(
                 case,
-                &variant.name,
-                &variant.modifications,
-                POSITIONS,
+                &ltca,
                 torque,
+                &format!("ltca (relief {})", variant.name),
             )?
+            .0
         }
         StiffnessSource::PotentialEnergy => potential_energy::potential_energy_table(
             pair,
@@ -266,9 +268,9 @@ pub struct QuasiStaticReference {
     pub cycles: Vec<Vec<PositionResult>>,
 }
 
-/// The LTCA of `ltca` at [`force_law_loads`] × `torque` on [`POSITIONS`] positions (the force
-/// law) and at [`QUASI_STATIC_LOADS`] × `torque` on twice as many (the quasi-static reference,
-/// whose design-torque cycle at the law's positions gives the secant k(θ)).
+/// The LTCA of `ltca` at [`force_law_loads`] × `torque` on [`FORCE_LAW_POSITIONS`] positions
+/// (the force law) and at [`QUASI_STATIC_LOADS`] × `torque` on twice as many (the quasi-static
+/// reference, whose design-torque cycle at the law's positions gives the secant k(θ)).
 pub fn ltca_tables(
     case: &Case,
     ltca: &LtcaModel,

@@ -129,12 +129,26 @@ pub struct LumpedSection {
     pub bearing_damping_ratio: f64,
     /// Translating mass of each gear [kg]; default: ρ b A of the gear bodies.
     pub gear_mass_kg: Option<[f64; 2]>,
-    /// Take each free gear body's twist between bore and root circle out of a hub-to-hub
-    /// stiffness (ltca or an FE CSV): k′ = 1/(1/k − c_b). Most of the inertia lies outside that
-    /// annulus, so the mesh mode does not stretch it (validation/frequencies: rigid gears put
-    /// the mesh mode 10 % low with both gears free, rims 2.5 %).
+    /// "elastic" (default): each gear as hub and rim with its body's torsional compliance
+    /// between bore and root circle, the inertia where it sits; a hub-to-hub stiffness (ltca or
+    /// an FE CSV) loses that twist, k′ = 1/(1/k − c_b), and the bodies carry it
+    /// (validation/frequencies: rigid gears put the mesh mode 10 % low with both gears free).
+    /// "rigid": one inertia per gear behind the whole stiffness.
     #[serde(default)]
-    pub rims: bool,
+    pub bodies: BodyModel,
+    /// Input shaft from a motor to the driver's hub: torsional stiffness [N·m/rad], and the
+    /// motor's inertia [kg·mm²] (0: a massless end, left out under a torque drive; under a
+    /// speed drive the shaft's end turns at the prescribed speed).
+    pub input_shaft_stiffness_nm_per_rad: Option<f64>,
+    pub motor_inertia_kg_mm2: Option<f64>,
+    /// Output shaft from the driven hub to a load inertia: stiffness [N·m/rad], inertia
+    /// [kg·mm²].
+    pub output_shaft_stiffness_nm_per_rad: Option<f64>,
+    pub load_inertia_kg_mm2: Option<f64>,
+    /// Damping ratio of every shaft and body spring, c = 2ζ√(k m_r) (m_r: the reduced inertia of
+    /// the two ends).
+    #[serde(default = "default_drivetrain_damping_ratio")]
+    pub drivetrain_damping_ratio: f64,
     /// The relief variant whose LTCA k(θ) and unloaded TE the `ltca` source takes; default:
     /// the case's first.
     pub relief: Option<String>,
@@ -156,7 +170,12 @@ impl Default for LumpedSection {
             bearing_stiffness_n_per_m: default_bearing_stiffness(),
             bearing_damping_ratio: default_bearing_damping_ratio(),
             gear_mass_kg: None,
-            rims: false,
+            bodies: BodyModel::default(),
+            input_shaft_stiffness_nm_per_rad: None,
+            motor_inertia_kg_mm2: None,
+            output_shaft_stiffness_nm_per_rad: None,
+            load_inertia_kg_mm2: None,
+            drivetrain_damping_ratio: default_drivetrain_damping_ratio(),
             relief: None,
             force_law: ForceLawKind::default(),
         }
@@ -174,6 +193,20 @@ fn default_bearing_stiffness() -> [f64; 2] {
 }
 fn default_bearing_damping_ratio() -> f64 {
     0.02
+}
+fn default_drivetrain_damping_ratio() -> f64 {
+    0.02
+}
+
+/// How the lumped model holds each gear's body (`[lumped] bodies`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BodyModel {
+    /// Hub and rim with the body's torsional compliance between them.
+    #[default]
+    Elastic,
+    /// One rigid inertia per gear.
+    Rigid,
 }
 
 /// Element sizes of the gear meshes.
@@ -571,6 +604,13 @@ impl StiffnessSource {
         }
     }
 
+    /// Whether its k(θ) runs hub to hub and so holds the gear bodies' twist between bore and
+    /// root circle: the LTCA's and an FE stiffness file's do; ISO 6336's and the
+    /// potential-energy method's stop at the tooth's foundation.
+    pub fn holds_body_twist(&self) -> bool {
+        matches!(self, Self::Ltca | Self::Csv(_))
+    }
+
     /// Parses `ltca`, `pe`, `iso` or a path ending in `.csv`; None otherwise.
     pub fn parse(text: &str) -> Option<Self> {
         match text {
@@ -605,8 +645,12 @@ pub struct LumpedSettings {
     pub bearing_damping_ratio: f64,
     /// Translating masses [kg]; None: ρ b A of the bodies.
     pub gear_masses: Option<[f64; 2]>,
-    /// The body twist taken out of a hub-to-hub stiffness (`[lumped] rims`).
-    pub rims: bool,
+    /// Gear bodies elastic (hub and rim) or rigid (`[lumped] bodies`).
+    pub bodies: BodyModel,
+    /// Input and output shafts (`[lumped]` *_shaft_stiffness_nm_per_rad [N·m/rad], motor and
+    /// load inertias [kg·m²], 0 when not given).
+    pub shafts: [Option<crate::lumped::Shaft>; 2],
+    pub drivetrain_damping_ratio: f64,
     /// The relief variant of the `ltca` source; None: the case's first.
     pub relief: Option<String>,
     pub force_law: ForceLawKind,
@@ -874,6 +918,49 @@ impl Case {
             _ => Ok(()),
         };
         positive_pair("lumped.inertia_kg_mm2", lumped.inertia_kg_mm2)?;
+        if !(0.0..1.0).contains(&lumped.drivetrain_damping_ratio) {
+            return Err(invalid(
+                "lumped.drivetrain_damping_ratio",
+                lumped.drivetrain_damping_ratio.to_string(),
+                "must be in [0, 1)",
+            ));
+        }
+        for (shaft, end, stiffness, inertia) in [
+            (
+                "lumped.input_shaft_stiffness_nm_per_rad",
+                "lumped.motor_inertia_kg_mm2",
+                lumped.input_shaft_stiffness_nm_per_rad,
+                lumped.motor_inertia_kg_mm2,
+            ),
+            (
+                "lumped.output_shaft_stiffness_nm_per_rad",
+                "lumped.load_inertia_kg_mm2",
+                lumped.output_shaft_stiffness_nm_per_rad,
+                lumped.load_inertia_kg_mm2,
+            ),
+        ] {
+            if let Some(k) = stiffness {
+                if !(k > 0.0 && k.is_finite()) {
+                    return Err(invalid(shaft, k.to_string(), "must be finite and > 0"));
+                }
+            }
+            match (stiffness, inertia) {
+                (_, Some(i)) if !(i >= 0.0 && i.is_finite()) => {
+                    return Err(invalid(end, i.to_string(), "must be finite and ≥ 0"))
+                }
+                (None, Some(i)) if i > 0.0 => {
+                    return Err(invalid(
+                        end,
+                        i.to_string(),
+                        &format!(
+                            "needs {shaft} (the shaft it sits on); for a rigid coupling add \
+                             the inertia to lumped.inertia_kg_mm2 instead"
+                        ),
+                    ))
+                }
+                _ => {}
+            }
+        }
         positive_pair("lumped.gear_mass_kg", lumped.gear_mass_kg)?;
         positive_pair(
             "lumped.bearing_stiffness_n_per_m",
@@ -1068,7 +1155,24 @@ impl Case {
             bearing_stiffness: lumped.bearing_stiffness_n_per_m,
             bearing_damping_ratio: lumped.bearing_damping_ratio,
             gear_masses: lumped.gear_mass_kg,
-            rims: lumped.rims,
+            bodies: lumped.bodies,
+            shafts: [
+                (
+                    lumped.input_shaft_stiffness_nm_per_rad,
+                    lumped.motor_inertia_kg_mm2,
+                ),
+                (
+                    lumped.output_shaft_stiffness_nm_per_rad,
+                    lumped.load_inertia_kg_mm2,
+                ),
+            ]
+            .map(|(stiffness, inertia)| {
+                stiffness.map(|k| crate::lumped::Shaft {
+                    stiffness: k,
+                    end_inertia: inertia.unwrap_or(0.0) * 1e-6,
+                })
+            }),
+            drivetrain_damping_ratio: lumped.drivetrain_damping_ratio,
             relief: lumped.relief.clone(),
             force_law: lumped.force_law,
         };

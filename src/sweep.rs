@@ -445,8 +445,7 @@ pub fn orbit_floquet_map(model: &MeshModel, rpms: &[f64]) -> Vec<Option<f64>> {
         .map(|rpm| {
             let speed = rpm * 2.0 * std::f64::consts::PI / 60.0;
             let steps = steps_per_period(model, speed);
-            let mut guess = model.static_state();
-            guess.q[0] += model.quasi_static_deflection(0.0) - guess.mesh_deflection();
+            let guess = model.quasi_static_state(0.0);
             periodic_orbit(model, speed, steps, guess, ORBIT_TOLERANCE).map(|o| o.max_multiplier())
         })
         .collect()

@@ -3,6 +3,7 @@
 
 use geardyn::lumped::{
     floquet_max_multiplier, integrate_period, periodic_orbit, steady_state, MeshModel, State,
+    Structure,
 };
 use geardyn::stiffness::{MeshStiffness, PeriodicTable};
 use std::f64::consts::PI;
@@ -13,7 +14,7 @@ const K_MEAN: f64 = 4.0e8;
 
 fn model(stiffness: PeriodicTable, te_amplitude: f64, zeta: f64) -> MeshModel {
     let mut m = MeshModel {
-        effective_mass: MASS,
+        structure: Structure::rigid_pair(MASS),
         mesh: MeshStiffness::from_tables(
             "analytic",
             None,
@@ -25,7 +26,6 @@ fn model(stiffness: PeriodicTable, te_amplitude: f64, zeta: f64) -> MeshModel {
         damping: 0.0,
         force: 2670.0,
         backlash: None,
-        bearings: None,
         back_reflection: None,
         force_law: None,
     };
@@ -447,17 +447,18 @@ fn bearing_model_reduces_to_the_one_dof_model_on_stiff_bearings() {
     let eps = 0.2;
     let stiffness = cosine_stiffness(eps);
     let one = model(stiffness, 1e-6, 0.05);
+    let bearings = |kb: f64| Bearings {
+        mass: [1.8, 2.4],
+        stiffness: [kb, 0.7 * kb],
+        damping: [0.0, 0.0],
+    };
     let with = |kb: f64| MeshModel {
-        bearings: Some(Bearings {
-            mass: [1.8, 2.4],
-            stiffness: [kb, 0.7 * kb],
-            damping: [0.0, 0.0],
-        }),
+        structure: Structure::rigid_pair_on_bearings(MASS, &bearings(kb)),
         ..one.clone()
     };
     // det(K − ω²M) = 0 at every computed frequency (relative to the product of the diagonals).
     let soft = with(3e8);
-    let b = soft.bearings.clone().unwrap();
+    let b = bearings(3e8);
     for w in soft.mode_frequencies(K_MEAN) {
         let w2 = w * w;
         let k = K_MEAN;
@@ -720,7 +721,7 @@ fn the_orbit_of_the_switched_model_shows_where_the_sweep_diverges() {
         Some(&path),
         &[
             geardyn::case::Override::set("lumped.force_law", "secant"),
-            geardyn::case::Override::set("lumped.rims", true),
+            geardyn::case::Override::set("lumped.bodies", "elastic"),
         ],
     )
     .unwrap();

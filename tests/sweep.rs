@@ -2,7 +2,7 @@
 //! excitation the teeth separate near resonance and the up- and down-sweeps part (jump with
 //! hysteresis, softening: the resonance bends to lower speed).
 
-use geardyn::lumped::MeshModel;
+use geardyn::lumped::{MeshModel, Structure};
 use geardyn::stiffness::{MeshStiffness, PeriodicTable};
 use geardyn::sweep::{peaks, sweep};
 use std::f64::consts::PI;
@@ -11,7 +11,7 @@ const PERIOD: f64 = 2.0 * PI / 36.0;
 
 fn model(te_amplitude: f64, backlash: Option<f64>) -> MeshModel {
     let mut m = MeshModel {
-        effective_mass: 0.57,
+        structure: Structure::rigid_pair(0.57),
         mesh: MeshStiffness::from_tables(
             "analytic",
             None,
@@ -23,7 +23,6 @@ fn model(te_amplitude: f64, backlash: Option<f64>) -> MeshModel {
         damping: 0.0,
         force: 2670.0,
         backlash,
-        bearings: None,
         back_reflection: None,
         force_law: None,
     };

@@ -227,6 +227,20 @@ impl Gear {
             - involute(alpha_r)
     }
 
+    /// The hub's share of the body annulus's polar area moment [m⁴]: ∫(1 − s(r)) r² dA from bore
+    /// to root circle, s(r) = (1/r_i² − 1/r²)/(1/r_i² − 1/r_f²) the static twist shape of
+    /// [`Gear::body_torsional_compliance`] (0 at the bore, 1 at the root circle). Times ρ b it is
+    /// the inertia a two-inertia (hub, rim) model of the body puts at the hub (the row sum of
+    /// the Rayleigh–Ritz mass matrix on that shape):
+    /// 2π[(r_f⁴ − r_i⁴)/4 − ((r_f⁴ − r_i⁴)/(4r_i²) − (r_f² − r_i²)/2)/(1/r_i² − 1/r_f²)].
+    pub fn body_hub_area_moment(&self) -> f64 {
+        let (ri, rf) = (self.spec.bore_radius, self.root_radius);
+        let d = 1.0 / (ri * ri) - 1.0 / (rf * rf);
+        let quartic = rf.powi(4) - ri.powi(4);
+        2.0 * std::f64::consts::PI
+            * (quartic / 4.0 - (quartic / (4.0 * ri * ri) - (rf * rf - ri * ri) / 2.0) / d)
+    }
+
     /// Torsional compliance of the gear body between bore and root circle, a solid annulus of
     /// width b in in-plane shear: the shear stress τ = T/(2π r² b) twists it by
     /// dφ/dr = τ/(G r), so φ/T = (1/r_i² − 1/r_f²)/(4π G b), G = E/(2(1 + ν)) [rad/(N·m)]

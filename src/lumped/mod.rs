@@ -1,9 +1,10 @@
 //! Lumped parametric-vibration model of the mesh: the relative rotation along the line of action
 //! (1 DOF), optionally with each gear's translation on its bearings along the line of action
-//! (3 DOFs), driven by the periodic mesh stiffness k(θ) — the stiffness currency from the LTCA,
-//! the explicit FE, ISO 6336, the potential-energy method or a user table.
+//! (3 DOFs), or a drivetrain with elastic gear bodies (hub and rim), shafts, motor and load
+//! ([`structure`]), driven by the periodic mesh stiffness k(θ) — the stiffness currency from
+//! the LTCA, the explicit FE, ISO 6336, the potential-energy method or a user table.
 //!
-//! # Equations
+//! # Equations (rigid pair; [`structure`] generalizes them to M q̈ + C q̇ + K q = F l − g W)
 //! p = r_b1θ₁ − r_b2θ₂ is the dynamic transmission error along the line of action; with rigid
 //! shafts the torsional 2-DOF reduces exactly to it (torque drive: m_e = I₁I₂/(I₁r_b2² + I₂r_b1²);
 //! driver at prescribed speed: m_e = I₂/r_b2²). y₁, y₂ are the bearing translations along the
@@ -38,8 +39,11 @@
 //! (Mathieu equation; Nayfeh & Mook, *Nonlinear Oscillations*, §5.2).
 
 pub mod schemes;
+pub mod structure;
 
-use nalgebra::{DMatrix, SymmetricEigen};
+use nalgebra::DMatrix;
+
+pub use structure::{DrivetrainSpec, GearBody, Mode, Shaft, Structure, MAX_DOFS};
 
 use crate::stiffness::{ForceLaw, MeshStiffness, PeriodicTable};
 
@@ -136,11 +140,12 @@ pub struct Bearings {
 /// µm) is past any tooth's height, and no bounded steady state gets there.
 pub const DIVERGENCE_DEFLECTIONS: f64 = 1e3;
 
-/// The lumped mesh model: 1 DOF (p), or 3 DOFs (p, y₁, y₂) with [`Bearings`].
+/// The lumped mesh model: the nonlinear mesh in a linear [`Structure`] — 1 DOF (p), 3 DOFs
+/// (p, y₁, y₂) with [`Bearings`], or a drivetrain with elastic gear bodies and shafts.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeshModel {
-    /// Effective mass m_e of the relative rotation p = r_b1θ₁ − r_b2θ₂ [kg].
-    pub effective_mass: f64,
+    /// The linear structure around the mesh (masses, shafts, bodies, bearings).
+    pub structure: Structure,
     /// Mesh stiffness k(θ) and unloaded transmission error e(θ) along the line of action.
     pub mesh: MeshStiffness,
     /// Viscous mesh damping c [N·s/m].
@@ -149,8 +154,6 @@ pub struct MeshModel {
     pub force: f64,
     /// Backlash j along the line of action [m]; `None`: no separation (linear contact).
     pub backlash: Option<f64>,
-    /// Bearing translations; `None`: rigid bearings.
-    pub bearings: Option<Bearings>,
     /// Where the back flanks' own k and e are read (see [`MeshModel::mesh_force`]):
     /// `Some(ρ)`: at the mirrored angle ρ − θ; `None`: at θ, with e a positional error.
     pub back_reflection: Option<f64>,
@@ -160,21 +163,21 @@ pub struct MeshModel {
     pub force_law: Option<ForceLaw>,
 }
 
-/// State of the lumped model: positions q = (p, y₁, y₂) [m] and their velocities [m/s]. Without
-/// bearings y₁ = y₂ = 0 throughout.
+/// State of the lumped model: the structure's coordinates q [m] and their velocities [m/s]
+/// (the first [`Structure::dofs`] entries; the rest stay 0).
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct State {
-    pub q: [f64; 3],
-    pub v: [f64; 3],
+    pub q: [f64; MAX_DOFS],
+    pub v: [f64; MAX_DOFS],
 }
 
 impl From<(f64, f64)> for State {
-    /// (p, ṗ) with the gears centred on rigid bearings.
+    /// The first coordinate and its rate (p, ṗ for a rigid pair), the others at rest.
     fn from((p, v): (f64, f64)) -> Self {
-        State {
-            q: [p, 0.0, 0.0],
-            v: [v, 0.0, 0.0],
-        }
+        let mut s = State::default();
+        s.q[0] = p;
+        s.v[0] = v;
+        s
     }
 }
 
@@ -187,76 +190,78 @@ impl State {
         }
     }
 
-    /// Mesh deflection along the line of action δ = p + y₁ − y₂ [m].
-    pub fn mesh_deflection(&self) -> f64 {
-        self.q[0] + self.q[1] - self.q[2]
-    }
-
-    fn mesh_deflection_rate(&self) -> f64 {
-        self.v[0] + self.v[1] - self.v[2]
-    }
-
-    /// Component `i` of the flattened state (q₀ q₁ q₂ v₀ v₁ v₂).
+    /// Component `i` of the flattened state (q then v, [`MAX_DOFS`] each).
     fn component(&self, i: usize) -> f64 {
-        if i < 3 {
+        if i < MAX_DOFS {
             self.q[i]
         } else {
-            self.v[i - 3]
+            self.v[i - MAX_DOFS]
+        }
+    }
+
+    fn component_mut(&mut self, i: usize) -> &mut f64 {
+        if i < MAX_DOFS {
+            &mut self.q[i]
+        } else {
+            &mut self.v[i - MAX_DOFS]
         }
     }
 
     fn unit(i: usize) -> State {
         let mut s = State::default();
-        if i < 3 {
-            s.q[i] = 1.0;
-        } else {
-            s.v[i - 3] = 1.0;
-        }
+        *s.component_mut(i) = 1.0;
         s
     }
 }
 
 impl MeshModel {
-    /// Damping coefficient for a damping ratio ζ at the mean stiffness: c = 2ζ√(k̄ m_e).
+    /// Damping coefficient for a damping ratio ζ at the mean stiffness: c = 2ζ√(k̄ m_e), m_e
+    /// the rigid pair's effective mass ([`Structure::effective_mass`]).
     pub fn damping_from_ratio(&self, ratio: f64) -> f64 {
-        2.0 * ratio * (self.mesh.mean() * self.effective_mass).sqrt()
+        2.0 * ratio * (self.mesh.mean() * self.structure.effective_mass).sqrt()
     }
 
-    /// Natural frequency of the mean stiffness on rigid bearings, ω_n = √(k̄/m_e) [rad/s].
+    /// The rigid pair's effective mass under the model's drive [kg].
+    pub fn effective_mass(&self) -> f64 {
+        self.structure.effective_mass
+    }
+
+    /// Natural frequency of the mesh mode at the mean stiffness [rad/s]: √(k̄/m_e) for a rigid
+    /// pair on rigid bearings, else the structure's mode with the most mesh strain energy.
     pub fn natural_frequency(&self) -> f64 {
-        (self.mesh.mean() / self.effective_mass).sqrt()
+        self.structure.mesh_mode(self.mesh.mean()).frequency
     }
 
-    /// Indices of the flattened state that move: (p, ṗ), or all six with bearings.
+    /// Indices of the flattened state that move: the structure's coordinates and their rates.
     fn active_components(&self) -> Vec<usize> {
-        match self.bearings {
-            None => vec![0, 3],
-            Some(_) => (0..6).collect(),
-        }
+        let n = self.structure.dofs;
+        (0..n).chain(MAX_DOFS..MAX_DOFS + n).collect()
     }
 
-    /// Undamped natural frequencies [rad/s] of the linear model at mesh stiffness k, ascending:
-    /// eigenvalues of M^{-1/2} K M^{-1/2}, K = K_bearings + k g gᵀ, g = (1, 1, −1).
+    /// Undamped natural frequencies [rad/s] of the linear model at mesh stiffness k, ascending.
     pub fn mode_frequencies(&self, mesh_stiffness: f64) -> Vec<f64> {
-        let Some(b) = &self.bearings else {
-            return vec![(mesh_stiffness / self.effective_mass).sqrt()];
-        };
-        let g = [1.0, 1.0, -1.0];
-        let mass = [self.effective_mass, b.mass[0], b.mass[1]];
-        let k = DMatrix::from_fn(3, 3, |i, j| {
-            let bearing = match i {
-                1 | 2 if i == j => b.stiffness[i - 1],
-                _ => 0.0,
-            };
-            (bearing + mesh_stiffness * g[i] * g[j]) / (mass[i] * mass[j]).sqrt()
-        });
-        let mut w: Vec<f64> = SymmetricEigen::new(k)
-            .eigenvalues
+        self.structure
+            .modes(mesh_stiffness)
             .iter()
-            .map(|l| l.max(0.0).sqrt())
-            .collect();
-        w.sort_by(f64::total_cmp);
-        w
+            .map(|m| m.frequency)
+            .collect()
+    }
+
+    /// Mesh deflection along the line of action δ = gᵀq [m] (p + y₁ − y₂ for a rigid pair on
+    /// bearings).
+    pub fn mesh_deflection(&self, s: &State) -> f64 {
+        self.structure.mesh_of(&s.q)
+    }
+
+    /// The transmission error the model reports, hub to hub along the line of action [m]: p for
+    /// a rigid pair; with elastic bodies it holds their twist, as the LTCA's and the FE's do.
+    pub fn transmission_error(&self, s: &State) -> f64 {
+        self.structure.te_of(&s.q) + self.force * self.structure.te_per_force
+    }
+
+    /// Its rate [m/s].
+    pub fn transmission_error_rate(&self, s: &State) -> f64 {
+        self.structure.te_of(&s.v)
     }
 
     /// The highest natural frequency the integration must resolve: at the largest mesh
@@ -316,8 +321,8 @@ impl MeshModel {
         }
     }
 
-    /// The mesh deflection δ under the static force F at roll angle θ, the bearings at rest:
-    /// the model's quasi-static transmission error along the line of action (W(θ, δ) = F).
+    /// The mesh deflection δ under the static force F at roll angle θ: the model's quasi-static
+    /// approach along the line of action (W(θ, δ) = F).
     pub fn quasi_static_deflection(&self, theta: f64) -> f64 {
         match &self.force_law {
             Some(law) if self.force > 0.0 => law.deflection_under(theta, self.force),
@@ -325,10 +330,28 @@ impl MeshModel {
         }
     }
 
-    /// The largest excursion of any coordinate from the static state the model stands for [m]:
-    /// [`DIVERGENCE_DEFLECTIONS`] × (the static deflection F/k̄, plus the backlash and the
-    /// unloaded TE's largest value; at least 1 µm). Farther than that a response has grown without bound
-    /// (in practice a linear parametric instability, with too little damping to hold it).
+    /// The quasi-static state at roll angle θ: the mesh at [`MeshModel::quasi_static_deflection`]
+    /// carrying F, the structure deflected statically, at rest.
+    pub fn quasi_static_state(&self, theta: f64) -> State {
+        State {
+            q: self
+                .structure
+                .static_coordinates(self.force, self.quasi_static_deflection(theta)),
+            v: [0.0; MAX_DOFS],
+        }
+    }
+
+    /// The quasi-static transmission error at θ (hub to hub, [`MeshModel::transmission_error`]):
+    /// the model's STE, what the LTCA gives at the same torque.
+    pub fn quasi_static_transmission_error(&self, theta: f64) -> f64 {
+        self.transmission_error(&self.quasi_static_state(theta))
+    }
+
+    /// The largest excursion of the mesh deflection from the static state the model stands for
+    /// [m]: [`DIVERGENCE_DEFLECTIONS`] × (the static deflection F/k̄, plus the backlash and the
+    /// unloaded TE's largest value; at least 1 µm). Farther than that a response has grown
+    /// without bound (in practice a linear parametric instability, with too little damping to
+    /// hold it).
     pub fn divergence_bound(&self) -> f64 {
         let te = self
             .mesh
@@ -341,62 +364,48 @@ impl MeshModel {
         DIVERGENCE_DEFLECTIONS * scale.max(1e-6)
     }
 
-    /// Whether `state` has left the model's range or is not finite: the mesh coordinate beyond
-    /// [`MeshModel::divergence_bound`], a bearing coordinate beyond [`DIVERGENCE_DEFLECTIONS`]
-    /// × its own static deflection F/k_b (at least 1 µm), so a soft support's bounded
-    /// resonance is not taken for divergence.
+    /// Whether `state` has left the model's range or is not finite: a coordinate farther from
+    /// the static state than [`MeshModel::divergence_bound`] or [`DIVERGENCE_DEFLECTIONS`] ×
+    /// its own static value (a soft bearing's or shaft's bounded resonance is not divergence).
     pub fn has_diverged(&self, state: &State) -> bool {
         let reference = self.static_state();
-        let finite = state.q.iter().chain(&state.v).all(|x| x.is_finite());
+        let n = self.structure.dofs;
+        let finite = state.q[..n]
+            .iter()
+            .chain(&state.v[..n])
+            .all(|x| x.is_finite());
         let mesh_bound = self.divergence_bound();
-        let bound = |i: usize| match (i, &self.bearings) {
-            (0, _) | (_, None) => mesh_bound,
-            (i, Some(b)) => {
-                DIVERGENCE_DEFLECTIONS * (self.force / b.stiffness[i - 1]).abs().max(1e-6)
-            }
-        };
         !finite
-            || state
-                .q
-                .iter()
-                .zip(&reference.q)
-                .enumerate()
-                .any(|(i, (q, q0))| !((q - q0).abs() <= bound(i)))
+            || (0..n).any(|i| {
+                let bound = mesh_bound.max(DIVERGENCE_DEFLECTIONS * reference.q[i].abs());
+                !((state.q[i] - reference.q[i]).abs() <= bound)
+            })
     }
 
-    /// The static state under F at the mean stiffness (TE and backlash left out): δ = F/k̄,
-    /// y₁ = −F/k_b1, y₂ = F/k_b2.
+    /// The static state under F at the mean stiffness (TE and backlash left out): the mesh at
+    /// δ = F/k̄ (for bearings y₁ = −F/k_b1, y₂ = F/k_b2).
     pub fn static_state(&self) -> State {
-        let delta = self.force / self.mesh.mean();
-        match &self.bearings {
-            None => State::from((delta, 0.0)),
-            Some(b) => {
-                let (y1, y2) = (-self.force / b.stiffness[0], self.force / b.stiffness[1]);
-                State {
-                    q: [delta - y1 + y2, y1, y2],
-                    v: [0.0; 3],
-                }
-            }
+        State {
+            q: self
+                .structure
+                .static_coordinates(self.force, self.force / self.mesh.mean()),
+            v: [0.0; MAX_DOFS],
         }
     }
 
-    /// Time derivative of the state at roll angle θ:
-    /// ```text
-    /// m_e p̈ = F − W,   m₁ÿ₁ + c₁ẏ₁ + k₁y₁ = −W,   m₂ÿ₂ + c₂ẏ₂ + k₂y₂ = W,
-    /// W = k(θ) f(δ − e(θ)) + c δ̇,   δ = p + y₁ − y₂
-    /// ```
+    /// Time derivative of the state at roll angle θ: M q̈ + C q̇ + K q = F l − g W,
+    /// W = k(θ) f(δ − e(θ)) + c δ̇, δ = gᵀq (for a rigid pair on bearings:
+    /// m_e p̈ = F − W, m₁ÿ₁ + c₁ẏ₁ + k₁y₁ = −W, m₂ÿ₂ + c₂ẏ₂ + k₂y₂ = W).
     /// (W is the mesh force on the driven gear along the line of action; the driver takes −W.)
     pub fn derivative(&self, theta: f64, s: &State) -> State {
-        let w =
-            self.mesh_force(theta, s.mesh_deflection()) + self.damping * s.mesh_deflection_rate();
+        let structure = &self.structure;
+        let w = self.mesh_force(theta, structure.mesh_of(&s.q))
+            + self.damping * structure.mesh_of(&s.v);
         let mut d = State {
             q: s.v,
-            v: [(self.force - w) / self.effective_mass, 0.0, 0.0],
+            v: [0.0; MAX_DOFS],
         };
-        if let Some(b) = &self.bearings {
-            d.v[1] = (-w - b.damping[0] * s.v[1] - b.stiffness[0] * s.q[1]) / b.mass[0];
-            d.v[2] = (w - b.damping[1] * s.v[2] - b.stiffness[1] * s.q[2]) / b.mass[1];
-        }
+        structure.accelerations(&s.q, &s.v, self.force, w, &mut d.v);
         d
     }
 
@@ -449,7 +458,7 @@ pub struct SteadyState {
     pub converged: bool,
     /// The state at the start of the recorded period (θ = 0).
     pub start: State,
-    /// Samples over one mesh period: DTE p along the line of action [m], its rate [m/s], the
+    /// Samples over one mesh period: the DTE ([`MeshModel::transmission_error`]) [m], its rate [m/s], the
     /// elastic mesh force [N].
     pub displacement: Vec<f64>,
     pub velocity: Vec<f64>,
@@ -504,9 +513,9 @@ pub fn steady_state(
             steps_per_period,
             start,
             |j, theta, s| {
-                out.displacement[j] = s.q[0];
-                out.velocity[j] = s.v[0];
-                out.mesh_force[j] = model.mesh_force(theta, s.mesh_deflection());
+                out.displacement[j] = model.transmission_error(s);
+                out.velocity[j] = model.transmission_error_rate(s);
+                out.mesh_force[j] = model.mesh_force(theta, model.mesh_deflection(s));
             },
         );
         out.periods = period;
@@ -515,7 +524,7 @@ pub fn steady_state(
             out.diverged = true;
             return out;
         }
-        let change = (0..3)
+        let change = (0..model.structure.dofs)
             .map(|i| {
                 (state.q[i] - start.q[i])
                     .abs()
@@ -531,7 +540,7 @@ pub fn steady_state(
     out
 }
 
-/// DTE p over `periods` whole mesh periods from `start` (θ = 0), `steps_per_period` samples
+/// The DTE ([`MeshModel::transmission_error`]) over `periods` whole mesh periods from `start` (θ = 0), `steps_per_period` samples
 /// each: the record a spectrum of a non-periodic (sub-harmonic, quasi-periodic) response needs.
 pub fn record_periods(
     model: &MeshModel,
@@ -544,15 +553,15 @@ pub fn record_periods(
     let mut state = start;
     for _ in 0..periods {
         state = integrate_period(model, driver_speed, steps_per_period, state, |_, _, s| {
-            record.push(s.q[0])
+            record.push(model.transmission_error(s))
         });
     }
     record
 }
 
 /// Floquet multipliers' largest modulus of the linear model (no separation, no TE) at driver
-/// speed Ω₁: eigenvalues of the monodromy matrix over one mesh period (2×2 on rigid bearings,
-/// 6×6 with bearing translations), columns from the unit initial states.
+/// speed Ω₁: eigenvalues of the monodromy matrix over one mesh period (2n×2n for the structure's n
+/// coordinates), columns from the unit initial states.
 pub fn floquet_max_multiplier(
     model: &MeshModel,
     driver_speed: f64,
@@ -612,19 +621,15 @@ fn period_map_jacobian(
     let map = |s: State| integrate_period(model, driver_speed, steps_per_period, s, |_, _, _| {});
     let mut jacobian = DMatrix::zeros(n, n);
     for (column, &i) in active.iter().enumerate() {
-        let h = if i < 3 { scale } else { scale * omega };
+        let h = if i < MAX_DOFS { scale } else { scale * omega };
         let end = |sign: f64| {
             let mut s = x;
-            if i < 3 {
-                s.q[i] += sign * h;
-            } else {
-                s.v[i - 3] += sign * h;
-            }
+            *s.component_mut(i) += sign * h;
             map(s)
         };
         let (plus, minus) = (end(1.0), end(-1.0));
         for (row, &j) in active.iter().enumerate() {
-            let balance = match (j < 3, i < 3) {
+            let balance = match (j < MAX_DOFS, i < MAX_DOFS) {
                 (true, false) => omega,
                 (false, true) => 1.0 / omega,
                 _ => 1.0,
@@ -679,7 +684,7 @@ pub fn periodic_orbit(
         nalgebra::DVector::from_iterator(
             n,
             active.iter().map(|&i| {
-                let scale = if i < 3 { 1.0 } else { 1.0 / omega };
+                let scale = if i < MAX_DOFS { 1.0 } else { 1.0 / omega };
                 (end.component(i) - x.component(i)) * scale
             }),
         )
@@ -687,11 +692,8 @@ pub fn periodic_orbit(
     let moved = |x: &State, step: &nalgebra::DVector<f64>, alpha: f64| {
         let mut y = *x;
         for (k, &i) in active.iter().enumerate() {
-            if i < 3 {
-                y.q[i] -= alpha * step[k];
-            } else {
-                y.v[i - 3] -= alpha * step[k] * omega;
-            }
+            let scale = if i < MAX_DOFS { 1.0 } else { omega };
+            *y.component_mut(i) -= alpha * step[k] * scale;
         }
         y
     };
@@ -792,7 +794,7 @@ pub struct RunUp {
     pub time: Vec<f64>,
     /// Driver speed [rad/s].
     pub driver_speed: Vec<f64>,
-    /// DTE p along the line of action [m].
+    /// DTE ([`MeshModel::transmission_error`]) [m].
     pub displacement: Vec<f64>,
     /// Elastic mesh force [N].
     pub mesh_force: Vec<f64>,
@@ -822,9 +824,9 @@ pub fn run_up(model: &MeshModel, from: f64, to: f64, duration: f64, max_samples:
         if i % decimate == 0 {
             out.time.push(t);
             out.driver_speed.push(from + alpha * t);
-            out.displacement.push(state.q[0]);
+            out.displacement.push(model.transmission_error(&state));
             out.mesh_force
-                .push(model.mesh_force(theta(t), state.mesh_deflection()));
+                .push(model.mesh_force(theta(t), model.mesh_deflection(&state)));
         }
         if i == steps {
             break;
@@ -913,7 +915,7 @@ pub fn reference_periods(
             y5 = y5.add_scaled(h * B5[s], &k[s]);
             err = err.add_scaled(h * (B5[s] - B4[s]), &k[s]);
         }
-        let e = (0..3)
+        let e = (0..model.structure.dofs)
             .map(|i| {
                 (err.q[i] / (scale_x * tolerance))
                     .abs()

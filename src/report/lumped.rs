@@ -20,7 +20,7 @@ pub fn setup_console(setup: &LumpedSetup) -> String {
         model.mesh.mean(),
         setup.inertias[0] * 1e6,
         setup.inertias[1] * 1e6,
-        model.effective_mass,
+        model.effective_mass(),
         setup.natural_frequency_hz,
         match model.backlash {
             Some(j) => format!("backlash {:.2} um (separation modelled)", j * 1e6),
@@ -470,5 +470,54 @@ fn resonance_sweep_table(
     for row in &rows {
         markdown.push_str(&format!("| {} |\n", row.join(" | ")));
     }
+    Ok(markdown)
+}
+
+/// Writes `validate frequencies`: mesh_modes.csv (per position), frequencies.md and
+/// summary.json; returns the Markdown table.
+pub fn write_mesh_modes(
+    out: OutputDir,
+    case: &Case,
+    result: &crate::study::frequencies::MeshModes,
+) -> Result<String, ReportError> {
+    out.case(case)?;
+    out.json("summary.json", result)?;
+    let both = [&result.driver_held, &result.both_free];
+    out.csv(
+        "mesh_modes.csv",
+        &["hubs", "driver_rotation_deg", "fe_modal_hz"],
+        both.iter().flat_map(|c| {
+            c.fe_modal_hz.iter().map(move |(deg, hz)| {
+                vec![
+                    format!("{:?}", c.hubs),
+                    format!("{deg:.4}"),
+                    format!("{hz:.2}"),
+                ]
+            })
+        }),
+    )?;
+    let mut markdown = format!(
+        "Mesh mode, lumped model against the FE modal analysis ({} positions, mesh {} / {} mm, {:.1} N·m)\n\n\
+         | boundary | lumped drive | FE modal mean [Hz] | lumped, case's bodies [Hz] | rel | rigid gears [Hz] | rel | within 2 % |\n|---|---|---|---|---|---|---|---|\n",
+        result.positions,
+        result.fine_element_mm,
+        result.coarse_element_mm,
+        result.torque_nm
+    );
+    for c in both {
+        markdown.push_str(&format!(
+            "| {:?} | {} | {:.1} | {:.1} | {:+.2} % | {:.1} | {:+.2} % | {} |\n",
+            c.hubs,
+            c.drive.name(),
+            c.fe_modal_mean_hz,
+            c.lumped_hz,
+            100.0 * c.lumped_rel,
+            c.lumped_rigid_hz,
+            100.0 * c.lumped_rigid_rel,
+            if c.pass { "yes" } else { "**no**" }
+        ));
+    }
+    markdown.push_str(&format!("\nmodel: {}\n", result.model_note));
+    out.bytes("frequencies.md", markdown.as_bytes())?;
     Ok(markdown)
 }

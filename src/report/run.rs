@@ -62,8 +62,8 @@ pub struct RunSummary {
     pub max_dynamic_factor_ltca: Option<f64>,
     pub primary_resonance_rpm_fe: Option<f64>,
     pub max_dynamic_factor_fe: Option<f64>,
-    /// The sweeps' own mesh mode √(k̄/m_e) (hub-to-hub k, rigid gears) on the LTCA's and the
-    /// FE's k [Hz]: what their resonance speeds follow.
+    /// The sweeps' own mesh mode (their model linearized about the design load) on the LTCA's
+    /// and the FE's k [Hz]: what their resonance speeds follow.
     pub natural_frequency_sweep_ltca_hz: Option<f64>,
     pub natural_frequency_sweep_fe_hz: Option<f64>,
     /// The sweeps' own warnings (an overload beyond the contact law), "LTCA k: …", "FE k: …".
@@ -500,14 +500,14 @@ fn sections(
             row(&[
                 "primary resonance, max dynamic factor".into(),
                 format!(
-                    "{} rpm, {} (LTCA k) · {} rpm, {} (FE k). The sweeps' model (hub-to-hub k, rigid gears) has its mesh mode at {} / {} Hz, {} against the FE modal analysis: its resonance speeds are low by about as much (validation/frequencies)",
+                    "{} rpm, {} (LTCA k) · {} rpm, {} (FE k). The sweeps' model has its mesh mode at {} / {} Hz; the LTCA one is {} against the FE modal analysis of the pair on the case's mesh, both gears free (compare/, validation/frequencies)",
                     show(s.primary_resonance_rpm_ltca, 0),
                     show(s.max_dynamic_factor_ltca, 2),
                     show(s.primary_resonance_rpm_fe, 0),
                     show(s.max_dynamic_factor_fe, 2),
                     show(s.natural_frequency_sweep_ltca_hz, 0),
                     show(s.natural_frequency_sweep_fe_hz, 0),
-                    relative(s.natural_frequency_sweep_fe_hz, s.mesh_mode_fe_modal_free_hz),
+                    relative(s.mesh_mode_lumped_fe_k_free_hz, s.mesh_mode_fe_modal_free_hz),
                 ),
                 "sweep-ltca/, sweep-fe/".into(),
             ]),
@@ -592,10 +592,9 @@ fn sections(
             row(&[
                 "mesh mode, both gears free [Hz]".into(),
                 format!(
-                    "FE modal {} · lumped on the FE k with the bodies' twist out (rigid rims) {} · the sweeps' model (hub-to-hub k) {}; driver held: FE modal {}, lumped rims {}",
+                    "FE modal {} · the lumped model (as the sweeps) {}; driver held: FE modal {}, lumped {}",
                     show(s.mesh_mode_fe_modal_free_hz, 0),
                     show(s.mesh_mode_lumped_fe_k_free_hz, 0),
-                    show(s.natural_frequency_sweep_fe_hz, 0),
                     show(s.mesh_mode_fe_modal_driver_held_hz, 0),
                     show(s.mesh_mode_lumped_fe_k_driver_held_hz, 0)
                 ),
@@ -614,10 +613,10 @@ fn sections(
             s.fe_stiffness_vs_ltca_same_mesh_rel.map_or("–".into(), |r| format!("{:+.1} %", 100.0 * r))
         ),
         format!(
-            "Lumped model ({}): speed sweeps, resonances, tooth separation and stability in seconds. Its k is hub to hub with rigid gears: on the FE's k its mesh mode is {} against the FE modal analysis with both gears free, so its resonance speeds read low by about as much; with the bodies' twist taken out (rigid rims, compare/) it is {}.",
+            "Lumped model ({}): speed sweeps, resonances, tooth separation and stability in seconds. Its mesh mode is {} (both gears free) and {} (driver held) against the FE modal analysis of the meshed pair on the case's mesh (compare/, validation/frequencies).",
             field(sweep_ltca, &["model"]).and_then(|m| m.as_str().map(String::from)).unwrap_or_else(|| "–".into()),
-            relative(s.natural_frequency_sweep_fe_hz, s.mesh_mode_fe_modal_free_hz),
             relative(s.mesh_mode_lumped_fe_k_free_hz, s.mesh_mode_fe_modal_free_hz),
+            relative(s.mesh_mode_lumped_fe_k_driver_held_hz, s.mesh_mode_fe_modal_driver_held_hz),
         ),
         "ISO 6336 and potential energy: first estimates; they do not see the bodies' compliance the FE sees.".into(),
     ];
@@ -849,7 +848,7 @@ fn sections(
     out.push(Section {
         title: "FE against lumped frequencies".into(),
         text: vec![format!(
-            "Mesh mode, both gears free: FE modal {} Hz, lumped on the FE k with rigid rims {} Hz; driver held: {} / {} Hz. The lumped model's k is hub to hub; compare/table.md lists every method.",
+            "Mesh mode, both gears free: FE modal {} Hz, the lumped model (as the sweeps integrate it) {} Hz; driver held: {} / {} Hz. compare/table.md lists every method.",
             show(s.mesh_mode_fe_modal_free_hz, 0),
             show(s.mesh_mode_lumped_fe_k_free_hz, 0),
             show(s.mesh_mode_fe_modal_driver_held_hz, 0),
@@ -860,11 +859,13 @@ fn sections(
             caption: "Mesh-mode frequency by method [Hz]".into(),
             header: ["method", "both gears free", "driver held"].map(String::from).to_vec(),
             rows: [
-                ("lumped √(k/m), k LTCA on the explicit mesh", "lumped_ltca_secant_hz"),
-                ("lumped, k LTCA on the explicit mesh, rigid rims", "lumped_ltca_rim_hz"),
-                ("lumped, k FE DTE", "lumped_fe_hz"),
-                ("lumped, k FE DTE, rigid rims", "lumped_fe_rim_hz"),
-                ("FE modal (mean over positions)", "fe_modal_mean_hz"),
+                ("lumped √(k/m), rigid gears, k LTCA on the explicit mesh", "lumped_ltca_secant_hz"),
+                ("lumped, elastic bodies, k LTCA tangent on the explicit mesh", "lumped_ltca_tangent_elastic_hz"),
+                ("lumped √(k/m), rigid gears, k FE DTE", "lumped_fe_hz"),
+                ("lumped, elastic bodies, k FE DTE", "lumped_fe_elastic_hz"),
+                ("FE modal on the explicit mesh (mean over positions)", "fe_modal_mean_hz"),
+                ("the lumped model as the sweeps (the case's mesh)", "lumped_model_hz"),
+                ("FE modal on the case's mesh (mean over positions)", "fe_modal_case_mesh_mean_hz"),
             ]
             .iter()
             .map(|(method, key)| {

@@ -29,7 +29,7 @@ use crate::lumped::{steady_state, Drive};
 use crate::signal::{amplitude_spectrum, harmonic_amplitudes};
 use crate::stiffness::{self, potential_energy, MeshStiffness};
 
-use super::compare::{lumped_twin, twist_behind_free_hubs, FeDte};
+use super::compare::{lumped_twin, FeDte};
 use super::lumped::gear_inertias;
 use super::{Progress, StudyError};
 use crate::explicit::scene::static_te;
@@ -113,18 +113,28 @@ fn answers(
     let started = std::time::Instant::now();
     let pair = &case.pair;
     let rb = [pair.gears[0].base_radius, pair.gears[1].base_radius];
-    let twist = twist_behind_free_hubs(case, Drive::Speed);
-    // Only a hub-to-hub stiffness (LTCA, FE) holds the body's twist; ISO 6336 and the
-    // potential-energy method stop at the tooth's foundation. A k too soft to hold the twist
-    // keeps its own value.
-    let rim = match holds_body_twist {
-        true => mesh
-            .without_series_compliance(twist)
-            .unwrap_or_else(|| mesh.clone()),
-        false => mesh.clone(),
+    // The FE's lumped twin: speed drive, elastic bodies. A hub-to-hub stiffness (LTCA, FE)
+    // holds the bodies' twist, which the twin takes out and gives the bodies; ISO 6336 and the
+    // potential-energy method stop at the tooth's foundation, so the twist is put in series
+    // first (a negative compliance "taken out"). A k too soft to hold the twist gets rigid gears.
+    let twist: f64 = super::compare::body_twist(case).iter().sum();
+    let hub_to_hub = match holds_body_twist {
+        true => mesh.clone(),
+        false => mesh
+            .without_series_compliance(-twist)
+            .expect("adding a compliance keeps k positive"),
     };
     let m = Drive::Speed.effective_mass(gear_inertias(case), rb);
-    let f_n = (rim.mean() / m).sqrt() / std::f64::consts::TAU;
+    let damping = 2.0 * case.fe.mesh_damping_ratio * (hub_to_hub.mean() * m).sqrt();
+    let model = lumped_twin(
+        case,
+        hub_to_hub.clone(),
+        (Drive::Speed, true),
+        torque,
+        damping,
+    )
+    .or_else(|_| lumped_twin(case, hub_to_hub, (Drive::Speed, false), torque, damping))?;
+    let f_n = model.natural_frequency() / std::f64::consts::TAU;
     let teeth = pair.gears[0].teeth() as f64;
     let pitch = pair.gears[0].angular_pitch();
     let bins: Vec<Option<f64>> = (0..256)
@@ -132,8 +142,6 @@ fn answers(
         .collect();
     let static_te_pp = static_te(pair, torque, &bins, &mesh.unloaded_te)
         .map_or(f64::NAN, |te| te.peak_to_peak_rad);
-    let damping = 2.0 * case.fe.mesh_damping_ratio * (rim.mean() * m).sqrt();
-    let model = lumped_twin(case, rim, Drive::Speed, torque, damping);
     let speed = speed_rpm * std::f64::consts::TAU / 60.0;
     let steps = crate::sweep::steps_per_period(&model, speed);
     let steady = steady_state(&model, speed, steps, model.static_state(), 1e-9, 2000);

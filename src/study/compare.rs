@@ -41,6 +41,12 @@ use crate::stiffness::MeshStiffness;
 
 use super::lumped::gear_inertias;
 use super::{Progress, StudyError};
+use crate::case::BodyModel;
+
+/// Positions of the FE modal analysis on the case's mesh (the headline frequencies): 8 put the
+/// mean 0.5–0.6 % above 16's on the paper pair (validation/frequencies), at half the cost in
+/// the default `run`; `geardyn validate frequencies --positions N` takes more.
+pub const CASE_MESH_MODAL_POSITIONS: usize = 8;
 
 /// Mesh harmonics compared.
 pub const HARMONICS: usize = 3;
@@ -89,26 +95,34 @@ pub struct Frequencies {
     pub lumped_ltca_secant_hz: f64,
     pub lumped_ltca_tangent_hz: f64,
     pub lumped_fe_hz: f64,
-    /// The bodies' twist (bore to root circle) behind light free hubs, taken out of the FE k:
-    /// the driven gear's with the driver held, both with both free [m/N], and the lumped
-    /// √(k̄'/m) with that k'(θ) = 1/(1/k − c) (rigid rims carrying the inertia).
-    pub body_twist_removed_m_per_n: f64,
-    pub lumped_fe_rim_hz: f64,
-    /// √(k̄'/m) with the LTCA's secant k̄ and the same body twist out: the FE modal's own
-    /// contact (hard), so it isolates the reduction from the FE's penalty compliance.
-    pub lumped_ltca_rim_hz: f64,
-    /// The same with the LTCA's tangent k̄ (the modal's own linearization).
-    pub lumped_ltca_tangent_rim_hz: f64,
-    /// Floquet frequency of the undamped lumped model with the FE k(θ) (rigid rims), per FE
+    /// The bodies' twist between bore and root circle along the line of action, both gears
+    /// [m/N] ([`body_twist`]).
+    pub body_twist_m_per_n: f64,
+    /// Elastic bodies (hub and rim, [`crate::lumped::structure`]) under this boundary
+    /// condition, the twist taken out of the hub-to-hub k: the structure's mesh mode with the
+    /// FE's k(θ) (its mean), the LTCA's secant k̄ and its tangent k̄ (the modal's own
+    /// linearization, on the same mesh).
+    pub lumped_fe_elastic_hz: f64,
+    pub lumped_ltca_elastic_hz: f64,
+    pub lumped_ltca_tangent_elastic_hz: f64,
+    /// The case's lumped model (what `sweep` and `run` integrate: its stiffness source and force
+    /// law on the case's mesh, linearized about the design load, its bodies) on this boundary
+    /// condition (no shafts, no bearings, as the FE): the mesh mode; and the FE modal analysis
+    /// on the case's mesh, mean over [`CASE_MESH_MODAL_POSITIONS`] ([`super::frequencies`]).
+    pub lumped_model_hz: f64,
+    pub fe_modal_case_mesh_mean_hz: f64,
+    /// Floquet frequency of the undamped lumped model with the FE k(θ) (elastic bodies), per FE
     /// speed: (rpm, Hz).
     pub floquet_hz: Vec<(f64, f64)>,
     /// FE modal mesh mode per position: (driver rotation [deg], Hz), and its mean.
     pub fe_modal_hz: Vec<(f64, f64)>,
     pub fe_modal_mean_hz: f64,
-    /// The lumped √(k̄/m) with the FE k̄ over the FE modal mean, minus 1: rigid gears, and
-    /// rigid rims (body twist behind light free hubs out).
+    /// Over the FE modal mean, minus 1: rigid gears with the FE k̄, elastic bodies with the FE
+    /// k(θ) (both against the modal on the explicit mesh), and the case's lumped model (against
+    /// the modal on the case's mesh).
     pub lumped_fe_over_modal_rel: f64,
-    pub lumped_fe_rim_over_modal_rel: f64,
+    pub lumped_fe_elastic_over_modal_rel: f64,
+    pub lumped_model_over_modal_rel: f64,
 }
 
 /// A labelled spectral line.
@@ -248,38 +262,39 @@ pub fn body_twist(case: &Case) -> [f64; 2] {
     })
 }
 
-/// The twist a light free hub leaves out of the mesh mode: the driven gear's with the driver
-/// held (speed drive), both gears' with both free (torque drive).
-pub fn twist_behind_free_hubs(case: &Case, drive: Drive) -> f64 {
-    let twist = body_twist(case);
-    match drive {
-        Drive::Speed => twist[1],
-        Drive::Torque => twist[0] + twist[1],
-    }
-}
-
-/// The lumped twin of a pair on `mesh`: 1 DOF with `drive`'s mass, rigid bearings, mesh force
-/// T/r_b2, viscous mesh damping `damping` [N·s/m], and with zero backlash the back flanks
-/// engaging with their own mirrored k and e.
+/// The lumped twin of the explicit FE on `mesh` (hub to hub, as the FE's DTE and the LTCA give
+/// it): the pair under `drive` with elastic bodies and nothing else (the FE's boundary
+/// conditions: no shafts, no bearings; [`super::lumped::drivetrain_with`]), the bodies' twist
+/// taken out of `mesh`, mesh force T/r_b2, viscous mesh damping `damping` [N·s/m], and with zero
+/// backlash the back flanks engaging with their own mirrored k and e. `elastic = false`: rigid
+/// gears behind the whole hub-to-hub k.
 pub fn lumped_twin(
     case: &Case,
     mesh: MeshStiffness,
-    drive: Drive,
+    (drive, elastic): (Drive, bool),
     torque: f64,
     damping: f64,
-) -> MeshModel {
+) -> Result<MeshModel, StudyError> {
     let pair = &case.pair;
-    let rb = [pair.gears[0].base_radius, pair.gears[1].base_radius];
-    MeshModel {
-        effective_mass: drive.effective_mass(gear_inertias(case), rb),
+    let bodies = match elastic {
+        true => BodyModel::Elastic,
+        false => BodyModel::Rigid,
+    };
+    let structure = super::lumped::drivetrain_with(case, drive, bodies, [None; 2], false)?;
+    let twist: f64 = match elastic {
+        true => body_twist(case).iter().sum(),
+        false => 0.0,
+    };
+    let (mesh, _) = super::lumped::to_rims(mesh, None, twist)?;
+    Ok(MeshModel {
+        structure,
         back_reflection: Some(super::lumped::back_reflection(pair, &mesh)),
         mesh,
         damping,
-        force: torque / rb[1],
+        force: torque / pair.gears[1].base_radius,
         backlash: Some(pair.backlash_normal.max(0.0)),
-        bearings: None,
         force_law: None,
-    }
+    })
 }
 
 /// The FE run the headline numbers, the paper-stiffness study and the chart use: the one
@@ -364,47 +379,39 @@ pub fn run(
     let zeta = case.fe.mesh_damping_ratio;
     let damping_of =
         |drive: Drive| 2.0 * zeta * (k_secant * drive.effective_mass(inertias, rb)).sqrt();
-    let damping = damping_of(Drive::Speed);
-    let removed = |drive: Drive| twist_behind_free_hubs(case, drive);
-    let rim_stiffness = |drive: Drive| {
-        input
-            .fe_stiffness
-            .without_series_compliance(removed(drive))
-            .ok_or_else(|| {
-                StudyError::Input(format!(
-                    "the gear bodies' twist ({:.3e} m/N) is not below the FE mesh compliance: check bore_radius_mm and the stiffness file",
-                    removed(drive)
-                ))
-            })
+    let twin = |drive: Drive, elastic: bool, mesh: MeshStiffness| {
+        lumped_twin(case, mesh, (drive, elastic), torque, damping_of(drive))
     };
-    let lumped = |drive: Drive, mesh: MeshStiffness| {
-        lumped_twin(case, mesh, drive, torque, damping_of(drive))
-    };
+    let constant = |k: f64| MeshStiffness::constant("mean", input.fe_stiffness.period(), k);
+    // The case's lumped model (its stiffness source and force law on the case's mesh, what
+    // `sweep` and `run` integrate), linearized about the design load, on the FE's boundary
+    // conditions, against the FE modal analysis on the case's (converged) mesh: the report's
+    // resonance speeds come from this mesh mode.
+    let converged = super::frequencies::mesh_modes(case, CASE_MESH_MODAL_POSITIONS, progress)?;
+    let twist: f64 = body_twist(case).iter().sum();
     let frequencies = |hubs: Hubs, drive: Drive| -> Result<Frequencies, StudyError> {
-        let rim = rim_stiffness(drive)?;
-        let k_rim = rim.mean();
-        let model = lumped(drive, rim);
-        let m = model.effective_mass;
+        let elastic = twin(drive, true, input.fe_stiffness.clone())?;
+        let m = elastic.effective_mass();
         let hz = |k: f64| (k / m).sqrt() / std::f64::consts::TAU;
-        // NaN when the twist is not below the compliance (checked for the FE k above).
-        let rim_of = |k: f64| {
-            let rest = 1.0 / k - removed(drive);
-            if rest > 0.0 {
-                hz(1.0 / rest)
-            } else {
-                f64::NAN
-            }
+        // The structure's mesh mode with the hub-to-hub k̄ taken to the rims.
+        let elastic_of = |k: f64| -> Result<f64, StudyError> {
+            Ok(twin(drive, true, constant(k))?.natural_frequency() / std::f64::consts::TAU)
         };
+        let on_case_mesh = match hubs {
+            Hubs::DriverHeld => &converged.driver_held,
+            Hubs::BothFree => &converged.both_free,
+        };
+        let elastic_hz = elastic.natural_frequency() / std::f64::consts::TAU;
         let floquet_hz = input
             .fe_runs
             .iter()
             .map(|r| {
                 let speed = r.speed_rpm * std::f64::consts::TAU / 60.0;
-                let steps = crate::sweep::steps_per_period(&model, speed);
+                let steps = crate::sweep::steps_per_period(&elastic, speed);
                 // Undamped: the parametric shift alone, comparable with the modal.
                 let undamped = MeshModel {
                     damping: 0.0,
-                    ..model.clone()
+                    ..elastic.clone()
                 };
                 let w = floquet_frequency(&undamped, speed, steps);
                 (r.speed_rpm, w / std::f64::consts::TAU)
@@ -427,24 +434,27 @@ pub fn run(
             lumped_ltca_secant_hz: hz(k_secant),
             lumped_ltca_tangent_hz: hz(k_tangent),
             lumped_fe_hz: hz(k_fe),
-            body_twist_removed_m_per_n: removed(drive),
-            lumped_fe_rim_hz: hz(k_rim),
-            lumped_ltca_rim_hz: rim_of(k_secant),
-            lumped_ltca_tangent_rim_hz: rim_of(k_tangent),
+            body_twist_m_per_n: twist,
+            lumped_fe_elastic_hz: elastic_hz,
+            lumped_ltca_elastic_hz: elastic_of(k_secant)?,
+            lumped_ltca_tangent_elastic_hz: elastic_of(k_tangent)?,
+            lumped_model_hz: on_case_mesh.lumped_hz,
+            fe_modal_case_mesh_mean_hz: on_case_mesh.fe_modal_mean_hz,
             floquet_hz,
             fe_modal_hz,
             fe_modal_mean_hz,
             lumped_fe_over_modal_rel: hz(k_fe) / fe_modal_mean_hz - 1.0,
-            lumped_fe_rim_over_modal_rel: hz(k_rim) / fe_modal_mean_hz - 1.0,
+            lumped_fe_elastic_over_modal_rel: elastic_hz / fe_modal_mean_hz - 1.0,
+            lumped_model_over_modal_rel: on_case_mesh.lumped_rel,
         })
     };
     let driver_held = frequencies(Hubs::DriverHeld, Drive::Speed)?;
     let both_free = frequencies(Hubs::BothFree, Drive::Torque)?;
 
     // (d), (e) per FE speed: the explicit FE holds the driver's bore and drives a light driven
-    // hub, so its lumped twin is the speed drive with the driven body's twist out.
-    let rim_model = lumped(Drive::Speed, rim_stiffness(Drive::Speed)?);
-    let rigid_model = lumped(Drive::Speed, input.fe_stiffness.clone());
+    // hub, so its lumped twin is the speed drive with elastic bodies.
+    let rim_model = twin(Drive::Speed, true, input.fe_stiffness.clone())?;
+    let rigid_model = twin(Drive::Speed, false, input.fe_stiffness.clone())?;
     let teeth = pair.gears[0].teeth() as f64;
     let speeds: Vec<SpeedComparison> = input
         .fe_runs
@@ -478,10 +488,10 @@ pub fn run(
     Ok(CompareSummary {
         case: case.name().to_string(),
         f_mesh_hz: first.map_or(f64::NAN, |s| s.mesh_hz),
-        f_natural_lumped_hz: both_free.lumped_fe_rim_hz,
-        f_natural_fe_modal_hz: both_free.fe_modal_mean_hz,
-        f_natural_lumped_driver_held_hz: driver_held.lumped_fe_rim_hz,
-        f_natural_fe_modal_driver_held_hz: driver_held.fe_modal_mean_hz,
+        f_natural_lumped_hz: both_free.lumped_model_hz,
+        f_natural_fe_modal_hz: both_free.fe_modal_case_mesh_mean_hz,
+        f_natural_lumped_driver_held_hz: driver_held.lumped_model_hz,
+        f_natural_fe_modal_driver_held_hz: driver_held.fe_modal_case_mesh_mean_hz,
         fe_dte_peaks_hz: first.map_or(Vec::new(), |s| s.fe_peaks.iter().map(|p| p.frequency_hz).collect()),
         lumped_dte_peaks_hz: first.map_or(Vec::new(), |s| {
             let mut lines: Vec<(f64, f64)> = s
@@ -501,7 +511,7 @@ pub fn run(
         both_free,
         speeds,
         modal,
-        mesh_damping_n_s_per_m: damping,
+        mesh_damping_n_s_per_m: damping_of(Drive::Speed),
         paper_stiffness: paper,
         model_note: format!(
             "FE modal: the explicit FE's mesh ({:.2} mm flanks, {:.2} mm body), consistent mass, hubs rigid with the bore nodes' inertia, the LTCA's active contact points tied along their normals, relief none, {positions} positions; lumped: 1 DOF, rigid gears (I = {:.4e} / {:.4e} kg m2), k(theta) from the FE DTE, zeta = {zeta} on the LTCA k and the driven inertia, back flanks with their own k and e",

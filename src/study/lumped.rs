@@ -6,9 +6,12 @@
 //! ρ b A; m_e follows the drive ([`Drive::effective_mass`]); the mesh damping is
 //! c = 2ζ√(k̄ m_e), or the case's coefficient when it gives one.
 
+use crate::case::BodyModel;
 use crate::case::{Case, Override, StiffnessSource};
 use crate::ltca::{LtcaModel, PositionResult};
-use crate::lumped::{Bearings, Drive, ForceLawKind, MeshModel};
+use crate::lumped::{
+    Bearings, Drive, DrivetrainSpec, ForceLawKind, GearBody, MeshModel, Structure,
+};
 use crate::stiffness::{self, potential_energy, ForceLaw, MeshStiffness};
 
 use super::checks::{Check, CheckKind};
@@ -35,10 +38,10 @@ pub struct LumpedShorthands {
     /// Add each gear's translation on its bearings along the line of action (lumped.bearings).
     #[arg(long)]
     pub bearings: bool,
-    /// Take the free gear bodies' twist out of a hub-to-hub stiffness (ltca or an FE CSV),
-    /// so the mesh mode matches the FE modal analysis (lumped.rims).
+    /// One rigid inertia per gear instead of hub and rim with the body's twist between them
+    /// (lumped.bodies = "rigid").
     #[arg(long)]
-    pub rims: bool,
+    pub rigid_bodies: bool,
 }
 
 impl LumpedShorthands {
@@ -65,8 +68,8 @@ impl LumpedShorthands {
         if self.bearings {
             overrides.push(Override::set("lumped.bearings", true));
         }
-        if self.rims {
-            overrides.push(Override::set("lumped.rims", true));
+        if self.rigid_bodies {
+            overrides.push(Override::set("lumped.bodies", "rigid"));
         }
         Ok(overrides)
     }
@@ -117,7 +120,7 @@ pub struct LumpedSetup {
     pub inertias: [f64; 2],
     pub drive: Drive,
     pub damping_ratio: f64,
-    /// Undamped natural frequency at the mean stiffness [Hz].
+    /// Undamped mesh-mode frequency of the model linearized about the design load [Hz].
     pub natural_frequency_hz: f64,
     /// One line saying which model was used and what it leaves out.
     pub model_note: String,
@@ -200,26 +203,14 @@ pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
         source => (mesh_stiffness(case, source, torque)?, None, None),
     };
     let stiffness_wall_s = started.elapsed().as_secs_f64();
-    let mut rims_note = String::new();
-    let mut twist = 0.0;
-    if settings.rims {
-        twist = super::compare::twist_behind_free_hubs(case, settings.drive);
-        mesh = rims(case, &settings.stiffness, mesh)?;
-        if let Some(law) = force_law {
-            force_law = Some(law.without_series_compliance(twist).ok_or_else(|| {
-                StudyError::Input(format!(
-                    "the gear bodies' twist ({twist:.3e} m/N) is not below the mesh's tangent \
-                     compliance at every load of the force law: check bore_radius_mm, or drop \
-                     lumped.rims"
-                ))
-            })?);
-        }
-        rims_note = format!(
-            "; rims: the free bodies' twist ({twist:.3e} m/N) taken out of the hub-to-hub k"
-        );
-    }
+    // A hub-to-hub source holds the bodies' twist; elastic bodies carry it themselves.
+    let twist = match settings.stiffness.holds_body_twist() {
+        true => structure_body_twist(case),
+        false => 0.0,
+    };
+    (mesh, force_law) = to_rims(mesh, force_law, twist)?;
     let inertias = gear_inertias(case);
-    let (mut model, damping_ratio) = model_on(case, mesh, torque);
+    let (mut model, damping_ratio) = model_on(case, mesh, torque)?;
     let law_note = match (&force_law, &settings.stiffness) {
         (Some(law), _) => format!(
             "; mesh force law W(θ, δ) from the LTCA at {} loads, {:.3}–{:.3} × the design torque (load-dependent stiffness and loaded contact ratio; beyond them the last tangent)",
@@ -233,21 +224,19 @@ pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
         (None, _) => "; mesh force linear in the approach, k(θ)(δ − e) (the source gives one k(θ))".to_string(),
     };
     model.force_law = force_law;
-    let natural_frequency_hz = model.natural_frequency() / std::f64::consts::TAU;
+    let natural_frequency_hz = model.linearized().natural_frequency() / std::f64::consts::TAU;
     let self_checks = match &reference {
-        Some(reference) => quasi_static_checks(case, &model, twist, reference),
+        Some(reference) => {
+            // The LTCA holds the bearings: so does the check.
+            let held = MeshModel {
+                structure: drivetrain(case, settings.drive, false)?,
+                ..model.clone()
+            };
+            quasi_static_checks(case, &held, reference)
+        }
         None => Vec::new(),
     };
-    let drive = settings.drive.name();
-    let model_note = match &model.bearings {
-        None => format!(
-            "1-DOF along the line of action ({drive} drive; the torsional 2-DOF with rigid shafts and bearings reduced exactly: torque drive -> relative coordinate, speed drive -> driven gear only); mesh stiffness periodic in the driver roll angle{law_note}{rims_note}"
-        ),
-        Some(b) => format!(
-            "3-DOF: relative rotation along the line of action ({drive} drive) + each gear's translation on its bearings along the line of action (k_b = {:.3e} / {:.3e} N/m, m = {:.3} / {:.3} kg); translations across the line of action left out (a frictionless spur mesh force does not excite them){law_note}",
-            b.stiffness[0], b.stiffness[1], b.mass[0], b.mass[1]
-        ) + &rims_note,
-    };
+    let model_note = structure_note(case, &model.structure, twist) + &law_note;
     Ok(LumpedSetup {
         torque,
         model,
@@ -312,8 +301,9 @@ pub fn force_law_of(
     ForceLaw::from_ltca(&case.pair, &law_torques, &cycles, source).map_err(StudyError::Input)
 }
 
-/// The model's quasi-static TE (W(θ, δ) = T/r_b2, bearings at rest; plus the body twist c·W
-/// taken out for rims) against the LTCA's STE r_b2 φ at each torque of `reference`, at the law's
+/// The model's quasi-static TE, hub to hub ([`MeshModel::quasi_static_transmission_error`]:
+/// W(θ, δ) = T/r_b2, the bodies' static twist included; give it a structure without bearings,
+/// which the LTCA does not have) against the LTCA's STE r_b2 φ at each torque of `reference`, at the law's
 /// positions and half-way between them, over the mean loaded deflection r_b2 (φ − φ₀):
 /// * the rms difference over the cycle within [`QUASI_STATIC_TOLERANCE`]: an error for the
 ///   load-dependent law (the table must hold the LTCA's answer between its knots and
@@ -325,7 +315,6 @@ pub fn force_law_of(
 pub fn quasi_static_checks(
     case: &Case,
     model: &MeshModel,
-    series_compliance: f64,
     reference: &QuasiStaticReference,
 ) -> Vec<Check> {
     let rb2 = case.pair.gears[1].base_radius;
@@ -346,7 +335,7 @@ pub fn quasi_static_checks(
             .iter()
             .map(|r| {
                 let theta = r.roll_angle - model.mesh.origin;
-                loaded.quasi_static_deflection(theta) + series_compliance * force - rb2 * r.ste
+                loaded.quasi_static_transmission_error(theta) - rb2 * r.ste
             })
             .collect();
         let rms = (differences.iter().map(|d| d * d).sum::<f64>() / n).sqrt();
@@ -387,45 +376,94 @@ pub fn quasi_static_checks(
     checks
 }
 
-/// `mesh` (a hub-to-hub stiffness from `source`) with the bodies' twist behind free hubs taken
-/// out of series ([`super::compare::twist_behind_free_hubs`]); refused for the tooth-level
-/// sources, which hold no body twist.
-fn rims(
-    case: &Case,
-    source: &StiffnessSource,
+/// `mesh` and `law`, hub to hub, with the bodies' twist `twist` [m/N] taken out of series:
+/// k′ = 1/(1/k − c_b), and δ′ = δ − c_b W for the law: the mesh between the rims.
+pub fn to_rims(
     mesh: MeshStiffness,
-) -> Result<MeshStiffness, StudyError> {
-    if matches!(
-        source,
-        StiffnessSource::PotentialEnergy | StiffnessSource::Iso
-    ) {
-        return Err(StudyError::Input(format!(
-            "lumped.rims takes the gear bodies' twist out of a hub-to-hub stiffness, and {} holds \
-             none: use it with lumped.stiffness = \"ltca\" or an FE stiffness CSV, or drop --rims",
-            source.name()
-        )));
+    law: Option<ForceLaw>,
+    twist: f64,
+) -> Result<(MeshStiffness, Option<ForceLaw>), StudyError> {
+    if twist == 0.0 {
+        return Ok((mesh, law));
     }
-    let twist = super::compare::twist_behind_free_hubs(case, case.lumped.drive);
-    mesh.without_series_compliance(twist).ok_or_else(|| {
+    let refused = |what: &str| {
         StudyError::Input(format!(
-            "the gear bodies' twist ({twist:.3e} m/N) is not below the mesh compliance: check \
-             bore_radius_mm and the stiffness source, or drop lumped.rims"
+            "the gear bodies' twist ({twist:.3e} m/N) is not below the {what}: check \
+             bore_radius_mm and the stiffness source, or set lumped.bodies = \"rigid\""
         ))
+    };
+    let mesh = mesh
+        .without_series_compliance(twist)
+        .ok_or_else(|| refused("mesh compliance"))?;
+    let law =
+        match law {
+            Some(law) => Some(law.without_series_compliance(twist).ok_or_else(|| {
+                refused("mesh's tangent compliance at every load of the force law")
+            })?),
+            None => None,
+        };
+    Ok((mesh, law))
+}
+
+/// Each gear body as the lumped model holds it (`[lumped] bodies`): elastic, hub and rim with
+/// the annulus's torsional compliance between them and the hub's share of the inertia
+/// ([`crate::geometry::Gear::body_hub_area_moment`]); the case's inertias, when it gives them,
+/// scale both; or rigid.
+pub fn gear_bodies(case: &Case, bodies: BodyModel) -> [GearBody; 2] {
+    let inertias = gear_inertias(case);
+    std::array::from_fn(|i| {
+        let gear = &case.pair.gears[i];
+        match bodies {
+            BodyModel::Rigid => GearBody::rigid(inertias[i]),
+            BodyModel::Elastic => {
+                let own = case.material.density * gear.spec.face_width * gear.area_moments().1;
+                let hub =
+                    case.material.density * gear.spec.face_width * gear.body_hub_area_moment()
+                        / own
+                        * inertias[i];
+                GearBody {
+                    hub_inertia: hub,
+                    rim_inertia: inertias[i] - hub,
+                    torsional_compliance: gear.body_torsional_compliance(
+                        case.material.youngs_modulus,
+                        case.material.poisson_ratio,
+                    ),
+                }
+            }
+        }
     })
 }
 
-/// The case's lumped model (`[lumped]`: drive, inertias, bearings, damping) on the mesh
-/// stiffness `mesh` under `torque`, with the damping ratio it was given.
-pub fn model_on(case: &Case, mesh: MeshStiffness, torque: f64) -> (MeshModel, f64) {
+/// The bodies' twist the structure carries along the line of action, Σ r_b² c_t over elastic
+/// bodies [m/N] (what a hub-to-hub stiffness loses to them).
+pub fn structure_body_twist(case: &Case) -> f64 {
+    gear_bodies(case, case.lumped.bodies)
+        .iter()
+        .zip(&case.pair.gears)
+        .map(|(body, gear)| body.torsional_compliance * gear.base_radius.powi(2))
+        .sum()
+}
+
+/// The case's drivetrain under `drive`: its bodies, shafts and (with `bearings`, when the case
+/// asks for them) bearings.
+pub fn drivetrain(case: &Case, drive: Drive, bearings: bool) -> Result<Structure, StudyError> {
+    let settings = &case.lumped;
+    drivetrain_with(case, drive, settings.bodies, settings.shafts, bearings)
+}
+
+/// The pair under `drive` with `bodies`, `shafts` and (with `bearings`, when the case asks for
+/// them) the case's bearings: e.g. the explicit FE's boundary conditions (elastic bodies, no
+/// shafts, no bearings).
+pub fn drivetrain_with(
+    case: &Case,
+    drive: Drive,
+    bodies: BodyModel,
+    shafts: [Option<crate::lumped::Shaft>; 2],
+    bearings: bool,
+) -> Result<Structure, StudyError> {
     let settings = &case.lumped;
     let pair = &case.pair;
-    let inertias = gear_inertias(case);
-    let base_radii = [pair.gears[0].base_radius, pair.gears[1].base_radius];
-    let effective_mass = settings.drive.effective_mass(inertias, base_radii);
-    // Zero backlash: the back flanks engage as soon as the drive flanks open, with their own
-    // k and e (back_reflection below).
-    let backlash = Some(pair.backlash_normal.max(0.0));
-    let bearings = settings.bearings.then(|| {
+    let bearings = (bearings && settings.bearings).then(|| {
         let mass = settings.gear_masses.unwrap_or_else(|| {
             std::array::from_fn(|i| {
                 let gear = &pair.gears[i];
@@ -441,14 +479,66 @@ pub fn model_on(case: &Case, mesh: MeshStiffness, torque: f64) -> (MeshModel, f6
             }),
         }
     });
+    Structure::drivetrain(&DrivetrainSpec {
+        drive,
+        base_radii: [pair.gears[0].base_radius, pair.gears[1].base_radius],
+        gears: gear_bodies(case, bodies),
+        shafts,
+        bearings,
+        spring_damping_ratio: settings.drivetrain_damping_ratio,
+    })
+    .map_err(|e| StudyError::Input(format!("[lumped] drivetrain: {e}")))
+}
+
+/// One line saying what the structure is and what it leaves out.
+fn structure_note(case: &Case, structure: &Structure, twist: f64) -> String {
+    let drive = case.lumped.drive.name();
+    let mut note = format!(
+        "{}-DOF lumped model ({drive} drive; coordinates {}): ",
+        structure.dofs,
+        structure.names.join(", ")
+    );
+    note += match case.lumped.bodies {
+        BodyModel::Elastic => {
+            "elastic gear bodies (hub and rim, the annulus's twist between bore and root circle)"
+        }
+        BodyModel::Rigid => "rigid gear bodies",
+    };
+    if twist > 0.0 {
+        note += &format!(
+            ", the hub-to-hub stiffness with that twist ({twist:.3e} m/N) taken out of the mesh"
+        );
+    }
+    if case.lumped.bearings {
+        note += "; each gear's translation on its bearings along the line of action (across it left out: a frictionless spur mesh force does not excite it)";
+    }
+    for n in &structure.notes {
+        note += "; ";
+        note += n;
+    }
+    note
+}
+
+/// The case's lumped model (`[lumped]`: drive, bodies, shafts, bearings, damping) on the mesh
+/// stiffness `mesh` (between the rims: a hub-to-hub one through [`to_rims`] first) under
+/// `torque`, with the damping ratio it was given.
+pub fn model_on(
+    case: &Case,
+    mesh: MeshStiffness,
+    torque: f64,
+) -> Result<(MeshModel, f64), StudyError> {
+    let settings = &case.lumped;
+    let pair = &case.pair;
+    // Zero backlash: the back flanks engage as soon as the drive flanks open, with their own
+    // k and e (back_reflection below).
+    let backlash = Some(pair.backlash_normal.max(0.0));
     let mut model = MeshModel {
-        effective_mass,
+        structure: drivetrain(case, settings.drive, true)?,
         back_reflection: Some(back_reflection(pair, &mesh)),
         mesh,
         damping: 0.0,
-        force: torque / base_radii[1],
+        force: torque / pair.gears[1].base_radius,
         backlash,
-        bearings,
         force_law: None,
     };
     // A coefficient in the case wins over its ratio (`--damping-ratio` removes the coefficient).
@@ -457,7 +547,7 @@ pub fn model_on(case: &Case, mesh: MeshStiffness, torque: f64) -> (MeshModel, f6
         None => settings.damping_ratio,
     };
     model.damping = model.damping_from_ratio(damping_ratio);
-    (model, damping_ratio)
+    Ok((model, damping_ratio))
 }
 
 /// The driver speed at which the mesh frequency equals `frequency_hz`: f_mesh = z₁ n / 60 [rpm].
@@ -465,10 +555,12 @@ pub fn speed_for_mesh_frequency(case: &Case, frequency_hz: f64) -> f64 {
     frequency_hz * 60.0 / case.pair.gears[0].teeth() as f64
 }
 
-/// Undamped natural frequencies of the lumped model at the mean mesh stiffness [Hz].
+/// Undamped natural frequencies of the lumped model linearized about the design load (the
+/// force law's mean tangent stiffness; a linear law's k̄) [Hz].
 pub fn mode_frequencies_hz(model: &MeshModel) -> Vec<f64> {
-    model
-        .mode_frequencies(model.mesh.mean())
+    let linear = model.linearized();
+    linear
+        .mode_frequencies(linear.mesh.mean())
         .iter()
         .map(|w| w / std::f64::consts::TAU)
         .collect()

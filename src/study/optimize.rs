@@ -628,15 +628,23 @@ fn judge(
     let mesh_stiffness = stiffness::from_ltca(pair, &at_design, torque, format!("ltca ({name})"))
         .map_err(StudyError::Input)?;
     // The sweep stage's model: with the load-dependent law, the candidate's own.
-    let (mut lumped, _) = super::lumped::model_on(case, mesh_stiffness.clone(), torque);
-    if case.lumped.force_law == crate::lumped::ForceLawKind::LoadDependent {
-        lumped.force_law = Some(super::lumped::force_law_of(
+    let law = match case.lumped.force_law {
+        crate::lumped::ForceLawKind::LoadDependent => Some(super::lumped::force_law_of(
             case,
             &model.with_relief(&modifications),
             torque,
             &format!("ltca ({name})"),
-        )?);
-    }
+        )?),
+        crate::lumped::ForceLawKind::Secant => None,
+    };
+    // The LTCA's k and law run hub to hub: the case's bodies carry the twist.
+    let (rim_mesh, law) = super::lumped::to_rims(
+        mesh_stiffness.clone(),
+        law,
+        super::lumped::structure_body_twist(case),
+    )?;
+    let (mut lumped, _) = super::lumped::model_on(case, rim_mesh, torque)?;
+    lumped.force_law = law;
     // A diverged sweep does not end the study: the candidate keeps the speeds before it.
     let progress = sweep::continue_sweep(
         &lumped,

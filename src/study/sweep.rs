@@ -237,7 +237,7 @@ pub fn run(case: &Case, options: &SweepOptions) -> Result<SweepRun, StudyError> 
         drive: setup.drive,
         mean_stiffness_n_per_m: model.mesh.mean(),
         modes_hz: mode_frequencies_hz(model),
-        effective_mass_kg: model.effective_mass,
+        effective_mass_kg: model.effective_mass(),
         inertia_kg_mm2: setup.inertias.map(|i| i * 1e6),
         natural_frequency_hz: setup.natural_frequency_hz,
         damping_ratio: setup.damping_ratio,

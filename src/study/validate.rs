@@ -70,10 +70,12 @@ pub const RESONANCE_SPEEDS: usize = 116;
 /// Runs the integrator study on the case's lumped model (1 DOF).
 pub fn integrators(case: &Case) -> Result<IntegratorSummary, StudyError> {
     let setup = setup(case)?;
-    if setup.model.bearings.is_some() {
-        return Err(StudyError::Input(
-            "the integrator study covers the 1-DOF model: drop --bearings (or bearings = true in the case)".into(),
-        ));
+    if setup.model.structure.dofs != 1 {
+        return Err(StudyError::Input(format!(
+            "the integrator study covers the 1-DOF model, and this case's has {} coordinates ({}): drop --bearings, the shafts, or use the torque drive",
+            setup.model.structure.dofs,
+            setup.model.structure.names.join(", ")
+        )));
     }
     let period = setup.model.mesh.period();
     let k_mean = setup.model.mesh.mean();
@@ -113,7 +115,7 @@ pub fn integrators(case: &Case) -> Result<IntegratorSummary, StudyError> {
     Ok(IntegratorSummary {
         case: case.name().to_string(),
         study: "integrators",
-        effective_mass_kg: setup.model.effective_mass,
+        effective_mass_kg: setup.model.effective_mass(),
         mean_stiffness_n_per_m: k_mean,
         natural_frequency_hz: setup.natural_frequency_hz,
         damping_ratio: setup.damping_ratio,

@@ -211,6 +211,9 @@ pub enum Command {
         /// scene 4 ms with a 2 ms ramp), its self-checks held (a few minutes a pair).
         #[arg(long)]
         run: bool,
+        /// `frequencies`: FE modal positions over one base pitch.
+        #[arg(long, value_name = "N", default_value_t = 8)]
+        positions: usize,
     },
     /// Prints a case file: the given one, or the embedded default (start your own from it:
     /// `geardyn case > my.toml`); with --set, the effective case.
@@ -245,6 +248,10 @@ pub enum ValidationStudy {
     /// LTCA's self-checks, mesh convergence, the swap test, the lumped sweep, and with --fe the
     /// explicit FE's stiffness scene; exits non-zero when a row fails (validation/pairs).
     Pairs,
+    /// The case's lumped model's mesh mode (as sweep and run integrate it) against the FE
+    /// modal analysis of the meshed pair on the case's mesh, driver held and both free, with
+    /// its bodies and with rigid gears; exits non-zero beyond 2 % (validation/frequencies).
+    Frequencies,
 }
 
 impl Command {

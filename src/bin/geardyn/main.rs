@@ -25,8 +25,8 @@ use lumped::{lumped_case, stability, sweep};
 use optimize::{optimize, optimize_into};
 use progress::{fe_check_run, fe_run, fe_run_reusing, progress_bar, stage, staged_bar};
 use validate::{
-    validate_integrators, validate_mass_scaling, validate_pairs, validate_properties,
-    validate_quick,
+    validate_frequencies, validate_integrators, validate_mass_scaling, validate_pairs,
+    validate_properties, validate_quick,
 };
 
 /// The exit code of a run stopped on SIGINT or SIGTERM (128 + SIGINT, as shells report it).
@@ -110,6 +110,13 @@ fn main() -> ExitCode {
             run,
             ..
         } => validate_pairs(&common, &only, fe, run),
+        Command::Validate {
+            study: ValidationStudy::Frequencies,
+            common,
+            model,
+            positions,
+            ..
+        } => validate_frequencies(&common, &model, positions),
         Command::Validate {
             study: ValidationStudy::MassScaling,
             common,

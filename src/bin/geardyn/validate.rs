@@ -80,6 +80,27 @@ pub fn validate_integrators(args: &CommonArgs, options: &LumpedShorthands) -> Re
     Ok(())
 }
 
+pub fn validate_frequencies(
+    args: &CommonArgs,
+    options: &LumpedShorthands,
+    positions: usize,
+) -> Result<()> {
+    let case = lumped_case(args, options)?;
+    let dir = output_dir(args, "validate-frequencies", &case)?;
+    let bar = crate::progress::staged_bar();
+    let result = study::frequencies::mesh_modes(&case, positions, &crate::progress::stage(&bar))?;
+    bar.finish_and_clear();
+    let table = report::lumped::write_mesh_modes(OutputDir(&dir), &case, &result)?;
+    println!("{table}wrote {}", dir.display());
+    if !(result.driver_held.pass && result.both_free.pass) {
+        anyhow::bail!(
+            "the lumped mesh mode is more than {:.0} % from the FE modal analysis (table above)",
+            100.0 * study::frequencies::MESH_MODE_TOLERANCE
+        );
+    }
+    Ok(())
+}
+
 pub fn validate_mass_scaling(args: &CommonArgs, scene: &str) -> Result<()> {
     let scaled = load(args, Vec::new())?;
     let unscaled = load(args, vec![Override::set("fe.mass_scaling", false)])?;

@@ -1,0 +1,634 @@
+//! The linear structure around the mesh: the gear bodies (hub and rim), shafts, motor and load
+//! inertias and the bearings, assembled as a small linear system M ÿ + C ẏ + K y = F l − g W
+//! in which the nonlinear mesh force W acts along g.
+//!
+//! # Coordinates
+//! Every rotation is measured along the line of action, u = r_b θ (r_b of the gear whose side
+//! of the mesh it turns on), relative to the nominal motion; the bearings' translations along
+//! the line of action are coordinates of their own. The chain runs
+//! ```text
+//! motor ─ input shaft ─ hub₁ ─ body₁ ─ rim₁ ⟷ mesh ⟷ rim₂ ─ body₂ ─ hub₂ ─ output shaft ─ load
+//! ```
+//! with inertias m = I/r_b² and springs k = k_t/r_b². The mesh deflection is
+//! δ = u_rim1 − u_rim2 + y₁ − y₂ (g), the transmission error the model reports is the hubs'
+//! u_hub1 − u_hub2 (h), as the explicit FE and the LTCA measure it.
+//!
+//! # Gear bodies
+//! A gear body twists between bore and root circle (an annulus in shear,
+//! [`crate::geometry::Gear::body_torsional_compliance`]), with the inertia split between hub and
+//! rim along the static twist shape s(r) = (1/r_i² − 1/r²)/(1/r_i² − 1/r_f²): the hub carries
+//! ∫(1 − s) dI, the rim ∫ s dI plus the teeth (row sums of the Rayleigh–Ritz mass matrix).
+//! A hub with nothing attached (no shaft, not the speed-driven end) is a free end under a
+//! constant torque: its own mode (tens of kHz) lies far above the mesh mode, so it is
+//! condensed onto its rim (Guyan): its inertia moves with the rim and the body's static twist
+//! under the torque, F c_b, is added to the reported transmission error. That keeps the RK4
+//! step at the mesh mode's scale.
+//!
+//! # Drives
+//! * **torque**: an input force +F at the driver side's outer end and the load −F at the driven
+//!   side's; the chain has a rigid rotation u = (1, …, 1) that neither g, K nor the balanced
+//!   load excite, so it is removed exactly: y_k = x_k − x_last with x M-orthogonal to u
+//!   (uᵀM x = 0), M_y = RᵀMR, R = (I − u uᵀM/uᵀMu) E.
+//! * **speed**: the driver side's outer end (the motor, or the driver hub) follows the
+//!   prescribed speed; it is removed and the others are measured as its lag, y_k = −x_k.
+//!
+//! For a pair of rigid gears without shafts both reduce to the 1-DOF relative coordinate
+//! p = r_b1θ₁ − r_b2θ₂ with m_e = I₁I₂/(I₁r_b2² + I₂r_b1²) (torque) or I₂/r_b2² (speed).
+
+use nalgebra::{DMatrix, DVector, SymmetricEigen};
+
+use super::{Bearings, Drive};
+
+/// The largest number of coordinates a structure has (5 rotations and 2 bearing translations
+/// at most).
+pub const MAX_DOFS: usize = 8;
+
+/// One gear's body: inertias [kg·m²] of hub and rim and the torsional compliance between them
+/// [rad/(N·m)] (0: a rigid body, hub and rim one inertia).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GearBody {
+    pub hub_inertia: f64,
+    pub rim_inertia: f64,
+    pub torsional_compliance: f64,
+}
+
+impl GearBody {
+    /// A rigid gear of inertia `inertia`.
+    pub fn rigid(inertia: f64) -> Self {
+        GearBody {
+            hub_inertia: 0.0,
+            rim_inertia: inertia,
+            torsional_compliance: 0.0,
+        }
+    }
+
+    pub fn inertia(&self) -> f64 {
+        self.hub_inertia + self.rim_inertia
+    }
+}
+
+/// A shaft from a gear's hub to an outer inertia (motor or load) [kg·m²], of torsional stiffness
+/// [N·m/rad].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Shaft {
+    pub stiffness: f64,
+    pub end_inertia: f64,
+}
+
+/// What the structure is built from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DrivetrainSpec {
+    pub drive: Drive,
+    pub base_radii: [f64; 2],
+    pub gears: [GearBody; 2],
+    /// Input shaft and motor (driver side), output shaft and load (driven side).
+    pub shafts: [Option<Shaft>; 2],
+    pub bearings: Option<Bearings>,
+    /// Damping ratio of every shaft and body spring, c = 2ζ√(k m_r) with m_r the reduced mass
+    /// of the two inertias it joins (the one inertia when the other end is held).
+    pub spring_damping_ratio: f64,
+}
+
+/// The linear structure around the mesh, reduced to its independent coordinates y.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Structure {
+    /// Number of coordinates n (≤ [`MAX_DOFS`]).
+    pub dofs: usize,
+    /// What each coordinate is (`rim2`, `hub2`, `y1`, …; rotations relative as described).
+    pub names: Vec<String>,
+    pub mass: DMatrix<f64>,
+    pub stiffness: DMatrix<f64>,
+    pub damping: DMatrix<f64>,
+    /// δ = gᵀy (mesh deflection), load F l, transmission error hᵀy + F·te_per_force.
+    pub mesh_direction: DVector<f64>,
+    pub load_direction: DVector<f64>,
+    pub te_direction: DVector<f64>,
+    /// The static twist of condensed bodies per unit mesh force, in the TE [m/N].
+    pub te_per_force: f64,
+    /// The effective mass of the rigid pair under this drive (the mesh damping ratio's
+    /// convention c = 2ζ√(k̄ m_e)) [kg].
+    pub effective_mass: f64,
+    /// The simplifications made, for the output.
+    pub notes: Vec<String>,
+    // M⁻¹K, M⁻¹C, M⁻¹g, M⁻¹l, row-major in fixed arrays for the integrator's inner loop.
+    inv_mass_stiffness: [[f64; MAX_DOFS]; MAX_DOFS],
+    inv_mass_damping: [[f64; MAX_DOFS]; MAX_DOFS],
+    inv_mass_mesh: [f64; MAX_DOFS],
+    inv_mass_load: [f64; MAX_DOFS],
+}
+
+/// A natural mode of the structure with a given mesh stiffness.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mode {
+    /// Undamped natural frequency [rad/s].
+    pub frequency: f64,
+    /// Share of the mode's strain energy in the mesh spring (1: the pure mesh mode).
+    pub mesh_energy_share: f64,
+    /// Mode shape over the coordinates, largest component 1 in magnitude.
+    pub shape: Vec<f64>,
+}
+
+impl Structure {
+    /// The 1-DOF relative coordinate p with mass `effective_mass` [kg].
+    pub fn rigid_pair(effective_mass: f64) -> Self {
+        Self::from_parts(
+            vec!["p".into()],
+            DMatrix::from_element(1, 1, effective_mass),
+            DMatrix::zeros(1, 1),
+            DMatrix::zeros(1, 1),
+            [vec![1.0], vec![1.0], vec![1.0]],
+            0.0,
+            effective_mass,
+            Vec::new(),
+        )
+    }
+
+    /// p and the bearing translations y₁, y₂ (3 DOFs): δ = p + y₁ − y₂.
+    pub fn rigid_pair_on_bearings(effective_mass: f64, bearings: &Bearings) -> Self {
+        let diagonal = |v: [f64; 3]| DMatrix::from_diagonal(&DVector::from_row_slice(&v));
+        Self::from_parts(
+            vec!["p".into(), "y1".into(), "y2".into()],
+            diagonal([effective_mass, bearings.mass[0], bearings.mass[1]]),
+            diagonal([0.0, bearings.stiffness[0], bearings.stiffness[1]]),
+            diagonal([0.0, bearings.damping[0], bearings.damping[1]]),
+            [
+                vec![1.0, 1.0, -1.0],
+                vec![1.0, 0.0, 0.0],
+                vec![1.0, 0.0, 0.0],
+            ],
+            0.0,
+            effective_mass,
+            Vec::new(),
+        )
+    }
+
+    /// Assembles and reduces the chain of `spec` (module docs).
+    pub fn drivetrain(spec: &DrivetrainSpec) -> Result<Self, String> {
+        let rb = spec.base_radii;
+        let speed = spec.drive == Drive::Speed;
+        // Nodes along the chain: (name, side, mass [kg] along the line of action).
+        let mut nodes: Vec<(String, usize, f64)> = Vec::new();
+        // Springs between consecutive nodes: (left, right, k [N/m]).
+        let mut springs: Vec<(usize, usize, f64)> = Vec::new();
+        let mut notes = Vec::new();
+        let mut te_per_force = 0.0;
+        let mut rims = [0usize; 2];
+        let mut hubs = [0usize; 2];
+        let mut prescribed = None;
+        for (side, body) in spec.gears.iter().enumerate() {
+            let r2 = rb[side] * rb[side];
+            let gear = side + 1;
+            if !(body.hub_inertia >= 0.0 && body.rim_inertia > 0.0)
+                || !(body.torsional_compliance >= 0.0)
+            {
+                return Err(format!(
+                    "gear {gear}: the body needs a positive rim inertia, a hub inertia ≥ 0 and a \
+                     torsional compliance ≥ 0"
+                ));
+            }
+            let shaft = spec.shafts[side];
+            if let Some(s) = shaft {
+                if !(s.stiffness > 0.0 && s.end_inertia >= 0.0) {
+                    return Err(format!(
+                        "the {} shaft needs a positive stiffness and an end inertia ≥ 0",
+                        ["input", "output"][side]
+                    ));
+                }
+            }
+            // A massless shaft end under a constant torque transmits it statically: no
+            // coordinate, unless it is the speed-driven end.
+            let shaft = shaft.filter(|s| s.end_inertia > 0.0 || (speed && side == 0));
+            if spec.shafts[side].is_some() && shaft.is_none() {
+                notes.push(format!(
+                    "the {} shaft has no inertia at its end: it carries the torque statically \
+                     and is left out",
+                    ["input", "output"][side]
+                ));
+            }
+            let compliant = body.torsional_compliance > 0.0;
+            let held_hub = speed && side == 0 && shaft.is_none();
+            let separate_hub = compliant && (shaft.is_some() || held_hub);
+            let body_stiffness = if compliant {
+                1.0 / (body.torsional_compliance * r2)
+            } else {
+                0.0
+            };
+            // The side from its outer end inwards: (name, mass), and the spring inside each
+            // consecutive pair.
+            let mut chain: Vec<(String, f64)> = Vec::new();
+            let mut joints: Vec<f64> = Vec::new();
+            if let Some(s) = shaft {
+                chain.push((["motor", "load"][side].to_string(), s.end_inertia / r2));
+                joints.push(s.stiffness / r2);
+            }
+            if separate_hub {
+                chain.push((format!("hub{gear}"), body.hub_inertia / r2));
+                joints.push(body_stiffness);
+                chain.push((format!("rim{gear}"), body.rim_inertia / r2));
+            } else {
+                chain.push((format!("rim{gear}"), body.inertia() / r2));
+                if compliant {
+                    // The free hub's static twist under the end load, F c_b, in the TE.
+                    te_per_force += body.torsional_compliance * r2;
+                    notes.push(format!(
+                        "gear {gear}'s free hub moves with its rim (its body mode lies far above \
+                         the mesh mode); the body's static twist is added to the TE"
+                    ));
+                }
+            }
+            if side == 1 {
+                chain.reverse();
+                joints.reverse();
+            }
+            let first = nodes.len();
+            for (j, (name, mass)) in chain.into_iter().enumerate() {
+                if name.starts_with("rim") {
+                    rims[side] = first + j;
+                }
+                if name.starts_with("hub") || (name.starts_with("rim") && !separate_hub) {
+                    hubs[side] = first + j;
+                }
+                nodes.push((name, side, mass));
+            }
+            for (j, stiffness) in joints.into_iter().enumerate() {
+                springs.push((first + j, first + j + 1, stiffness));
+            }
+            if speed && side == 0 {
+                prescribed = Some(first);
+            }
+        }
+        let n_rot = nodes.len();
+        // Full (unreduced) matrices over the rotations, then the bearings.
+        let n_bearings = if spec.bearings.is_some() { 2 } else { 0 };
+        let n_x = n_rot + n_bearings;
+        let mut m = DMatrix::zeros(n_x, n_x);
+        let mut k = DMatrix::zeros(n_x, n_x);
+        let mut c = DMatrix::zeros(n_x, n_x);
+        for (i, node) in nodes.iter().enumerate() {
+            m[(i, i)] = node.2;
+        }
+        for &(a, b, stiffness) in &springs {
+            let (ma, mb) = (nodes[a].2, nodes[b].2);
+            // The held end's spring sees the other inertia alone.
+            let reduced = match prescribed {
+                Some(p) if p == a => mb,
+                Some(p) if p == b => ma,
+                _ => ma * mb / (ma + mb),
+            };
+            let damping = 2.0 * spec.spring_damping_ratio * (stiffness * reduced).sqrt();
+            for (matrix, value) in [(&mut k, stiffness), (&mut c, damping)] {
+                matrix[(a, a)] += value;
+                matrix[(b, b)] += value;
+                matrix[(a, b)] -= value;
+                matrix[(b, a)] -= value;
+            }
+        }
+        let mut g = DVector::zeros(n_x);
+        g[rims[0]] += 1.0;
+        g[rims[1]] -= 1.0;
+        let mut names: Vec<String> = nodes.iter().map(|n| n.0.clone()).collect();
+        if let Some(b) = &spec.bearings {
+            for i in 0..2 {
+                let j = n_rot + i;
+                m[(j, j)] = b.mass[i];
+                k[(j, j)] = b.stiffness[i];
+                c[(j, j)] = b.damping[i];
+                names.push(format!("y{}", i + 1));
+            }
+            g[n_rot] += 1.0;
+            g[n_rot + 1] -= 1.0;
+        }
+        let mut load = DVector::zeros(n_x);
+        load[n_rot - 1] -= 1.0;
+        let mut te = DVector::zeros(n_x);
+        te[hubs[0]] += 1.0;
+        te[hubs[1]] -= 1.0;
+        // The reduction x = R y (module docs).
+        let (reduction, kept): (DMatrix<f64>, Vec<usize>) = match prescribed {
+            Some(p) => {
+                let kept: Vec<usize> = (0..n_x).filter(|&i| i != p).collect();
+                let r = DMatrix::from_fn(n_x, kept.len(), |i, j| {
+                    if i != kept[j] {
+                        0.0
+                    } else if i < n_rot {
+                        -1.0
+                    } else {
+                        1.0
+                    }
+                });
+                (r, kept)
+            }
+            None => {
+                load[0] += 1.0;
+                let last = n_rot - 1;
+                let kept: Vec<usize> = (0..n_x).filter(|&i| i != last).collect();
+                let e = DMatrix::from_fn(n_x, kept.len(), |i, j| f64::from(i == kept[j]));
+                let u = DVector::from_fn(n_x, |i, _| f64::from(i < n_rot));
+                let mu = &m * &u;
+                let projector = DMatrix::identity(n_x, n_x) - &u * mu.transpose() / u.dot(&mu);
+                (projector * e, kept)
+            }
+        };
+        if kept.len() > MAX_DOFS || kept.is_empty() {
+            return Err(format!(
+                "the drivetrain has {} coordinates; the lumped model takes 1 to {MAX_DOFS}",
+                kept.len()
+            ));
+        }
+        let rt = reduction.transpose();
+        let effective_mass = spec.drive.effective_mass(
+            [spec.gears[0].inertia(), spec.gears[1].inertia()],
+            spec.base_radii,
+        );
+        // Names of the reduced coordinates: relative to the last rotation (torque drive), the lag
+        // behind the prescribed motion (speed drive), the bearings' own.
+        let reduced_names = kept
+            .iter()
+            .map(|&i| match prescribed {
+                _ if i >= n_rot => names[i].clone(),
+                Some(_) => format!("{} lag", names[i]),
+                None => format!("{} - {}", names[i], names[n_rot - 1]),
+            })
+            .collect();
+        Ok(Self::from_parts(
+            reduced_names,
+            &rt * &m * &reduction,
+            &rt * &k * &reduction,
+            &rt * &c * &reduction,
+            [
+                (&rt * &g).iter().copied().collect(),
+                (&rt * &load).iter().copied().collect(),
+                (&rt * &te).iter().copied().collect(),
+            ],
+            te_per_force,
+            effective_mass,
+            notes,
+        ))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn from_parts(
+        names: Vec<String>,
+        mass: DMatrix<f64>,
+        stiffness: DMatrix<f64>,
+        damping: DMatrix<f64>,
+        [mesh, load, te]: [Vec<f64>; 3],
+        te_per_force: f64,
+        effective_mass: f64,
+        notes: Vec<String>,
+    ) -> Self {
+        let n = names.len();
+        let inverse = mass
+            .clone()
+            .cholesky()
+            .expect("a positive definite mass matrix")
+            .inverse();
+        let to_square = |a: DMatrix<f64>| {
+            let mut out = [[0.0; MAX_DOFS]; MAX_DOFS];
+            for i in 0..n {
+                for j in 0..n {
+                    out[i][j] = a[(i, j)];
+                }
+            }
+            out
+        };
+        let to_vector = |v: &[f64]| {
+            let w = &inverse * DVector::from_row_slice(v);
+            std::array::from_fn(|i| if i < n { w[i] } else { 0.0 })
+        };
+        Structure {
+            dofs: n,
+            inv_mass_stiffness: to_square(&inverse * &stiffness),
+            inv_mass_damping: to_square(&inverse * &damping),
+            inv_mass_mesh: to_vector(&mesh),
+            inv_mass_load: to_vector(&load),
+            names,
+            mass,
+            stiffness,
+            damping,
+            mesh_direction: DVector::from_vec(mesh),
+            load_direction: DVector::from_vec(load),
+            te_direction: DVector::from_vec(te),
+            te_per_force,
+            effective_mass,
+            notes,
+        }
+    }
+
+    /// Accelerations M⁻¹(F l − K q − C v − g W) into `out`.
+    #[inline]
+    pub(crate) fn accelerations(
+        &self,
+        q: &[f64; MAX_DOFS],
+        v: &[f64; MAX_DOFS],
+        force: f64,
+        mesh_force: f64,
+        out: &mut [f64; MAX_DOFS],
+    ) {
+        for i in 0..self.dofs {
+            let mut a = force * self.inv_mass_load[i] - mesh_force * self.inv_mass_mesh[i];
+            for j in 0..self.dofs {
+                a -= self.inv_mass_stiffness[i][j] * q[j] + self.inv_mass_damping[i][j] * v[j];
+            }
+            out[i] = a;
+        }
+    }
+
+    /// gᵀx over the first `dofs` entries.
+    #[inline]
+    pub(crate) fn mesh_of(&self, x: &[f64; MAX_DOFS]) -> f64 {
+        (0..self.dofs).map(|i| self.mesh_direction[i] * x[i]).sum()
+    }
+
+    /// hᵀx over the first `dofs` entries (without the static twist of condensed hubs).
+    #[inline]
+    pub(crate) fn te_of(&self, x: &[f64; MAX_DOFS]) -> f64 {
+        (0..self.dofs).map(|i| self.te_direction[i] * x[i]).sum()
+    }
+
+    /// The static coordinates under the mesh force F with the mesh at deflection `deflection`:
+    /// K y + g F = F l with gᵀy = δ, solved as (K + κggᵀ) y = F l + κ(δ − F/κ) g for any
+    /// κ > 0: |F/δ| (the right side then loses nothing to cancellation), else K's largest
+    /// diagonal entry.
+    pub fn static_coordinates(&self, force: f64, deflection: f64) -> [f64; MAX_DOFS] {
+        let n = self.dofs;
+        let secant = (force / deflection).abs();
+        let kappa = if secant.is_finite() && secant > 0.0 {
+            secant
+        } else {
+            (0..n)
+                .map(|i| self.stiffness[(i, i)])
+                .fold(0.0, f64::max)
+                .max(1.0)
+        };
+        let g = &self.mesh_direction;
+        let a = &self.stiffness + g * g.transpose() * kappa;
+        let rhs = &self.load_direction * force + g * (kappa * (deflection - force / kappa));
+        let y = a
+            .lu()
+            .solve(&rhs)
+            .expect("the structure is held by the mesh");
+        std::array::from_fn(|i| if i < n { y[i] } else { 0.0 })
+    }
+
+    /// Natural modes with the mesh spring k, ascending in frequency: K + k ggᵀ against M.
+    pub fn modes(&self, mesh_stiffness: f64) -> Vec<Mode> {
+        let g = &self.mesh_direction;
+        let total = &self.stiffness + g * g.transpose() * mesh_stiffness;
+        if self.dofs == 1 {
+            // √(k/m) as it stands: the schemes' stability test resolves 1e-12 in ωh.
+            return vec![Mode {
+                frequency: (total[(0, 0)] / self.mass[(0, 0)]).max(0.0).sqrt(),
+                mesh_energy_share: 1.0,
+                shape: vec![1.0],
+            }];
+        }
+        let l = self
+            .mass
+            .clone()
+            .cholesky()
+            .expect("a positive definite mass matrix")
+            .l();
+        let l_inv = l.clone().try_inverse().expect("a regular Cholesky factor");
+        let a = &l_inv * &total * l_inv.transpose();
+        let a = (&a + a.transpose()) * 0.5;
+        let eigen = SymmetricEigen::new(a);
+        let mut modes: Vec<Mode> = (0..self.dofs)
+            .map(|j| {
+                let phi = l_inv.transpose() * eigen.eigenvectors.column(j);
+                let strain = phi.dot(&(&total * &phi));
+                let mesh = mesh_stiffness * g.dot(&phi).powi(2);
+                let largest = phi
+                    .iter()
+                    .fold(0.0f64, |m, x| if x.abs() > m.abs() { *x } else { m });
+                Mode {
+                    frequency: eigen.eigenvalues[j].max(0.0).sqrt(),
+                    mesh_energy_share: if strain > 0.0 { mesh / strain } else { 0.0 },
+                    shape: phi.iter().map(|x| x / largest).collect(),
+                }
+            })
+            .collect();
+        modes.sort_by(|a, b| a.frequency.total_cmp(&b.frequency));
+        modes
+    }
+
+    /// The mode with the largest share of its strain energy in the mesh: the mesh mode.
+    pub fn mesh_mode(&self, mesh_stiffness: f64) -> Mode {
+        self.modes(mesh_stiffness)
+            .into_iter()
+            .max_by(|a, b| a.mesh_energy_share.total_cmp(&b.mesh_energy_share))
+            .expect("at least one mode")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn chain(drive: Drive, inertia: f64, stiffness: f64) -> Structure {
+        // Base radii 1 m: the line-of-action coordinates are the rotations themselves.
+        Structure::drivetrain(&DrivetrainSpec {
+            drive,
+            base_radii: [1.0, 1.0],
+            gears: [GearBody::rigid(inertia); 2],
+            shafts: [Some(Shaft {
+                stiffness,
+                end_inertia: inertia,
+            }); 2],
+            bearings: None,
+            spring_damping_ratio: 0.0,
+        })
+        .expect("a valid chain")
+    }
+
+    /// Motor, two gears and load, all of inertia m, joined by three springs k (shafts and the
+    /// mesh): a uniform chain. Free-free (torque drive) it has ω_j = 2√(k/m) sin(jπ/8),
+    /// j = 1..3, besides the rigid rotation it removes; held at the motor (speed drive) the
+    /// fixed-free chain of three masses has ω_j = 2√(k/m) sin((2j − 1)π/14) (the uniform
+    /// lattice's dispersion relation, e.g. Rao, *Mechanical Vibrations*, §6.12 / §8.6).
+    #[test]
+    fn uniform_chain_has_the_lattice_frequencies() {
+        let (m, k): (f64, f64) = (2.5, 4.0e6);
+        let scale = 2.0 * (k / m).sqrt();
+        let free = chain(Drive::Torque, m, k);
+        assert_eq!(free.dofs, 3);
+        let modes = free.modes(k);
+        for (j, mode) in modes.iter().enumerate() {
+            let expected = scale * ((j + 1) as f64 * std::f64::consts::PI / 8.0).sin();
+            assert!(
+                (mode.frequency / expected - 1.0).abs() < 1e-12,
+                "{j}: {}",
+                mode.frequency
+            );
+        }
+        let held = chain(Drive::Speed, m, k);
+        assert_eq!(held.dofs, 3);
+        for (j, mode) in held.modes(k).iter().enumerate() {
+            let expected = scale * ((2 * j + 1) as f64 * std::f64::consts::PI / 14.0).sin();
+            assert!(
+                (mode.frequency / expected - 1.0).abs() < 1e-12,
+                "{j}: {}",
+                mode.frequency
+            );
+        }
+    }
+
+    /// Rigid gears without shafts reduce to p with the 1-DOF effective masses.
+    #[test]
+    fn rigid_pair_reduces_to_the_relative_coordinate() {
+        let (i1, i2, rb) = (3.0e-3, 7.0e-3, [0.05, 0.08]);
+        for drive in [Drive::Torque, Drive::Speed] {
+            let s = Structure::drivetrain(&DrivetrainSpec {
+                drive,
+                base_radii: rb,
+                gears: [GearBody::rigid(i1), GearBody::rigid(i2)],
+                shafts: [None; 2],
+                bearings: None,
+                spring_damping_ratio: 0.02,
+            })
+            .unwrap();
+            assert_eq!(s.dofs, 1);
+            let m = drive.effective_mass([i1, i2], rb);
+            assert!((s.mass[(0, 0)] / m - 1.0).abs() < 1e-12);
+            assert_eq!(
+                (s.mesh_direction[0], s.load_direction[0], s.te_direction[0]),
+                (1.0, 1.0, 1.0)
+            );
+        }
+    }
+
+    /// Elastic bodies: the static TE is the mesh deflection plus each body's twist under the
+    /// load, c_b F, whether a hub is a coordinate (the held driver's) or condensed (free).
+    #[test]
+    fn static_transmission_error_holds_the_bodies_twist() {
+        let rb = [0.05, 0.08];
+        let body = |i: f64, c: f64| GearBody {
+            hub_inertia: 0.1 * i,
+            rim_inertia: 0.9 * i,
+            torsional_compliance: c,
+        };
+        let (c1, c2) = (2e-8, 5e-8);
+        let (force, delta) = (3000.0, 7e-6);
+        for drive in [Drive::Torque, Drive::Speed] {
+            let s = Structure::drivetrain(&DrivetrainSpec {
+                drive,
+                base_radii: rb,
+                gears: [body(3e-3, c1), body(7e-3, c2)],
+                shafts: [None; 2],
+                bearings: None,
+                spring_damping_ratio: 0.02,
+            })
+            .unwrap();
+            let q = s.static_coordinates(force, delta);
+            assert!((s.mesh_of(&q) / delta - 1.0).abs() < 1e-12);
+            let te = s.te_of(&q) + force * s.te_per_force;
+            let expected = delta + force * (c1 * rb[0] * rb[0] + c2 * rb[1] * rb[1]);
+            assert!(
+                (te / expected - 1.0).abs() < 1e-9,
+                "{drive:?}: {te} vs {expected}"
+            );
+            // The held driver's hub is the ground, its rim a coordinate; free hubs condense.
+            assert_eq!(s.dofs, if drive == Drive::Speed { 2 } else { 1 });
+        }
+    }
+}

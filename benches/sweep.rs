@@ -1,6 +1,7 @@
 //! Lumped-model cost: the paper's pair on a stiffness table with a double-contact step, 1-DOF with
 //! backlash, 600 driver speeds from 100 to 12 000 rpm to periodic steady state (up- and
-//! down-sweep), and the 600-point Floquet map.
+//! down-sweep), and the 600-point Floquet map; and the default case as `geardyn sweep` runs it
+//! (the LTCA's load-dependent force law, elastic bodies): its tables and its 600-speed sweep.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use geardyn::case::{Case, Override};
@@ -28,5 +29,22 @@ fn lumped(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, lumped);
+fn default_case(c: &mut Criterion) {
+    let case = Case::load_with(None, &[]).unwrap();
+    let model = setup(&case).unwrap().model;
+    let rpms: Vec<f64> = (0..600)
+        .map(|i| 100.0 + (12000.0 - 100.0) * i as f64 / 599.0)
+        .collect();
+    let mut group = c.benchmark_group("lumped_paper36_default_case");
+    group.sample_size(10);
+    group.bench_function("force_law_tables_and_checks", |b| {
+        b.iter(|| setup(black_box(&case)).unwrap())
+    });
+    group.bench_function("sweep_600_points_up_and_down", |b| {
+        b.iter(|| sweep(black_box(&model), &rpms))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, lumped, default_case);
 criterion_main!(benches);

@@ -106,7 +106,7 @@ pub struct LumpedSection {
     /// columns roll_angle_deg, mesh_stiffness_n_per_m and optionally unloaded_te_um.
     #[serde(default = "default_stiffness_source")]
     pub stiffness: String,
-    /// "torque" (both gears free, the relative coordinate) or "speed" (driver at the prescribed
+    /// "torque" (both gears free under input and load torque) or "speed" (driver at the prescribed
     /// speed, as in the explicit FE).
     #[serde(default)]
     pub drive: Drive,
@@ -118,7 +118,7 @@ pub struct LumpedSection {
     /// Rotary inertias of the gears with what turns with them [kg·mm²]; default: ρ b ∫r² dA of
     /// the gear bodies.
     pub inertia_kg_mm2: Option<[f64; 2]>,
-    /// Translation of each gear along the line of action on its bearings (3 DOFs instead of 1).
+    /// Translation of each gear along the line of action on its bearings (two coordinates more).
     #[serde(default)]
     pub bearings: bool,
     /// Bearing (support) stiffness of each gear along the line of action [N/m].

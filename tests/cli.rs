@@ -594,6 +594,11 @@ fn sweep_speed_drive_and_run_up() {
         run_ok(
             geardyn()
                 .args(["sweep", "--stiffness", "pe", "--rpm", "1000:9000:5"])
+                // Rigid gears: the drives' masses then differ by exactly 2 for equal gears.
+                // (With elastic bodies and this linear law the speed drive at ζ = 0.05 meets
+                // the zero-backlash switching instability near 0.92 f_n, 5 000 rpm: the
+                // divergence tests cover that.)
+                .arg("--rigid-bodies")
                 .args(extra)
                 .arg("--out")
                 .arg(&out),
@@ -1351,7 +1356,10 @@ fn lumped_bodies_shafts_and_relief_choose_the_model() {
     assert_eq!(shafts["modes_hz"].as_array().unwrap().len(), 5, "{shafts}");
     assert!(shafts["model"].as_str().unwrap().contains("motor"));
     let relief = sweep("relief", &["--set", "lumped.relief=tip20-root10"]);
-    assert_eq!(relief["stiffness_source"], "ltca (relief tip20-root10)");
+    assert!(relief["stiffness_source"]
+        .as_str()
+        .unwrap()
+        .starts_with("ltca (relief tip20-root10)"));
     assert!(k(&relief) < k(&hub));
     for (args, expected) in [
         (

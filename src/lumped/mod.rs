@@ -737,12 +737,12 @@ pub const SHOOTING_ITERATIONS: usize = 30;
 
 /// The lowest Floquet frequency of the linear model at driver speed Ω₁ [rad/s]: the imaginary
 /// part of the characteristic exponent μ = ln λ / T_m, which is fixed only modulo the mesh
-/// frequency Ω_m = 2π/T_m; the branch nearest the mean-stiffness ω of the lowest mode is taken.
+/// frequency Ω_m = 2π/T_m; the branch nearest the mean-stiffness ω of the mesh mode is taken.
 /// Inside an instability region (|λ| > 1, real λ) it locks to a multiple of Ω_m/2.
 pub fn floquet_frequency(model: &MeshModel, driver_speed: f64, steps_per_period: usize) -> f64 {
     let period = model.mesh.period() / driver_speed;
     let mesh = std::f64::consts::TAU / period;
-    let target = model.mode_frequencies(model.mesh.mean())[0];
+    let target = model.structure.mesh_mode(model.mesh.mean()).frequency;
     floquet_multipliers(model, driver_speed, steps_per_period)
         .iter()
         .map(|l| {

@@ -215,6 +215,11 @@ impl Structure {
             };
             // The side from its outer end inwards: (name, mass), and the spring inside each
             // consecutive pair.
+            if separate_hub && !held_hub && !(body.hub_inertia > 0.0) {
+                return Err(format!(
+                    "gear {gear}: a hub between its body and a shaft needs an inertia > 0"
+                ));
+            }
             let mut chain: Vec<(String, f64)> = Vec::new();
             let mut joints: Vec<f64> = Vec::new();
             if let Some(s) = shaft {
@@ -268,11 +273,19 @@ impl Structure {
             m[(i, i)] = node.2;
         }
         for &(a, b, stiffness) in &springs {
-            let (ma, mb) = (nodes[a].2, nodes[b].2);
-            // The held end's spring sees the other inertia alone.
-            let reduced = match prescribed {
-                Some(p) if p == a => mb,
-                Some(p) if p == b => ma,
+            // The spring's own mode swings everything on either side of it (the chain is joined
+            // through the mesh): the reduced inertia of the two sides, or the free side's alone
+            // when the other holds the prescribed end.
+            let side_mass = |range: std::ops::Range<usize>| -> f64 {
+                match prescribed {
+                    Some(p) if range.contains(&p) => f64::INFINITY,
+                    _ => range.map(|i| nodes[i].2).sum(),
+                }
+            };
+            let (ma, mb) = (side_mass(0..a + 1), side_mass(b..nodes.len()));
+            let reduced = match (ma.is_finite(), mb.is_finite()) {
+                (false, _) => mb,
+                (_, false) => ma,
                 _ => ma * mb / (ma + mb),
             };
             let damping = 2.0 * spec.spring_damping_ratio * (stiffness * reduced).sqrt();
@@ -629,6 +642,59 @@ mod tests {
             );
             // The held driver's hub is the ground, its rim a coordinate; free hubs condense.
             assert_eq!(s.dofs, if drive == Drive::Speed { 2 } else { 1 });
+        }
+    }
+
+    /// With shafts, motor and load, and bearings, the hubs are coordinates of their own: the
+    /// static TE hub to hub is δ + F(c₁r_b1² + c₂r_b2²) + F/k_b1 + F/k_b2 — the bodies' twist
+    /// and the centres giving way along the line of action (y₁ = −F/k_b1, y₂ = F/k_b2), the
+    /// shafts outside the hubs adding nothing — and the mesh deflection is δ; both drives.
+    #[test]
+    fn static_transmission_error_with_shafts_and_bearings() {
+        let rb = [0.05, 0.08];
+        let body = |i: f64, c: f64| GearBody {
+            hub_inertia: 0.1 * i,
+            rim_inertia: 0.9 * i,
+            torsional_compliance: c,
+        };
+        let (c1, c2) = (2e-8, 5e-8);
+        let (force, delta) = (3000.0, 7e-6);
+        for drive in [Drive::Torque, Drive::Speed] {
+            let s = Structure::drivetrain(&DrivetrainSpec {
+                drive,
+                base_radii: rb,
+                gears: [body(3e-3, c1), body(7e-3, c2)],
+                shafts: [
+                    Some(Shaft {
+                        stiffness: 2e5,
+                        end_inertia: 2e-2,
+                    }),
+                    Some(Shaft {
+                        stiffness: 3e5,
+                        end_inertia: 5e-2,
+                    }),
+                ],
+                bearings: Some(Bearings {
+                    mass: [2.0, 3.0],
+                    stiffness: [4e8, 6e8],
+                    damping: [100.0, 100.0],
+                }),
+                spring_damping_ratio: 0.02,
+            })
+            .unwrap();
+            // motor, hub1, rim1, rim2, hub2, load, y1, y2 less the rigid rotation or the motor.
+            assert_eq!(s.dofs, 7, "{:?}", s.names);
+            let q = s.static_coordinates(force, delta);
+            assert!((s.mesh_of(&q) / delta - 1.0).abs() < 1e-12);
+            let te = s.te_of(&q) + force * s.te_per_force;
+            let expected = delta
+                + force * (c1 * rb[0] * rb[0] + c2 * rb[1] * rb[1])
+                + force * (1.0 / 4e8 + 1.0 / 6e8);
+            assert!(
+                (te / expected - 1.0).abs() < 1e-9,
+                "{drive:?}: {te} vs {expected}"
+            );
+            assert_eq!(s.te_per_force, 0.0);
         }
     }
 }

@@ -270,6 +270,7 @@ pub fn write(dir: OutputDir, case: &Case, summary: &CompareSummary) -> Result<St
         dir.chart(
             &stem,
             &LinePlot {
+                y_range: None,
                 title: format!(
                     "{}: DTE spectra at {:.0} rpm (f_m {:.0} Hz, f_n held {:.0} Hz): {labels}",
                     case.name(),
@@ -285,7 +286,10 @@ pub fn write(dir: OutputDir, case: &Case, summary: &CompareSummary) -> Result<St
                         "explicit FE, early window".into(),
                         clip(&s.fe_early_spectrum),
                     ),
-                    ("lumped, k from FE, rigid rims (harmonics)".into(), lumped),
+                    (
+                        "lumped, k from FE, elastic bodies (harmonics)".into(),
+                        lumped,
+                    ),
                 ],
             },
         )?;
@@ -308,6 +312,7 @@ pub fn write(dir: OutputDir, case: &Case, summary: &CompareSummary) -> Result<St
         dir.chart(
             "paper_stiffness_spectra",
             &LinePlot {
+                y_range: None,
                 title: format!(
                     "PAPER-STIFFNESS STUDY (k = {:.4e} N/m, lumped, speed drive) at {:.0} rpm: f_n held {:.0} Hz, free {:.0} Hz",
                     p.mean_stiffness_n_per_m, p.speed_rpm, p.f_driver_held_hz, p.f_both_free_hz
@@ -325,7 +330,7 @@ pub fn write(dir: OutputDir, case: &Case, summary: &CompareSummary) -> Result<St
     for row in &rows {
         table += &format!("| {} | {} | {} |\n", row[0], row[1], row[2]);
     }
-    table += "\n| speed [rpm] | f_m [Hz] | f_m/f_n | FE peaks (late) | FE peaks (early) | harmonics FE [rad] | lumped/FE - 1 (rims) | (rigid gears) |\n|---|---|---|---|---|---|---|---|\n";
+    table += "\n| speed [rpm] | f_m [Hz] | f_m/f_n | FE peaks (late) | FE peaks (early) | harmonics FE [rad] | lumped/FE - 1 (elastic bodies) | (rigid gears) |\n|---|---|---|---|---|---|---|---|\n";
     for s in &summary.speeds {
         table += &format!(
             "| {:.0} | {:.0} | {:.2} | {} | {} | {} | {} | {} |\n",

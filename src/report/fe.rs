@@ -107,6 +107,7 @@ pub fn plot_run(
             dir,
             stem,
             &LinePlot {
+                y_range: None,
                 title: format!("{title}: {stem}"),
                 x_label: "time [ms]".into(),
                 y_label: y_label.into(),
@@ -189,6 +190,7 @@ pub fn plot_run(
             dir,
             "dte_spectrum",
             &LinePlot {
+                y_range: None,
                 title: format!("{title}: DTE spectrum (Hann window, after the ramp)"),
                 x_label: "frequency [Hz]".into(),
                 y_label: "amplitude [rad]".into(),
@@ -406,6 +408,7 @@ fn write_stiffness_comparison(
     out.chart(
         "stiffness",
         &LinePlot {
+            y_range: None,
             title: format!(
                 "{}: {}: k = sum W / sum (Rb2 theta_DTE - e) per bin, against the LTCA",
                 case.name(),
@@ -659,6 +662,7 @@ pub fn write_mass_scaling(
     out.chart(
         "mass_scaling_stiffness",
         &LinePlot {
+            y_range: None,
             title: format!(
                 "{}: {}: k from the DTE, mass scaled {:.1}x against unscaled",
                 case.name(),

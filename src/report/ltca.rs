@@ -48,6 +48,7 @@ pub fn write(out: OutputDir, case: &Case, study: &LtcaStudy) -> Result<(), Repor
         out.chart(
             &format!("load_sharing_{}", cycle.name),
             &LinePlot {
+                y_range: None,
                 title: format!(
                     "{}: load per tooth pair, relief \"{}\", T = {torque} N·m",
                     case.name(),
@@ -71,6 +72,7 @@ pub fn write(out: OutputDir, case: &Case, study: &LtcaStudy) -> Result<(), Repor
     out.chart(
         "ste",
         &LinePlot {
+            y_range: None,
             title: format!(
                 "{}: static transmission error, T = {torque} N·m",
                 case.name()
@@ -102,6 +104,7 @@ pub fn write(out: OutputDir, case: &Case, study: &LtcaStudy) -> Result<(), Repor
     out.chart(
         "stiffness",
         &LinePlot {
+            y_range: None,
             title: format!("{}: mesh stiffness, T = {torque} N·m", case.name()),
             x_label: "driver roll angle [deg]".into(),
             y_label: "mesh stiffness [N/m]".into(),

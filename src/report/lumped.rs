@@ -34,8 +34,14 @@ pub fn setup_console(setup: &LumpedSetup) -> String {
 pub fn write_sweep(out: OutputDir, case: &Case, study: &SweepStudy) -> Result<(), ReportError> {
     out.case(case)?;
     let model = &study.setup.model;
-    // The stiffness the sweep used, in the file format every source reads back.
-    stiffness_csv::write_stiffness_csv(&out.path("stiffness.csv"), &model.mesh).map_err(|e| {
+    // The stiffness the sweep used, hub to hub (the mesh with the bodies' twist in series, as
+    // the LTCA and the FE give it), in the file format every source reads back: a sweep that
+    // reads it (a hub-to-hub source) takes the twist out again and integrates the same model.
+    let hub_to_hub = model
+        .mesh
+        .without_series_compliance(-study.setup.body_twist)
+        .expect("adding a compliance keeps k positive");
+    stiffness_csv::write_stiffness_csv(&out.path("stiffness.csv"), &hub_to_hub).map_err(|e| {
         ReportError::Io {
             path: out.path("stiffness.csv").display().to_string(),
             source: e,
@@ -104,7 +110,8 @@ pub fn write_sweep(out: OutputDir, case: &Case, study: &SweepStudy) -> Result<()
     let curve = |points: &[SweepPoint], f: &dyn Fn(&SweepPoint) -> f64| -> Vec<(f64, f64)> {
         points.iter().map(|p| (p.driver_speed_rpm, f(p))).collect()
     };
-    let source = &model.mesh.source;
+    // The source's name without the folders of the machine it ran on.
+    let source = &crate::report::plot::without_folders(&model.mesh.source);
     let zeta = study.setup.damping_ratio;
     let plots = [
         (
@@ -154,6 +161,7 @@ pub fn write_sweep(out: OutputDir, case: &Case, study: &SweepStudy) -> Result<()
         out.chart(
             stem,
             &LinePlot {
+                y_range: None,
                 title: format!("{}: {stem}, stiffness {source}, zeta = {zeta}", case.name()),
                 x_label: "driver speed [rpm]".into(),
                 y_label: label.into(),
@@ -162,7 +170,9 @@ pub fn write_sweep(out: OutputDir, case: &Case, study: &SweepStudy) -> Result<()
         )?;
     }
 
-    // Waterfall: DTE amplitude at each mesh harmonic, at its frequency, over speed.
+    // Order map (the waterfall): the DTE amplitude of each mesh harmonic over speed, a row per
+    // harmonic filling the plane, with the natural frequencies as curves n = f_j / f_mesh: where
+    // a curve crosses a row, that harmonic meets that mode.
     let rpms = &study.rpms;
     let step_rpm = if rpms.len() > 1 {
         rpms[1] - rpms[0]
@@ -170,32 +180,49 @@ pub fn write_sweep(out: OutputDir, case: &Case, study: &SweepStudy) -> Result<()
         1.0
     };
     let mesh_hz_per_rpm = case.pair.gears[0].teeth() as f64 / 60.0;
+    let linear = model.linearized();
+    let overlays = linear
+        .structure
+        .modes(linear.mesh.mean())
+        .iter()
+        .map(|m| {
+            let hz = m.frequency / std::f64::consts::TAU;
+            (
+                format!("mode {hz:.0} Hz"),
+                rpms.iter()
+                    .map(|rpm| (*rpm, hz / (rpm * mesh_hz_per_rpm)))
+                    .filter(|p| p.1 <= HARMONICS as f64 + 0.5)
+                    .collect(),
+            )
+        })
+        .collect();
     out.chart(
         "waterfall",
         &ColourMap {
             title: format!(
-                "{}: DTE mesh harmonics (log colour, 3 decades), stiffness {source}",
+                "{}: order map, DTE amplitude of each mesh harmonic (log colour, 3 decades), stiffness {source}",
                 case.name()
             ),
             x_label: "driver speed [rpm]".into(),
-            y_label: "frequency [Hz]".into(),
+            y_label: "mesh harmonic order (frequency / f_mesh)".into(),
             cells: up
                 .iter()
                 .flat_map(|p| {
-                    p.harmonics.iter().enumerate().map(move |(h, a)| {
-                        (p.driver_speed_rpm, (h + 1) as f64 * p.mesh_frequency_hz, *a)
-                    })
+                    p.harmonics
+                        .iter()
+                        .enumerate()
+                        .map(move |(h, a)| (p.driver_speed_rpm, (h + 1) as f64, a * 1e6))
                 })
                 .collect(),
-            cell_size: (
-                step_rpm,
-                0.8 * step_rpm * mesh_hz_per_rpm * HARMONICS as f64,
-            ),
+            cell_size: (step_rpm, 1.0),
             decades: 3.0,
+            value_label: "um".into(),
+            overlays,
         },
     )?;
+    campbell(out, case, model, rpms)?;
     if let Some((duration, r)) = &study.run_up {
-        let static_x = model.force / model.mesh.mean();
+        let static_x = model.transmission_error(&model.static_state());
         let rpm_of = |speed: f64| speed * 60.0 / std::f64::consts::TAU;
         out.csv(
             "runup.csv",
@@ -218,6 +245,7 @@ pub fn write_sweep(out: OutputDir, case: &Case, study: &SweepStudy) -> Result<()
         out.chart(
             "runup",
             &LinePlot {
+                y_range: None,
                 title: format!(
                     "{}: run-up {from:.0} -> {to:.0} rpm in {duration} s, stiffness {source}",
                     case.name()
@@ -302,6 +330,7 @@ pub fn write_stability(
     out.chart(
         "stability",
         &LinePlot {
+            y_range: None,
             title: format!(
                 "{}: Floquet stability, stiffness {}, zeta = {}",
                 case.name(),
@@ -520,4 +549,98 @@ pub fn write_mesh_modes(
     markdown.push_str(&format!("\nmodel: {}\n", result.model_note));
     out.bytes("frequencies.md", markdown.as_bytes())?;
     Ok(markdown)
+}
+
+/// The Campbell diagram of the lumped structure: its natural frequencies linearized about the
+/// design load (the force law's mean tangent stiffness) against the mesh-harmonic lines
+/// n z₁ n_rpm / 60 over the sweep's speeds (a torsional model has no gyroscopic terms, so the
+/// modes are flat lines); where a line crosses a mode, the sweep's resonances sit. Writes
+/// `modes.csv` (frequency, mesh energy share, shape over the coordinates), `campbell.csv` (each
+/// crossing's speed) and `campbell.{png,svg}`.
+fn campbell(
+    out: OutputDir,
+    case: &Case,
+    model: &crate::lumped::MeshModel,
+    rpms: &[f64],
+) -> Result<(), ReportError> {
+    let linear = model.linearized();
+    let structure = &linear.structure;
+    let modes = structure.modes(linear.mesh.mean());
+    let mut header = vec![
+        "mode".to_string(),
+        "frequency_hz".to_string(),
+        "mesh_energy_share".to_string(),
+    ];
+    header.extend(structure.names.iter().map(|n| format!("shape_{n}")));
+    out.csv(
+        "modes.csv",
+        &header.iter().map(String::as_str).collect::<Vec<_>>(),
+        modes.iter().enumerate().map(|(j, m)| {
+            let mut row = vec![
+                (j + 1).to_string(),
+                format!("{:.3}", m.frequency / std::f64::consts::TAU),
+                format!("{:.4}", m.mesh_energy_share),
+            ];
+            row.extend(m.shape.iter().map(|x| format!("{x:.5}")));
+            row
+        }),
+    )?;
+    let teeth = case.pair.gears[0].teeth() as f64;
+    let crossings: Vec<Vec<String>> = modes
+        .iter()
+        .enumerate()
+        .flat_map(|(j, m)| {
+            (1..=HARMONICS).map(move |n| {
+                let hz = m.frequency / std::f64::consts::TAU;
+                vec![
+                    (j + 1).to_string(),
+                    n.to_string(),
+                    format!("{hz:.3}"),
+                    format!("{:.2}", hz * 60.0 / (n as f64 * teeth)),
+                ]
+            })
+        })
+        .collect();
+    out.csv(
+        "campbell.csv",
+        &["mode", "mesh_harmonic", "frequency_hz", "crossing_rpm"],
+        crossings,
+    )?;
+    let (from, to) = (
+        rpms.first().copied().unwrap_or(0.0),
+        rpms.last().copied().unwrap_or(1.0),
+    );
+    let mut series: Vec<(String, Vec<(f64, f64)>)> = (1..=HARMONICS)
+        .map(|n| {
+            let line = |rpm: f64| (rpm, n as f64 * teeth * rpm / 60.0);
+            (format!("{n} x f_mesh"), vec![line(from), line(to)])
+        })
+        .collect();
+    series.extend(modes.iter().enumerate().map(|(j, m)| {
+        let hz = m.frequency / std::f64::consts::TAU;
+        (
+            format!(
+                "mode {} {:.0} Hz (mesh share {:.0} %)",
+                j + 1,
+                hz,
+                100.0 * m.mesh_energy_share
+            ),
+            vec![(from, hz), (to, hz)],
+        )
+    }));
+    out.chart(
+        "campbell",
+        &LinePlot {
+            y_range: None,
+            title: format!(
+                "{}: Campbell diagram of the lumped model ({})",
+                case.name(),
+                structure.names.join(", ")
+            ),
+            x_label: "driver speed [rpm]".into(),
+            y_label: "frequency [Hz]".into(),
+            series,
+        },
+    )?;
+    Ok(())
 }

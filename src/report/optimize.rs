@@ -212,12 +212,24 @@ pub fn write(dir: OutputDir, case: &Case, study: &OptimizeStudy) -> Result<(), R
             .map(|c| (c.name.clone(), points(c)))
             .collect::<Vec<_>>()
     };
+    // One candidate far above the rest (a case's long relief, whose unloaded TE dominates at
+    // light load) would squash the others against the axis: cut the scale at 1.5 × the next
+    // candidate's largest value when the largest is more than twice that, and say so.
+    let mut tops: Vec<f64> = candidates
+        .iter()
+        .map(|c| crate::signal::largest(c.harris.ste_pp_um.iter().copied()))
+        .filter(|v| v.is_finite())
+        .collect();
+    tops.sort_by(|a, b| b.total_cmp(a));
+    let cut = (tops.len() > 1 && tops[0] > 2.0 * tops[1]).then(|| 1.5 * tops[1]);
     dir.chart(
         "harris",
         &LinePlot {
+            y_range: cut.map(|top| (0.0, top)),
             title: format!(
-                "{}: Harris map, loaded STE peak-to-peak against torque",
-                case.name()
+                "{}: Harris map, loaded STE peak-to-peak against torque{}",
+                case.name(),
+                cut.map_or(String::new(), |top| format!(" (scale cut at {top:.1} um)"))
             ),
             x_label: "torque on the driven gear [N·m]".into(),
             y_label: "STE peak-to-peak [um]".into(),
@@ -233,6 +245,7 @@ pub fn write(dir: OutputDir, case: &Case, study: &OptimizeStudy) -> Result<(), R
     dir.chart(
         "ste_design",
         &LinePlot {
+            y_range: None,
             title: format!(
                 "{}: loaded STE at the design torque {:.1} N·m",
                 case.name(),
@@ -252,6 +265,7 @@ pub fn write(dir: OutputDir, case: &Case, study: &OptimizeStudy) -> Result<(), R
     dir.chart(
         "sweep",
         &LinePlot {
+            y_range: None,
             title: format!("{}: lumped dynamic factor per candidate", case.name()),
             x_label: "driver speed [rpm]".into(),
             y_label: "dynamic factor".into(),
@@ -268,6 +282,7 @@ pub fn write(dir: OutputDir, case: &Case, study: &OptimizeStudy) -> Result<(), R
     dir.chart(
         "convergence",
         &LinePlot {
+            y_range: None,
             title: format!(
                 "{}: robust objective per trust-region iteration",
                 case.name()

@@ -459,12 +459,34 @@ const PALETTE: [RGBColor; 9] = [
     RGBColor(230, 90, 160),
 ];
 
+/// `text` with every path in it cut to its file name (a title or label must not carry the
+/// folders of the machine it ran on): a space-separated word that starts with a separator or a
+/// drive (`C:`), or holds two separators, keeps what follows its last one (a unit like `m/N`
+/// stays).
+pub fn without_folders(text: &str) -> String {
+    let separator = |c: char| c == '/' || c == '\\';
+    text.split(' ')
+        .map(|word| {
+            let drive = word.len() > 2 && word.as_bytes()[1] == b':';
+            let path = word.starts_with(separator) || drive || word.matches(separator).count() >= 2;
+            match path {
+                true => word.rsplit(separator).next().unwrap_or(word),
+                false => word,
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
 /// A line chart of one or more named series.
 pub struct LinePlot {
     pub title: String,
     pub x_label: String,
     pub y_label: String,
     pub series: Vec<(String, Vec<(f64, f64)>)>,
+    /// The y range drawn; `None`: the data's (one far series can then squash the others,
+    /// e.g. a Harris map's unloaded-TE-dominated candidate).
+    pub y_range: Option<(f64, f64)>,
 }
 
 impl Drawing for LinePlot {
@@ -490,6 +512,9 @@ impl Drawing for LinePlot {
         }
         if !x0.is_finite() {
             (x0, x1, y0, y1) = (0.0, 1.0, 0.0, 1.0);
+        }
+        if let Some(range) = self.y_range {
+            (y0, y1) = range;
         }
         let pad = 0.06 * (y1 - y0).max(1e-12 * y1.abs().max(1.0));
         let mut chart = ChartBuilder::on(root)
@@ -640,6 +665,10 @@ pub struct ColourMap {
     pub cell_size: (f64, f64),
     /// Decades of dynamic range shown below the largest value.
     pub decades: f64,
+    /// What the colour shows, with its unit (the legend's label for the values of each decade).
+    pub value_label: String,
+    /// Curves drawn over the map (e.g. the natural frequencies in its coordinates).
+    pub overlays: Vec<(String, Vec<(f64, f64)>)>,
 }
 
 impl Drawing for ColourMap {
@@ -654,8 +683,8 @@ impl Drawing for ColourMap {
             fold(f64::max, f64::NEG_INFINITY, |c| c.0),
         );
         let (y0, y1) = (
-            0.0,
-            fold(f64::max, f64::NEG_INFINITY, |c| c.1) + self.cell_size.1,
+            fold(f64::min, f64::INFINITY, |c| c.1) - 0.5 * self.cell_size.1,
+            fold(f64::max, f64::NEG_INFINITY, |c| c.1) + 0.5 * self.cell_size.1,
         );
         let top = fold(f64::max, 0.0, |c| c.2).max(1e-300);
         let mut chart = ChartBuilder::on(root)
@@ -663,7 +692,7 @@ impl Drawing for ColourMap {
             .margin(15)
             .x_label_area_size(45)
             .y_label_area_size(70)
-            .build_cartesian_2d(x0..x1.max(x0 + 1e-9), y0..y1.max(1e-9))
+            .build_cartesian_2d(x0..x1.max(x0 + 1e-9), y0..y1.max(y0 + 1e-9))
             .map_err(&err)?;
         chart
             .configure_mesh()
@@ -674,14 +703,68 @@ impl Drawing for ColourMap {
             .draw()
             .map_err(&err)?;
         let (w, h) = (0.5 * self.cell_size.0, 0.5 * self.cell_size.1);
+        // 0 at `decades` below the top, 1 at the top; blue → green → yellow → red.
+        let colour_of = |v: f64| {
+            let t = (1.0 + (v / top).log10() / self.decades).clamp(0.0, 1.0);
+            HSLColor(0.66 * (1.0 - t), 0.9, 0.25 + 0.35 * t)
+        };
         chart
             .draw_series(self.cells.iter().filter(|c| c.2 > 0.0).map(|&(x, y, v)| {
-                // 0 at `decades` below the top, 1 at the top; blue → yellow → red.
-                let t = (1.0 + (v / top).log10() / self.decades).clamp(0.0, 1.0);
-                let colour = HSLColor(0.66 * (1.0 - t), 0.9, 0.25 + 0.35 * t);
-                Rectangle::new([(x - w, y - h), (x + w, y + h)], colour.filled())
+                Rectangle::new([(x - w, y - h), (x + w, y + h)], colour_of(v).filled())
             }))
             .map_err(&err)?;
+        // The legend: one swatch per decade below the top.
+        for d in 0..=(self.decades.round() as i32) {
+            let value = top * 10f64.powi(-d);
+            let colour = colour_of(value);
+            chart
+                .draw_series(std::iter::empty::<Rectangle<(f64, f64)>>())
+                .map_err(&err)?
+                .label(format!("{} {value:.3e}", self.value_label))
+                .legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 6), (x + 18, y + 6)], colour.filled())
+                });
+        }
+        for (name, data) in &self.overlays {
+            chart
+                .draw_series(LineSeries::new(
+                    data.iter().copied().filter(|p| p.1 >= y0 && p.1 <= y1),
+                    BLACK.stroke_width(2),
+                ))
+                .map_err(&err)?
+                .label(name.as_str())
+                .legend(|(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(2))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(&err)?;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::without_folders;
+
+    #[test]
+    fn titles_lose_the_folders_but_keep_units() {
+        assert_eq!(
+            without_folders(
+                "/home/me/out/run/sweep-fe/stiffness.csv without 4.9e-10 m/N body twist"
+            ),
+            "stiffness.csv without 4.9e-10 m/N body twist"
+        );
+        assert_eq!(
+            without_folders("run/sweep-fe/stiffness.csv"),
+            "stiffness.csv"
+        );
+        assert_eq!(without_folders(r"C:\runs\k.csv"), "k.csv");
+        assert_eq!(without_folders("ltca (relief none)"), "ltca (relief none)");
     }
 }

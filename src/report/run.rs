@@ -87,9 +87,9 @@ pub struct RunSummary {
     /// Low-passed or raw DTE peak-to-peak (as the cross-check ranked).
     pub fe_low_speed_measure: Option<String>,
     pub mesh_mode_fe_modal_free_hz: Option<f64>,
-    pub mesh_mode_lumped_fe_k_free_hz: Option<f64>,
+    pub mesh_mode_lumped_free_hz: Option<f64>,
     pub mesh_mode_fe_modal_driver_held_hz: Option<f64>,
-    pub mesh_mode_lumped_fe_k_driver_held_hz: Option<f64>,
+    pub mesh_mode_lumped_driver_held_hz: Option<f64>,
     /// The stages' checks of their own answers (LTCA, FE stiffness run) that failed: errors
     /// (the answer is wrong) and warnings (suspicious); the report's "Self-checks" lists them.
     pub self_check_errors: usize,
@@ -292,12 +292,9 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
         fe_low_speed_measure: field(&optimize, &["fe_check", "fe_low_measure"])
             .and_then(|m| m.as_str().map(String::from)),
         mesh_mode_fe_modal_free_hz: number(&compare, &["f_natural_fe_modal_hz"]),
-        mesh_mode_lumped_fe_k_free_hz: number(&compare, &["f_natural_lumped_hz"]),
+        mesh_mode_lumped_free_hz: number(&compare, &["f_natural_lumped_hz"]),
         mesh_mode_fe_modal_driver_held_hz: number(&compare, &["f_natural_fe_modal_driver_held_hz"]),
-        mesh_mode_lumped_fe_k_driver_held_hz: number(
-            &compare,
-            &["f_natural_lumped_driver_held_hz"],
-        ),
+        mesh_mode_lumped_driver_held_hz: number(&compare, &["f_natural_lumped_driver_held_hz"]),
     };
     let mut sections = sections(
         dir,
@@ -500,14 +497,14 @@ fn sections(
             row(&[
                 "primary resonance, max dynamic factor".into(),
                 format!(
-                    "{} rpm, {} (LTCA k) · {} rpm, {} (FE k). The sweeps' model has its mesh mode at {} / {} Hz; the LTCA one is {} against the FE modal analysis of the pair on the case's mesh, both gears free (compare/, validation/frequencies)",
+                    "{} rpm, {} (LTCA k) · {} rpm, {} (FE k). The sweeps' model has its mesh mode at {} / {} Hz; the case's model (LTCA force law) is {} against the FE modal analysis of the pair on the case's mesh with both gears free (compare/, validation/frequencies)",
                     show(s.primary_resonance_rpm_ltca, 0),
                     show(s.max_dynamic_factor_ltca, 2),
                     show(s.primary_resonance_rpm_fe, 0),
                     show(s.max_dynamic_factor_fe, 2),
                     show(s.natural_frequency_sweep_ltca_hz, 0),
                     show(s.natural_frequency_sweep_fe_hz, 0),
-                    relative(s.mesh_mode_lumped_fe_k_free_hz, s.mesh_mode_fe_modal_free_hz),
+                    relative(s.mesh_mode_lumped_free_hz, s.mesh_mode_fe_modal_free_hz),
                 ),
                 "sweep-ltca/, sweep-fe/".into(),
             ]),
@@ -594,9 +591,9 @@ fn sections(
                 format!(
                     "FE modal {} · the lumped model (as the sweeps) {}; driver held: FE modal {}, lumped {}",
                     show(s.mesh_mode_fe_modal_free_hz, 0),
-                    show(s.mesh_mode_lumped_fe_k_free_hz, 0),
+                    show(s.mesh_mode_lumped_free_hz, 0),
                     show(s.mesh_mode_fe_modal_driver_held_hz, 0),
-                    show(s.mesh_mode_lumped_fe_k_driver_held_hz, 0)
+                    show(s.mesh_mode_lumped_driver_held_hz, 0)
                 ),
                 "compare/, sweep-fe/".into(),
             ]),
@@ -615,8 +612,8 @@ fn sections(
         format!(
             "Lumped model ({}): speed sweeps, resonances, tooth separation and stability in seconds. Its mesh mode is {} (both gears free) and {} (driver held) against the FE modal analysis of the meshed pair on the case's mesh (compare/, validation/frequencies).",
             field(sweep_ltca, &["model"]).and_then(|m| m.as_str().map(String::from)).unwrap_or_else(|| "–".into()),
-            relative(s.mesh_mode_lumped_fe_k_free_hz, s.mesh_mode_fe_modal_free_hz),
-            relative(s.mesh_mode_lumped_fe_k_driver_held_hz, s.mesh_mode_fe_modal_driver_held_hz),
+            relative(s.mesh_mode_lumped_free_hz, s.mesh_mode_fe_modal_free_hz),
+            relative(s.mesh_mode_lumped_driver_held_hz, s.mesh_mode_fe_modal_driver_held_hz),
         ),
         "ISO 6336 and potential energy: first estimates; they do not see the bodies' compliance the FE sees.".into(),
     ];
@@ -850,9 +847,9 @@ fn sections(
         text: vec![format!(
             "Mesh mode, both gears free: FE modal {} Hz, the lumped model (as the sweeps integrate it) {} Hz; driver held: {} / {} Hz. compare/table.md lists every method.",
             show(s.mesh_mode_fe_modal_free_hz, 0),
-            show(s.mesh_mode_lumped_fe_k_free_hz, 0),
+            show(s.mesh_mode_lumped_free_hz, 0),
             show(s.mesh_mode_fe_modal_driver_held_hz, 0),
-            show(s.mesh_mode_lumped_fe_k_driver_held_hz, 0),
+            show(s.mesh_mode_lumped_driver_held_hz, 0),
         )],
         tables: vec![Table {
             name: "mesh_mode",

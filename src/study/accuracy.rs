@@ -10,9 +10,10 @@
 //! # Questions (each answered from the method's k(θ), the same way for every method)
 //! * mean stiffness k̄;
 //! * peak-to-peak of the static TE the stiffness gives at the load, (T/(r_b2 k) + e)/r_b2;
-//! * first resonance speed: f_mesh = f_n of the speed-driven pair with rigid rims
-//!   ([`super::compare`]; the driven body's twist is taken out of the hub-to-hub LTCA and FE
-//!   stiffness, ISO and potential energy do not hold it), n = 60 f_n / z₁ — its error follows
+//! * first resonance speed: f_mesh = f_n of the speed-driven pair with elastic bodies (the
+//!   FE's lumped twin, [`super::compare::lumped_twin`]: the bodies' twist is taken out of the
+//!   hub-to-hub LTCA and FE stiffness and given to the bodies; ISO and potential energy do not
+//!   hold it, so it is put in series first), n = 60 f_n / z₁ — its error follows
 //!   from the mean stiffness's (√k), so it is about half of it;
 //! * DTE amplitude at the mesh frequency at the primary FE run's speed
 //!   ([`super::compare::primary_run`], 3000 rpm for paper36): the lumped model's periodic

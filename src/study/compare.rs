@@ -3,10 +3,11 @@
 //! lumped model's at the same speeds.
 //!
 //! # Boundary conditions and masses
-//! * **driver held** — the explicit FE's: the driver's bore follows the prescribed speed, so the
-//!   mesh mode moves the driven gear only, m = I₂/r_b2² (lumped `drive = speed`).
-//! * **both free** — the lumped model's torque drive: m_e = I₁I₂/(I₁r_b2² + I₂r_b1²). (The seed
-//!   paper's 2 433 Hz used this mass although its driver is speed-driven.)
+//! * **driver held** — the explicit FE's: the driver's bore follows the prescribed speed
+//!   (lumped `drive = speed`); with rigid gears the mesh mode moves the driven gear only,
+//!   m = I₂/r_b2², with elastic bodies the driver's rim swings on its body's twist too.
+//! * **both free** — the lumped model's torque drive: rigid gears m_e = I₁I₂/(I₁r_b2² +
+//!   I₂r_b1²). (The seed paper's 2 433 Hz used this mass although its driver is speed-driven.)
 //!
 //! # Methods
 //! (a) √(k̄/m) with k̄ from the LTCA (secant W/δ and tangent dW/dδ, on the explicit FE's mesh)
@@ -19,15 +20,18 @@
 //! same speed (speed drive, FE k(θ), the FE's mesh damping, the back flanks' own k and e), its
 //! first three mesh harmonics against the FE's.
 //!
-//! # Rigid gears or rigid rims
+//! # Rigid gears or elastic bodies
 //! The hub-to-hub stiffness (LTCA, FE DTE) holds each body's twist between bore and root
 //! circle, c_b = r_b² (1/r_i² − 1/r_f²)/(4πGb) ([`crate::geometry::Gear::body_torsional_compliance`]).
 //! Most of a gear's inertia lies outside that twist (I ∝ ∫r³dr, the twist ∝ ∫dr/r³), so behind a
 //! free, light hub (the FE's driven hub carries only its bore nodes) the mesh mode does not
 //! stretch it. The lumped model with rigid gears puts the whole inertia behind the whole
-//! compliance and reads the mesh mode low; with that twist taken out of series
-//! (k' = 1/(1/k − c_b) for the driven gear with the driver held, both gears when both are free)
-//! it places the inertia at rigid rims. Both are reported; the speed comparison uses the rims.
+//! compliance and reads the mesh mode low; with elastic bodies ([`crate::lumped::structure`])
+//! the twist leaves the mesh (k' = 1/(1/k − c_b)) for the bodies, hub and rim, the inertia where
+//! it sits (the FE's lumped twin, [`lumped_twin`]). Both are reported; the speed comparison
+//! uses the elastic bodies. The headline frequencies set the case's own lumped model (as the
+//! sweeps integrate it) against the FE modal analysis on the case's mesh
+//! ([`super::frequencies`]).
 
 use serde::Serialize;
 
@@ -514,7 +518,7 @@ pub fn run(
         mesh_damping_n_s_per_m: damping_of(Drive::Speed),
         paper_stiffness: paper,
         model_note: format!(
-            "FE modal: the explicit FE's mesh ({:.2} mm flanks, {:.2} mm body), consistent mass, hubs rigid with the bore nodes' inertia, the LTCA's active contact points tied along their normals, relief none, {positions} positions; lumped: 1 DOF, rigid gears (I = {:.4e} / {:.4e} kg m2), k(theta) from the FE DTE, zeta = {zeta} on the LTCA k and the driven inertia, back flanks with their own k and e",
+            "FE modal: the explicit FE's mesh ({:.2} mm flanks, {:.2} mm body), consistent mass, hubs rigid with the bore nodes' inertia, the LTCA's active contact points tied along their normals, relief none, {positions} positions; lumped twin of the FE: elastic bodies (hub and rim, the bodies' twist out of the FE's hub-to-hub k), speed drive, no shafts or bearings (I = {:.4e} / {:.4e} kg m2), k(theta) from the FE DTE, zeta = {zeta} on the LTCA k and the driven inertia, back flanks with their own k and e",
             fine * 1e3,
             coarse * 1e3,
             inertias[0],

@@ -1,10 +1,12 @@
-//! The lumped model of a case (shared by `sweep`, `stability` and `validate integrators`): the
-//! mesh stiffness from the case's source, the gears' inertias and the effective mass of the
-//! drive, bearings and damping.
+//! The lumped model of a case (shared by `sweep`, `stability`, `optimize`, `compare` and
+//! `validate`): the mesh stiffness and force law from the case's source, and the linear
+//! structure around the mesh ([`crate::lumped::structure`]) from `[lumped]`: the gear bodies
+//! (elastic, hub and rim, or rigid), shafts, motor and load, bearings, the drive and damping.
 //!
 //! Inertias default to ρ b ∫r² dA of the gear bodies (the FE's bodies, bore to tip), masses to
-//! ρ b A; m_e follows the drive ([`Drive::effective_mass`]); the mesh damping is
-//! c = 2ζ√(k̄ m_e), or the case's coefficient when it gives one.
+//! ρ b A; a hub-to-hub stiffness loses the elastic bodies' twist ([`to_rims`]); the mesh damping
+//! is c = 2ζ√(k̄ m_e) with m_e the rigid pair's effective mass under the drive
+//! ([`Drive::effective_mass`]), or the case's coefficient when it gives one.
 
 use crate::case::BodyModel;
 use crate::case::{Case, Override, StiffnessSource};
@@ -124,6 +126,9 @@ pub struct LumpedSetup {
     pub natural_frequency_hz: f64,
     /// One line saying which model was used and what it leaves out.
     pub model_note: String,
+    /// The bodies' twist the structure carries, Σ r_b² c_b over elastic bodies [m/N]: the mesh
+    /// stiffness hub to hub is 1/(1/k + this).
+    pub body_twist: f64,
     /// The model's checks of its own answer: its quasi-static response against the LTCA
     /// ([`quasi_static_checks`]); empty for sources other than the LTCA.
     pub self_checks: Vec<Check>,
@@ -247,6 +252,7 @@ pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
         natural_frequency_hz,
         model_note,
         self_checks,
+        body_twist: structure_body_twist(case),
     })
 }
 
@@ -407,8 +413,9 @@ pub fn to_rims(
 
 /// Each gear body as the lumped model holds it (`[lumped] bodies`): elastic, hub and rim with
 /// the annulus's torsional compliance between them and the hub's share of the inertia
-/// ([`crate::geometry::Gear::body_hub_area_moment`]); the case's inertias, when it gives them,
-/// scale both; or rigid.
+/// ([`crate::geometry::Gear::body_hub_area_moment`]); or rigid. The case's inertias, when they
+/// exceed the body's own, add what turns with the gear (coupling, shaft) at the hub; when
+/// they fall short (a lightened body), both shares scale.
 pub fn gear_bodies(case: &Case, bodies: BodyModel) -> [GearBody; 2] {
     let inertias = gear_inertias(case);
     std::array::from_fn(|i| {
@@ -416,11 +423,13 @@ pub fn gear_bodies(case: &Case, bodies: BodyModel) -> [GearBody; 2] {
         match bodies {
             BodyModel::Rigid => GearBody::rigid(inertias[i]),
             BodyModel::Elastic => {
-                let own = case.material.density * gear.spec.face_width * gear.area_moments().1;
-                let hub =
-                    case.material.density * gear.spec.face_width * gear.body_hub_area_moment()
-                        / own
-                        * inertias[i];
+                let density = case.material.density * gear.spec.face_width;
+                let own = density * gear.area_moments().1;
+                let hub_own = density * gear.body_hub_area_moment();
+                let hub = match inertias[i] >= own {
+                    true => hub_own + (inertias[i] - own),
+                    false => hub_own / own * inertias[i],
+                };
                 GearBody {
                     hub_inertia: hub,
                     rim_inertia: inertias[i] - hub,

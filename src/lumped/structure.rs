@@ -178,8 +178,9 @@ impl Structure {
         for (side, body) in spec.gears.iter().enumerate() {
             let r2 = rb[side] * rb[side];
             let gear = side + 1;
-            if !(body.hub_inertia >= 0.0 && body.rim_inertia > 0.0)
-                || !(body.torsional_compliance >= 0.0)
+            if !(body.hub_inertia >= 0.0
+                && body.rim_inertia > 0.0
+                && body.torsional_compliance >= 0.0)
             {
                 return Err(format!(
                     "gear {gear}: the body needs a positive rim inertia, a hub inertia ≥ 0 and a \
@@ -438,12 +439,12 @@ impl Structure {
         mesh_force: f64,
         out: &mut [f64; MAX_DOFS],
     ) {
-        for i in 0..self.dofs {
-            let mut a = force * self.inv_mass_load[i] - mesh_force * self.inv_mass_mesh[i];
-            for j in 0..self.dofs {
-                a -= self.inv_mass_stiffness[i][j] * q[j] + self.inv_mass_damping[i][j] * v[j];
-            }
-            out[i] = a;
+        let n = self.dofs;
+        for (i, a) in out.iter_mut().enumerate().take(n) {
+            let (k, c) = (&self.inv_mass_stiffness[i], &self.inv_mass_damping[i]);
+            *a = force * self.inv_mass_load[i]
+                - mesh_force * self.inv_mass_mesh[i]
+                - (0..n).map(|j| k[j] * q[j] + c[j] * v[j]).sum::<f64>();
         }
     }
 

@@ -200,7 +200,7 @@ pub fn write_sweep(out: OutputDir, case: &Case, study: &SweepStudy) -> Result<()
         "waterfall",
         &ColourMap {
             title: format!(
-                "{}: order map, DTE amplitude of each mesh harmonic (log colour, 3 decades), stiffness {source}",
+                "{}: order map of the DTE (log colour), {source}",
                 case.name()
             ),
             x_label: "driver speed [rpm]".into(),

@@ -720,7 +720,7 @@ impl Drawing for ColourMap {
             chart
                 .draw_series(std::iter::empty::<Rectangle<(f64, f64)>>())
                 .map_err(&err)?
-                .label(format!("{} {value:.3e}", self.value_label))
+                .label(format!("{value:.2e} {}", self.value_label))
                 .legend(move |(x, y)| {
                     Rectangle::new([(x, y - 6), (x + 18, y + 6)], colour.filled())
                 });

@@ -63,7 +63,9 @@ impl RunPlan {
                 Vec::new()
             },
             compare_high_speed_run: full,
-            modal_positions: 16,
+            // Without FE runs at speed the explicit mesh's modes label nothing: 4 positions keep
+            // its rows; the headline frequencies come from the case's mesh (compare).
+            modal_positions: if full { 16 } else { 4 },
             paper_stiffness: full,
         }
     }

@@ -75,6 +75,13 @@ pub fn largest(values: impl IntoIterator<Item = f64>) -> f64 {
     })
 }
 
+/// Root mean square of `values` about their mean (0 for none).
+pub fn rms_about_mean(values: &[f64]) -> f64 {
+    let n = values.len().max(1) as f64;
+    let mean = values.iter().sum::<f64>() / n;
+    (values.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n).sqrt()
+}
+
 /// max − min of `values` (−∞ for none).
 pub fn peak_to_peak(values: &[f64]) -> f64 {
     let (lo, hi) = extremes(values);

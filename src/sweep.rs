@@ -255,15 +255,7 @@ fn analyse(
             backlash_m: model.backlash.unwrap_or(0.0),
         });
     }
-    let n = s.displacement.len() as f64;
-    let mean = s.displacement.iter().sum::<f64>() / n;
-    let rms = (s
-        .displacement
-        .iter()
-        .map(|x| (x - mean).powi(2))
-        .sum::<f64>()
-        / n)
-        .sqrt();
+    let rms = crate::signal::rms_about_mean(&s.displacement);
     let (lo, hi) = crate::signal::extremes(&s.displacement);
     let mesh_hz = speed / model.mesh.period();
     let (record, periods) = if s.converged {

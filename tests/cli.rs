@@ -1381,3 +1381,90 @@ fn lumped_bodies_shafts_and_relief_choose_the_model() {
         assert!(stderr.contains(expected), "{stderr}");
     }
 }
+
+/// `compare --fe-sweep` on synthetic FE runs whose answer is known: at five speeds from 4 000 to
+/// 6 000 rpm the DTE's first mesh harmonic follows a one-degree-of-freedom response with its
+/// undamped resonance at 5 000 rpm and ζ = 0.05 (peak at 5 000 √(1 − 2ζ²) = 4 987.5 rpm,
+/// amplitude a/(2ζ√(1 − ζ²))). The sweep must give that resonance and peak back from the five
+/// points (none on the peak), write its table, CSVs and plot, and set the lumped twin's curve
+/// beside it.
+#[test]
+fn compare_fe_sweep_finds_a_known_resonance() {
+    use std::f64::consts::TAU;
+    let dir = tempfile::tempdir().unwrap();
+    let (a, nr, zeta): (f64, f64, f64) = (2e-5, 5000.0, 0.05);
+    let mut args: Vec<std::ffi::OsString> = Vec::new();
+    for rpm in [4000.0, 4500.0, 5000.0, 5500.0, 6000.0] {
+        let run = dir.path().join(format!("fe-{rpm}"));
+        std::fs::create_dir_all(&run).unwrap();
+        let r: f64 = rpm / nr;
+        let amplitude = a / ((1.0 - r * r).powi(2) + (2.0 * zeta * r).powi(2)).sqrt();
+        let (dt, fm) = (1e-5, rpm / 60.0 * 36.0);
+        let mut history = String::from("time_s,driver_rotation_rad,dte_rad\n");
+        for k in 0..3001 {
+            let t = k as f64 * dt;
+            let dte = 1.2e-4 + amplitude * (TAU * fm * t).cos();
+            history += &format!("{t:.8},0,{dte:.12e}\n");
+        }
+        std::fs::write(run.join("history.csv"), history).unwrap();
+        std::fs::write(
+            run.join("summary.json"),
+            format!(
+                r#"{{"scene": {{"driver_speed": {}, "torque": 143.6, "ramp_time": 0.01}},
+                    "statistics_start_s": 0.016, "total_wall_s": 1.0, "diverged": null}}"#,
+                rpm * TAU / 60.0
+            ),
+        )
+        .unwrap();
+        args.push("--fe-run".into());
+        args.push(run.into_os_string());
+    }
+    let mut table =
+        String::from("roll_angle_deg,mesh_stiffness_n_per_m,unloaded_te_um,load_torque_nm\n");
+    for j in 0..64 {
+        let theta = 10.0 * j as f64 / 64.0;
+        let k = 4.0e8 * (1.0 + 0.1 * (TAU * theta / 10.0).cos());
+        table += &format!("{:.6},{k:.6e},0,143.6\n", 20.85 + theta);
+    }
+    let stiffness = dir.path().join("stiffness.csv");
+    std::fs::write(&stiffness, table).unwrap();
+    let out = dir.path().join("cmp");
+    run_ok(
+        geardyn()
+            .args(["compare", "--speed-rpm", "5000", "--positions", "2"])
+            .args(["--set", "mesh.fine_element_mm=1.0", "--set"])
+            .args(["mesh.coarse_element_mm=3.0", "--fe-sweep", "4000:6000:5"])
+            .args(&args)
+            .arg("--fe-stiffness")
+            .arg(&stiffness)
+            .arg("--out")
+            .arg(&out),
+    );
+    let summary = read_summary(&out);
+    let sweep = &summary["fe_sweep"];
+    let peak_rpm = nr * (1.0 - 2.0 * zeta * zeta).sqrt();
+    let got = sweep["resonance_rpm_fe"].as_f64().unwrap();
+    assert!((got / peak_rpm - 1.0).abs() < 1e-3, "{got} vs {peak_rpm}");
+    let peak = a / (2.0 * zeta * (1.0 - zeta * zeta).sqrt());
+    let got_peak = sweep["peak_dte_mesh_amplitude_fe_rad"].as_f64().unwrap();
+    assert!((got_peak / peak - 1.0).abs() < 2e-2, "{got_peak} vs {peak}");
+    assert_eq!(sweep["speeds"].as_array().unwrap().len(), 5);
+    assert_eq!(sweep["lumped_curve"].as_array().unwrap().len(), 20);
+    for key in [
+        "resonance_rpm_lumped",
+        "peak_dte_mesh_amplitude_rel_err",
+        "dte_rms_max_rel_err",
+    ] {
+        assert!(sweep[key].as_f64().unwrap().is_finite(), "{key}");
+    }
+    for file in [
+        "fe_sweep.csv",
+        "fe_sweep_lumped.csv",
+        "fe_sweep.png",
+        "fe_sweep.svg",
+    ] {
+        assert!(out.join(file).exists(), "{file}");
+    }
+    let md = std::fs::read_to_string(out.join("table.md")).unwrap();
+    assert!(md.contains("FE speed sweep (5 speeds)"), "{md}");
+}

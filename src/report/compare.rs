@@ -271,6 +271,7 @@ pub fn write(dir: OutputDir, case: &Case, summary: &CompareSummary) -> Result<St
             &stem,
             &LinePlot {
                 y_range: None,
+                markers: Vec::new(),
                 title: format!(
                     "{}: DTE spectra at {:.0} rpm (f_m {:.0} Hz, f_n held {:.0} Hz): {labels}",
                     case.name(),
@@ -313,6 +314,7 @@ pub fn write(dir: OutputDir, case: &Case, summary: &CompareSummary) -> Result<St
             "paper_stiffness_spectra",
             &LinePlot {
                 y_range: None,
+            markers: Vec::new(),
                 title: format!(
                     "PAPER-STIFFNESS STUDY (k = {:.4e} N/m, lumped, speed drive) at {:.0} rpm: f_n held {:.0} Hz, free {:.0} Hz",
                     p.mean_stiffness_n_per_m, p.speed_rpm, p.f_driver_held_hz, p.f_both_free_hz
@@ -368,8 +370,105 @@ pub fn write(dir: OutputDir, case: &Case, summary: &CompareSummary) -> Result<St
             peaks_text(&p.early_peaks)
         );
     }
+    if let Some(sweep) = &summary.fe_sweep {
+        table += &write_fe_sweep(dir, case, sweep)?;
+    }
     dir.bytes("table.md", table.as_bytes())?;
     Ok(table)
+}
+
+/// The FE speed sweep: fe_sweep.csv (per FE speed), fe_sweep_lumped.csv (the twin's dense
+/// curve), fe_sweep.{png,svg} (the twin's curves with the FE's points as markers) and its
+/// Markdown table.
+fn write_fe_sweep(
+    dir: OutputDir,
+    case: &Case,
+    sweep: &crate::study::fe_sweep::FeSweep,
+) -> Result<String, ReportError> {
+    let um = |rad: f64| rad * 1e6;
+    dir.csv(
+        "fe_sweep.csv",
+        &[
+            "driver_rpm",
+            "fe_mesh_amplitude_urad",
+            "lumped_mesh_amplitude_urad",
+            "fe_dte_rms_urad",
+            "lumped_dte_rms_urad",
+            "dte_rms_rel_err",
+            "lumped_converged",
+        ],
+        sweep.speeds.iter().map(|s| {
+            vec![
+                format!("{:.2}", s.speed_rpm),
+                format!("{:.5}", um(s.fe_mesh_amplitude_rad)),
+                format!("{:.5}", um(s.lumped_mesh_amplitude_rad)),
+                format!("{:.5}", um(s.fe_dte_rms_rad)),
+                format!("{:.5}", um(s.lumped_dte_rms_rad)),
+                format!("{:.4}", s.dte_rms_rel_err),
+                s.lumped_converged.to_string(),
+            ]
+        }),
+    )?;
+    dir.csv(
+        "fe_sweep_lumped.csv",
+        &["driver_rpm", "mesh_amplitude_urad", "dte_rms_urad"],
+        sweep.lumped_curve.iter().map(|c| {
+            vec![
+                format!("{:.2}", c.0),
+                format!("{:.5}", um(c.1)),
+                format!("{:.5}", um(c.2)),
+            ]
+        }),
+    )?;
+    let curve = |pick: fn(&(f64, f64, f64)) -> f64| -> Vec<(f64, f64)> {
+        sweep
+            .lumped_curve
+            .iter()
+            .map(|c| (c.0, um(pick(c))))
+            .collect()
+    };
+    let points = |pick: fn(&crate::study::fe_sweep::SweepSpeed) -> f64| -> Vec<(f64, f64)> {
+        sweep
+            .speeds
+            .iter()
+            .map(|s| (s.speed_rpm, um(pick(s))))
+            .collect()
+    };
+    dir.chart(
+        "fe_sweep",
+        &LinePlot {
+            title: format!(
+                "{}: explicit FE through the resonance (markers) against the lumped twin (lines)",
+                case.name()
+            ),
+            x_label: "driver speed [rpm]".into(),
+            y_label: "DTE of the driven gear [urad]".into(),
+            series: vec![
+                ("lumped, 1st mesh harmonic".into(), curve(|c| c.1)),
+                ("lumped, rms".into(), curve(|c| c.2)),
+            ],
+            y_range: None,
+            markers: vec![
+                (
+                    "FE, 1st mesh harmonic".into(),
+                    points(|s| s.fe_mesh_amplitude_rad),
+                ),
+                ("FE, rms".into(), points(|s| s.fe_dte_rms_rad)),
+            ],
+        },
+    )?;
+    Ok(format!(
+        "\nFE speed sweep ({} speeds): resonance {:.0} rpm (FE) / {:.0} rpm (lumped), {:+.2} %; peak 1st mesh harmonic {:.3} / {:.3} urad, {:+.1} %; DTE rms largest difference {:.1} %. {}\n",
+        sweep.speeds.len(),
+        sweep.resonance_rpm_fe,
+        sweep.resonance_rpm_lumped,
+        100.0 * sweep.resonance_rpm_rel_err,
+        um(sweep.peak_dte_mesh_amplitude_fe_rad),
+        um(sweep.peak_dte_mesh_amplitude_lumped_rad),
+        100.0 * sweep.peak_dte_mesh_amplitude_rel_err,
+        100.0 * sweep.dte_rms_max_rel_err,
+        sweep.settling_note
+    ))
 }
 
 /// Reads an explicit FE stiffness run (`geardyn fe --scene stiffness`): k(θ) from its

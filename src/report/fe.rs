@@ -108,6 +108,7 @@ pub fn plot_run(
             stem,
             &LinePlot {
                 y_range: None,
+                markers: Vec::new(),
                 title: format!("{title}: {stem}"),
                 x_label: "time [ms]".into(),
                 y_label: y_label.into(),
@@ -191,6 +192,7 @@ pub fn plot_run(
             "dte_spectrum",
             &LinePlot {
                 y_range: None,
+                markers: Vec::new(),
                 title: format!("{title}: DTE spectrum (Hann window, after the ramp)"),
                 x_label: "frequency [Hz]".into(),
                 y_label: "amplitude [rad]".into(),
@@ -409,6 +411,7 @@ fn write_stiffness_comparison(
         "stiffness",
         &LinePlot {
             y_range: None,
+            markers: Vec::new(),
             title: format!(
                 "{}: {}: k = sum W / sum (Rb2 theta_DTE - e) per bin, against the LTCA",
                 case.name(),
@@ -663,6 +666,7 @@ pub fn write_mass_scaling(
         "mass_scaling_stiffness",
         &LinePlot {
             y_range: None,
+            markers: Vec::new(),
             title: format!(
                 "{}: {}: k from the DTE, mass scaled {:.1}x against unscaled",
                 case.name(),

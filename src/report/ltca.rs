@@ -49,6 +49,7 @@ pub fn write(out: OutputDir, case: &Case, study: &LtcaStudy) -> Result<(), Repor
             &format!("load_sharing_{}", cycle.name),
             &LinePlot {
                 y_range: None,
+                markers: Vec::new(),
                 title: format!(
                     "{}: load per tooth pair, relief \"{}\", T = {torque} N·m",
                     case.name(),
@@ -73,6 +74,7 @@ pub fn write(out: OutputDir, case: &Case, study: &LtcaStudy) -> Result<(), Repor
         "ste",
         &LinePlot {
             y_range: None,
+            markers: Vec::new(),
             title: format!(
                 "{}: static transmission error, T = {torque} N·m",
                 case.name()
@@ -105,6 +107,7 @@ pub fn write(out: OutputDir, case: &Case, study: &LtcaStudy) -> Result<(), Repor
         "stiffness",
         &LinePlot {
             y_range: None,
+            markers: Vec::new(),
             title: format!("{}: mesh stiffness, T = {torque} N·m", case.name()),
             x_label: "driver roll angle [deg]".into(),
             y_label: "mesh stiffness [N/m]".into(),

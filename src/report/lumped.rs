@@ -162,6 +162,7 @@ pub fn write_sweep(out: OutputDir, case: &Case, study: &SweepStudy) -> Result<()
             stem,
             &LinePlot {
                 y_range: None,
+                markers: Vec::new(),
                 title: format!("{}: {stem}, stiffness {source}, zeta = {zeta}", case.name()),
                 x_label: "driver speed [rpm]".into(),
                 y_label: label.into(),
@@ -246,6 +247,7 @@ pub fn write_sweep(out: OutputDir, case: &Case, study: &SweepStudy) -> Result<()
             "runup",
             &LinePlot {
                 y_range: None,
+                markers: Vec::new(),
                 title: format!(
                     "{}: run-up {from:.0} -> {to:.0} rpm in {duration} s, stiffness {source}",
                     case.name()
@@ -331,6 +333,7 @@ pub fn write_stability(
         "stability",
         &LinePlot {
             y_range: None,
+            markers: Vec::new(),
             title: format!(
                 "{}: Floquet stability, stiffness {}, zeta = {}",
                 case.name(),
@@ -632,6 +635,7 @@ fn campbell(
         "campbell",
         &LinePlot {
             y_range: None,
+            markers: Vec::new(),
             title: format!(
                 "{}: Campbell diagram of the lumped model ({})",
                 case.name(),

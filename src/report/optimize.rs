@@ -226,6 +226,7 @@ pub fn write(dir: OutputDir, case: &Case, study: &OptimizeStudy) -> Result<(), R
         "harris",
         &LinePlot {
             y_range: cut.map(|top| (0.0, top)),
+            markers: Vec::new(),
             title: format!(
                 "{}: Harris map, loaded STE peak-to-peak against torque{}",
                 case.name(),
@@ -246,6 +247,7 @@ pub fn write(dir: OutputDir, case: &Case, study: &OptimizeStudy) -> Result<(), R
         "ste_design",
         &LinePlot {
             y_range: None,
+            markers: Vec::new(),
             title: format!(
                 "{}: loaded STE at the design torque {:.1} N·m",
                 case.name(),
@@ -266,6 +268,7 @@ pub fn write(dir: OutputDir, case: &Case, study: &OptimizeStudy) -> Result<(), R
         "sweep",
         &LinePlot {
             y_range: None,
+            markers: Vec::new(),
             title: format!("{}: lumped dynamic factor per candidate", case.name()),
             x_label: "driver speed [rpm]".into(),
             y_label: "dynamic factor".into(),
@@ -283,6 +286,7 @@ pub fn write(dir: OutputDir, case: &Case, study: &OptimizeStudy) -> Result<(), R
         "convergence",
         &LinePlot {
             y_range: None,
+            markers: Vec::new(),
             title: format!(
                 "{}: robust objective per trust-region iteration",
                 case.name()

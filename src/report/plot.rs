@@ -487,6 +487,8 @@ pub struct LinePlot {
     /// The y range drawn; `None`: the data's (one far series can then squash the others,
     /// e.g. a Harris map's unloaded-TE-dominated candidate).
     pub y_range: Option<(f64, f64)>,
+    /// Named point sets drawn as markers (circles), e.g. measurements on a model's curve.
+    pub markers: Vec<(String, Vec<(f64, f64)>)>,
 }
 
 impl Drawing for LinePlot {
@@ -496,6 +498,7 @@ impl Drawing for LinePlot {
         let points = self
             .series
             .iter()
+            .chain(&self.markers)
             .flat_map(|(_, s)| s.iter())
             .filter(|p| p.0.is_finite() && p.1.is_finite());
         let (mut x0, mut x1, mut y0, mut y1) = (
@@ -551,6 +554,19 @@ impl Drawing for LinePlot {
                 .legend(move |(x, y)| {
                     PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
                 });
+        }
+        for (i, (name, data)) in self.markers.iter().enumerate() {
+            let colour = PALETTE[(self.series.len() + i) % PALETTE.len()];
+            chart
+                .draw_series(
+                    data.iter()
+                        .copied()
+                        .filter(|p| p.1.is_finite())
+                        .map(|p| Circle::new(p, 5, colour.filled())),
+                )
+                .map_err(&err)?
+                .label(name)
+                .legend(move |(x, y)| Circle::new((x + 10, y), 5, colour.filled()));
         }
         chart
             .configure_series_labels()

@@ -86,6 +86,8 @@ impl FeDte {
 /// What the study needs beyond the case: FE runs and the FE's k(θ).
 pub struct CompareInput {
     pub fe_runs: Vec<FeDte>,
+    /// The speeds of `fe_runs` that form the FE speed sweep (`--fe-sweep`) [rpm]; empty: none.
+    pub fe_sweep_rpm: Vec<f64>,
     /// k(θ), e(θ) from the FE DTE (a stiffness scene), with its source.
     pub fe_stiffness: MeshStiffness,
 }
@@ -156,6 +158,9 @@ pub struct SpeedComparison {
     /// Amplitudes of the first mesh harmonics [rad]: FE (late window), lumped (steady state).
     pub fe_harmonics_rad: Vec<f64>,
     pub lumped_harmonics_rad: Vec<f64>,
+    /// DTE rms about its mean [rad]: FE (late window), lumped (steady state).
+    pub fe_dte_rms_rad: f64,
+    pub lumped_dte_rms_rad: f64,
     pub harmonic_error_rel: Vec<f64>,
     /// The same with rigid gears (the FE k as it is, body twist included).
     pub lumped_rigid_harmonics_rad: Vec<f64>,
@@ -228,6 +233,9 @@ pub struct CompareSummary {
     pub mesh_damping_n_s_per_m: f64,
     /// Only with `--paper-stiffness`.
     pub paper_stiffness: Option<PaperStiffness>,
+    /// Only with `--fe-sweep`: the FE speed sweep through the resonance against the lumped
+    /// twin ([`super::fe_sweep`]).
+    pub fe_sweep: Option<super::fe_sweep::FeSweep>,
     pub model_note: String,
     pub wall_s: f64,
 }
@@ -473,6 +481,10 @@ pub fn run(
             )
         })
         .collect::<Result<_, _>>()?;
+    let fe_sweep = match input.fe_sweep_rpm.as_slice() {
+        [] => None,
+        rpms => Some(fe_sweep(case, &rim_model, &speeds, rpms)?),
+    };
     let first = primary.map(|i| &speeds[i]);
     let paper = match (paper_stiffness, primary) {
         (false, _) => None,
@@ -517,6 +529,7 @@ pub fn run(
         modal,
         mesh_damping_n_s_per_m: damping_of(Drive::Speed),
         paper_stiffness: paper,
+        fe_sweep,
         model_note: format!(
             "FE modal: the explicit FE's mesh ({:.2} mm flanks, {:.2} mm body), consistent mass, hubs rigid with the bore nodes' inertia, the LTCA's active contact points tied along their normals, relief none, {positions} positions; lumped twin of the FE: elastic bodies (hub and rim, the bodies' twist out of the FE's hub-to-hub k), speed drive, no shafts or bearings (I = {:.4e} / {:.4e} kg m2), k(theta) from the FE DTE, zeta = {zeta} on the LTCA k and the driven inertia, back flanks with their own k and e",
             fine * 1e3,
@@ -576,6 +589,7 @@ fn compare_speed(
             return Err(lumped_diverged(run.speed_rpm));
         }
         let lines = amplitude_spectrum(&steady.displacement);
+        let rms = crate::signal::rms_about_mean(&steady.displacement) / rb2;
         let amplitudes: Vec<f64> = (0..HARMONICS)
             .map(|n| lines.get(n).copied().unwrap_or(0.0) / rb2)
             .collect();
@@ -584,10 +598,10 @@ fn compare_speed(
             .zip(&fe_harmonics_rad)
             .map(|(l, f)| l / f - 1.0)
             .collect();
-        Ok((steady, amplitudes, errors))
+        Ok((steady, amplitudes, errors, rms))
     };
-    let (steady, lumped_harmonics_rad, harmonic_error_rel) = harmonics(model)?;
-    let (_, lumped_rigid_harmonics_rad, rigid_harmonic_error_rel) = harmonics(rigid)?;
+    let (steady, lumped_harmonics_rad, harmonic_error_rel, lumped_dte_rms_rad) = harmonics(model)?;
+    let (_, lumped_rigid_harmonics_rad, rigid_harmonic_error_rel, _) = harmonics(rigid)?;
     Ok(SpeedComparison {
         speed_rpm: run.speed_rpm,
         mesh_hz,
@@ -597,8 +611,10 @@ fn compare_speed(
         early_window_s: (ramp as f64 * run.dt, early_end as f64 * run.dt),
         fe_peaks,
         fe_early_peaks,
+        fe_dte_rms_rad: crate::signal::rms_about_mean(late),
         fe_harmonics_rad,
         lumped_harmonics_rad,
+        lumped_dte_rms_rad,
         harmonic_error_rel,
         lumped_rigid_harmonics_rad,
         rigid_harmonic_error_rel,
@@ -607,6 +623,46 @@ fn compare_speed(
         mesh_over_mode: mesh_hz / mesh_mode_hz,
         fe_spectrum,
         fe_early_spectrum,
+    })
+}
+
+/// The FE sweep of `speeds` at `rpms` against the lumped `twin` swept four times as densely over
+/// the same range (up-sweep; a divergence ends the curve where it happened).
+fn fe_sweep(
+    case: &Case,
+    twin: &MeshModel,
+    speeds: &[SpeedComparison],
+    rpms: &[f64],
+) -> Result<super::fe_sweep::FeSweep, StudyError> {
+    let at: Vec<SpeedComparison> = speeds
+        .iter()
+        .filter(|s| rpms.iter().any(|r| (r - s.speed_rpm).abs() < 1e-6 * r))
+        .cloned()
+        .collect();
+    let (lo, hi) = rpms
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(l, h), r| (l.min(*r), h.max(*r)));
+    let n = 4 * rpms.len();
+    let dense: Vec<f64> = (0..n)
+        .map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64)
+        .collect();
+    let done = crate::sweep::continue_sweep(
+        twin,
+        &dense,
+        crate::sweep::SweepProgress::start(twin),
+        &|| false,
+    );
+    let rb2 = case.pair.gears[1].base_radius;
+    let curve = done
+        .up
+        .iter()
+        .map(|p| (p.driver_speed_rpm, p.harmonics[0] / rb2, p.dte_rms / rb2))
+        .collect();
+    let decay_time = 1.0 / (case.fe.mesh_damping_ratio * twin.natural_frequency());
+    super::fe_sweep::summarize(&at, curve, decay_time).ok_or_else(|| {
+        StudyError::Input(
+            "--fe-sweep needs at least three FE speeds with a mesh-harmonic response".into(),
+        )
     })
 }
 

@@ -10,6 +10,7 @@ pub mod accuracy;
 pub mod checks;
 pub mod compare;
 pub mod fe;
+pub mod fe_sweep;
 pub mod frequencies;
 pub mod geometry;
 pub mod ltca;

@@ -162,6 +162,13 @@ pub enum Command {
         /// stiffness scene at 1.0 and 0.7 mm flanks, scaled and unscaled, into DIR/chart-fe-*.
         #[arg(long = "chart-fe-run", value_name = "DIR")]
         chart_fe_runs: Vec<PathBuf>,
+        /// The explicit FE's speed sweep through the mesh resonance: scene high-unmodified at N
+        /// speeds from FROM to TO [rpm] (e.g. 4400:6600:8 on the paper pair, 0.8–1.2 × the
+        /// driver-held resonance; --fe-run folders at those speeds are reused), against the
+        /// lumped twin swept four times as densely: resonance speeds, the peak mesh-harmonic
+        /// amplitude and the DTE rms (fe_sweep in summary.json, fe_sweep.csv, fe_sweep.png).
+        #[arg(long, value_name = "FROM:TO:N")]
+        fe_sweep: Option<RpmRange>,
     },
     /// Re-writes the report of a `geardyn run` folder (index.html, report.md, summary.json,
     /// tables/) from what its stages wrote, e.g. after a stage was re-run.

@@ -273,5 +273,6 @@ fn stages(
             plan.paper_stiffness,
         ),
         None,
+        Vec::new(),
     )
 }

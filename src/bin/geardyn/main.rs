@@ -132,12 +132,14 @@ fn main() -> ExitCode {
             paper_stiffness,
             chart,
             chart_fe_runs,
+            fe_sweep,
         } => compare(
             &common,
             &speed_rpm,
             &fe_runs,
             (fe_stiffness.as_deref(), positions, paper_stiffness),
             chart.then_some(&chart_fe_runs[..]),
+            fe_sweep.map_or_else(Vec::new, |r| r.0),
         ),
         Command::Optimize { common, options } => optimize(&common, &options),
         Command::Report { dir } => geardyn::report::run::write(&dir)
@@ -285,6 +287,7 @@ fn compare(
     fe_runs: &[PathBuf],
     (fe_stiffness, positions, paper): (Option<&Path>, usize, bool),
     chart: Option<&[PathBuf]>,
+    fe_sweep: Vec<f64>,
 ) -> Result<()> {
     use study::compare::{self as cmp, CompareInput};
     let case = load(args, Vec::new())?;
@@ -294,7 +297,10 @@ fn compare(
         .iter()
         .map(|d| read(d))
         .collect::<Result<Vec<_>>>()?;
-    for rpm in cmp::speeds_to_run(speeds, &runs) {
+    let mut all_speeds: Vec<f64> = speeds.iter().chain(&fe_sweep).copied().collect();
+    all_speeds.sort_by(f64::total_cmp);
+    all_speeds.dedup_by(|a, b| (*a - *b).abs() < 1e-6 * b.abs());
+    for rpm in cmp::speeds_to_run(&all_speeds, &runs) {
         let at_speed = load(args, cmp::speed_overrides(rpm))?;
         let out = dir.join(format!("fe-{rpm:.0}"));
         fe_run_reusing(&at_speed, cmp::SPEED_SCENE, &out)?;
@@ -318,6 +324,7 @@ fn compare(
         .map_err(anyhow::Error::msg)?;
     let input = CompareInput {
         fe_runs: runs,
+        fe_sweep_rpm: fe_sweep,
         fe_stiffness,
     };
     let bar = staged_bar();

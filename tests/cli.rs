@@ -1023,6 +1023,22 @@ fn set_overrides_the_case_and_case_toml_is_the_effective_case() {
     }
 }
 
+/// A stiffness file over the paper pair's mesh period: k = 4e8 (1 + 0.1 cos) N/m, no TE, at
+/// 143.6 N·m (the synthetic FE k(θ) of the compare tests).
+fn write_cosine_stiffness(dir: &Path) -> std::path::PathBuf {
+    use std::f64::consts::TAU;
+    let mut table =
+        String::from("roll_angle_deg,mesh_stiffness_n_per_m,unloaded_te_um,load_torque_nm\n");
+    for j in 0..64 {
+        let theta = 10.0 * j as f64 / 64.0;
+        let k = 4.0e8 * (1.0 + 0.1 * (TAU * theta / 10.0).cos());
+        table += &format!("{:.6},{k:.6e},0,143.6\n", 20.85 + theta);
+    }
+    let stiffness = dir.join("stiffness.csv");
+    std::fs::write(&stiffness, table).unwrap();
+    stiffness
+}
+
 /// `compare` on a synthetic FE run whose DTE answer is known: 3000 rpm, a mean, three mesh
 /// harmonics (2e-5, 4e-5, 1.5e-6 rad) and a decaying 2800 Hz ring after the ramp; k(θ) a cosine
 /// table. The FE harmonics must come back as written, the lines be named, the frequencies be
@@ -1057,15 +1073,7 @@ fn compare_reads_a_known_fe_run_and_names_its_lines() {
             "statistics_start_s": 0.016, "total_wall_s": 1.0, "diverged": null}"#,
     )
     .unwrap();
-    let mut table =
-        String::from("roll_angle_deg,mesh_stiffness_n_per_m,unloaded_te_um,load_torque_nm\n");
-    for j in 0..64 {
-        let theta = 10.0 * j as f64 / 64.0;
-        let k = 4.0e8 * (1.0 + 0.1 * (TAU * theta / 10.0).cos());
-        table += &format!("{:.6},{k:.6e},0,143.6\n", 20.85 + theta);
-    }
-    let stiffness = dir.path().join("stiffness.csv");
-    std::fs::write(&stiffness, table).unwrap();
+    let stiffness = write_cosine_stiffness(dir.path());
     // A stiffness run folder for the chart: the same cosine k(θ), unscaled, 0.5 mm.
     let stiffness_run = dir.path().join("stiffness-run");
     std::fs::create_dir_all(&stiffness_run).unwrap();
@@ -1419,15 +1427,7 @@ fn compare_fe_sweep_finds_a_known_resonance() {
         args.push("--fe-run".into());
         args.push(run.into_os_string());
     }
-    let mut table =
-        String::from("roll_angle_deg,mesh_stiffness_n_per_m,unloaded_te_um,load_torque_nm\n");
-    for j in 0..64 {
-        let theta = 10.0 * j as f64 / 64.0;
-        let k = 4.0e8 * (1.0 + 0.1 * (TAU * theta / 10.0).cos());
-        table += &format!("{:.6},{k:.6e},0,143.6\n", 20.85 + theta);
-    }
-    let stiffness = dir.path().join("stiffness.csv");
-    std::fs::write(&stiffness, table).unwrap();
+    let stiffness = write_cosine_stiffness(dir.path());
     let out = dir.path().join("cmp");
     run_ok(
         geardyn()

@@ -364,22 +364,24 @@ impl MeshModel {
         DIVERGENCE_DEFLECTIONS * scale.max(1e-6)
     }
 
-    /// Whether `state` has left the model's range or is not finite: a coordinate farther from
-    /// the static state than [`MeshModel::divergence_bound`] or [`DIVERGENCE_DEFLECTIONS`] ×
-    /// its own static value (a soft bearing's or shaft's bounded resonance is not divergence).
+    /// Whether `state` has left the model's range or is not finite ([`DivergenceCheck`]). In a
+    /// loop, build the check once with [`MeshModel::divergence_check`].
     pub fn has_diverged(&self, state: &State) -> bool {
+        self.divergence_check().diverged(state)
+    }
+
+    /// The static state and each coordinate's bound, computed once (a linear solve) for the
+    /// checks of a run's periods or steps.
+    pub fn divergence_check(&self) -> DivergenceCheck {
         let reference = self.static_state();
-        let n = self.structure.dofs;
-        let finite = state.q[..n]
-            .iter()
-            .chain(&state.v[..n])
-            .all(|x| x.is_finite());
         let mesh_bound = self.divergence_bound();
-        !finite
-            || (0..n).any(|i| {
-                let bound = mesh_bound.max(DIVERGENCE_DEFLECTIONS * reference.q[i].abs());
-                !((state.q[i] - reference.q[i]).abs() <= bound)
-            })
+        DivergenceCheck {
+            dofs: self.structure.dofs,
+            bounds: std::array::from_fn(|i| {
+                mesh_bound.max(DIVERGENCE_DEFLECTIONS * reference.q[i].abs())
+            }),
+            reference,
+        }
     }
 
     /// The static state under F at the mean stiffness (TE and backlash left out): the mesh at
@@ -431,6 +433,27 @@ impl MeshModel {
             force_law: None,
             ..self.clone()
         }
+    }
+}
+
+/// Whether a state has left the model's range: a coordinate farther from the static state than
+/// [`MeshModel::divergence_bound`] or [`DIVERGENCE_DEFLECTIONS`] × its own static value (a soft
+/// bearing's or shaft's bounded resonance is not divergence), or a value not finite.
+#[derive(Debug, Clone, Copy)]
+pub struct DivergenceCheck {
+    dofs: usize,
+    reference: State,
+    bounds: [f64; MAX_DOFS],
+}
+
+impl DivergenceCheck {
+    pub fn diverged(&self, state: &State) -> bool {
+        let n = self.dofs;
+        let finite = state.q[..n]
+            .iter()
+            .chain(&state.v[..n])
+            .all(|x| x.is_finite());
+        !finite || (0..n).any(|i| !((state.q[i] - self.reference.q[i]).abs() <= self.bounds[i]))
     }
 }
 
@@ -493,6 +516,7 @@ pub fn steady_state(
     max_periods: usize,
 ) -> SteadyState {
     let static_deflection = (model.force / model.mesh.mean()).abs().max(1e-30);
+    let divergence = model.divergence_check();
     let mut state = initial.into();
     let mut out = SteadyState {
         periods: 0,
@@ -520,7 +544,7 @@ pub fn steady_state(
         );
         out.periods = period;
         out.start = start;
-        if model.has_diverged(&state) {
+        if divergence.diverged(&state) {
             out.diverged = true;
             return out;
         }
@@ -678,6 +702,7 @@ pub fn periodic_orbit(
     let n = active.len();
     let omega = model.highest_frequency();
     let static_deflection = (model.force / model.mesh.mean()).abs().max(1e-9);
+    let divergence = model.divergence_check();
     let map = |s: State| integrate_period(model, driver_speed, steps_per_period, s, |_, _, _| {});
     // r in the balanced coordinates (q, v/ω), over the active components.
     let residual = |x: &State, end: &State| {
@@ -700,7 +725,7 @@ pub fn periodic_orbit(
     let mut x = guess;
     for iteration in 0..=SHOOTING_ITERATIONS {
         let (end, jacobian) = period_map_jacobian(model, driver_speed, steps_per_period, x);
-        if model.has_diverged(&end) {
+        if divergence.diverged(&end) {
             return None;
         }
         let r = residual(&x, &end);
@@ -718,7 +743,7 @@ pub fn periodic_orbit(
         for _ in 0..=SHOOTING_HALVINGS {
             let trial = moved(&x, &step, alpha);
             let end = map(trial);
-            if !model.has_diverged(&end) && residual(&trial, &end).norm() < norm {
+            if !divergence.diverged(&end) && residual(&trial, &end).norm() < norm {
                 accepted = Some(trial);
                 break;
             }
@@ -814,6 +839,7 @@ pub fn run_up(model: &MeshModel, from: f64, to: f64, duration: f64, max_samples:
     let decimate = steps.div_ceil(max_samples.max(1)).max(1);
     let theta = |t: f64| from * t + 0.5 * alpha * t * t;
     let derivative = |t: f64, s: &State| model.derivative(theta(t), s);
+    let divergence = model.divergence_check();
     let mut state = model.static_state();
     let mut out = RunUp {
         steps,
@@ -832,7 +858,7 @@ pub fn run_up(model: &MeshModel, from: f64, to: f64, duration: f64, max_samples:
             break;
         }
         state = rk4_step(derivative, t, &state, h);
-        if model.has_diverged(&state) {
+        if divergence.diverged(&state) {
             out.diverged_at = Some(t + h);
             break;
         }

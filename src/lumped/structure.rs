@@ -611,36 +611,55 @@ mod tests {
         }
     }
 
-    /// Elastic bodies: the static TE is the mesh deflection plus each body's twist under the
-    /// load, c_b F, whether a hub is a coordinate (the held driver's) or condensed (free).
-    #[test]
-    fn static_transmission_error_holds_the_bodies_twist() {
-        let rb = [0.05, 0.08];
+    /// A pair of elastic gears (base radii 50 / 80 mm, hub 10 % of 3e-3 / 7e-3 kg·m², body
+    /// compliances 2e-8 / 5e-8 rad/(N·m)) under `drive` with `shafts` and `bearings`.
+    fn elastic_pair(
+        drive: Drive,
+        shafts: [Option<Shaft>; 2],
+        bearings: Option<Bearings>,
+    ) -> Structure {
         let body = |i: f64, c: f64| GearBody {
             hub_inertia: 0.1 * i,
             rim_inertia: 0.9 * i,
             torsional_compliance: c,
         };
-        let (c1, c2) = (2e-8, 5e-8);
-        let (force, delta) = (3000.0, 7e-6);
+        Structure::drivetrain(&DrivetrainSpec {
+            drive,
+            base_radii: RB,
+            gears: [body(3e-3, TWIST[0]), body(7e-3, TWIST[1])],
+            shafts,
+            bearings,
+            spring_damping_ratio: 0.02,
+        })
+        .unwrap()
+    }
+
+    const RB: [f64; 2] = [0.05, 0.08];
+    const TWIST: [f64; 2] = [2e-8, 5e-8];
+    const FORCE: f64 = 3000.0;
+    const DELTA: f64 = 7e-6;
+
+    /// The static state of `s` at mesh deflection δ under F: δ comes back (1e-12), and the TE
+    /// hub to hub is δ + F(c₁r_b1² + c₂r_b2²) + F·`extra_compliance` (1e-9).
+    fn assert_static_te(s: &Structure, extra_compliance: f64, what: &str) {
+        let q = s.static_coordinates(FORCE, DELTA);
+        assert!((s.mesh_of(&q) / DELTA - 1.0).abs() < 1e-12);
+        let te = s.te_of(&q) + FORCE * s.te_per_force;
+        let twist = TWIST[0] * RB[0] * RB[0] + TWIST[1] * RB[1] * RB[1];
+        let expected = DELTA + FORCE * (twist + extra_compliance);
+        assert!(
+            (te / expected - 1.0).abs() < 1e-9,
+            "{what}: {te} vs {expected}"
+        );
+    }
+
+    /// Elastic bodies: the static TE is the mesh deflection plus each body's twist under the
+    /// load, c_b F, whether a hub is a coordinate (the held driver's) or condensed (free).
+    #[test]
+    fn static_transmission_error_holds_the_bodies_twist() {
         for drive in [Drive::Torque, Drive::Speed] {
-            let s = Structure::drivetrain(&DrivetrainSpec {
-                drive,
-                base_radii: rb,
-                gears: [body(3e-3, c1), body(7e-3, c2)],
-                shafts: [None; 2],
-                bearings: None,
-                spring_damping_ratio: 0.02,
-            })
-            .unwrap();
-            let q = s.static_coordinates(force, delta);
-            assert!((s.mesh_of(&q) / delta - 1.0).abs() < 1e-12);
-            let te = s.te_of(&q) + force * s.te_per_force;
-            let expected = delta + force * (c1 * rb[0] * rb[0] + c2 * rb[1] * rb[1]);
-            assert!(
-                (te / expected - 1.0).abs() < 1e-9,
-                "{drive:?}: {te} vs {expected}"
-            );
+            let s = elastic_pair(drive, [None; 2], None);
+            assert_static_te(&s, 0.0, drive.name());
             // The held driver's hub is the ground, its rim a coordinate; free hubs condense.
             assert_eq!(s.dofs, if drive == Drive::Speed { 2 } else { 1 });
         }
@@ -652,49 +671,25 @@ mod tests {
     /// shafts outside the hubs adding nothing — and the mesh deflection is δ; both drives.
     #[test]
     fn static_transmission_error_with_shafts_and_bearings() {
-        let rb = [0.05, 0.08];
-        let body = |i: f64, c: f64| GearBody {
-            hub_inertia: 0.1 * i,
-            rim_inertia: 0.9 * i,
-            torsional_compliance: c,
-        };
-        let (c1, c2) = (2e-8, 5e-8);
-        let (force, delta) = (3000.0, 7e-6);
         for drive in [Drive::Torque, Drive::Speed] {
-            let s = Structure::drivetrain(&DrivetrainSpec {
+            let shaft = |stiffness: f64, end_inertia: f64| {
+                Some(Shaft {
+                    stiffness,
+                    end_inertia,
+                })
+            };
+            let s = elastic_pair(
                 drive,
-                base_radii: rb,
-                gears: [body(3e-3, c1), body(7e-3, c2)],
-                shafts: [
-                    Some(Shaft {
-                        stiffness: 2e5,
-                        end_inertia: 2e-2,
-                    }),
-                    Some(Shaft {
-                        stiffness: 3e5,
-                        end_inertia: 5e-2,
-                    }),
-                ],
-                bearings: Some(Bearings {
+                [shaft(2e5, 2e-2), shaft(3e5, 5e-2)],
+                Some(Bearings {
                     mass: [2.0, 3.0],
                     stiffness: [4e8, 6e8],
                     damping: [100.0, 100.0],
                 }),
-                spring_damping_ratio: 0.02,
-            })
-            .unwrap();
+            );
             // motor, hub1, rim1, rim2, hub2, load, y1, y2 less the rigid rotation or the motor.
             assert_eq!(s.dofs, 7, "{:?}", s.names);
-            let q = s.static_coordinates(force, delta);
-            assert!((s.mesh_of(&q) / delta - 1.0).abs() < 1e-12);
-            let te = s.te_of(&q) + force * s.te_per_force;
-            let expected = delta
-                + force * (c1 * rb[0] * rb[0] + c2 * rb[1] * rb[1])
-                + force * (1.0 / 4e8 + 1.0 / 6e8);
-            assert!(
-                (te / expected - 1.0).abs() < 1e-9,
-                "{drive:?}: {te} vs {expected}"
-            );
+            assert_static_te(&s, 1.0 / 4e8 + 1.0 / 6e8, drive.name());
             assert_eq!(s.te_per_force, 0.0);
         }
     }

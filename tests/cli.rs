@@ -1448,8 +1448,26 @@ fn compare_fe_sweep_finds_a_known_resonance() {
     let peak = a / (2.0 * zeta * (1.0 - zeta * zeta).sqrt());
     let got_peak = sweep["peak_dte_mesh_amplitude_fe_rad"].as_f64().unwrap();
     assert!((got_peak / peak - 1.0).abs() < 2e-2, "{got_peak} vs {peak}");
-    assert_eq!(sweep["speeds"].as_array().unwrap().len(), 5);
-    assert_eq!(sweep["lumped_curve"].as_array().unwrap().len(), 20);
+    let fe = sweep["fe"].as_array().unwrap();
+    assert_eq!(fe.len(), 5);
+    // The back flanks (zero backlash: DTE < 0) carry the share of the cycle where
+    // 1.2e-4 + A cos φ < 0: acos(1.2e-4/A)/π, 0.2952 at the undamped resonance (A = a/2ζ); a
+    // steady cosine neither grows nor decays.
+    let at_resonance = &fe[2];
+    let share = at_resonance["back_flank_share"].as_f64().unwrap();
+    let expected = (1.2e-4f64 / (a / (2.0 * zeta))).acos() / std::f64::consts::PI;
+    assert!((share - expected).abs() < 1e-2, "{share} vs {expected}");
+    assert_eq!(fe[0]["back_flank_share"].as_f64().unwrap(), 0.0);
+    for s in fe {
+        let growth = s["growth"].as_f64().unwrap();
+        assert!((growth - 1.0).abs() < 0.05, "{growth}");
+    }
+    let models = sweep["models"].as_array().unwrap();
+    assert_eq!(models.len(), 2);
+    for m in models {
+        assert_eq!(m["dense"].as_array().unwrap().len(), 20);
+        assert_eq!(m["at_fe_speeds"].as_array().unwrap().len(), 5);
+    }
     for key in [
         "resonance_rpm_lumped",
         "peak_dte_mesh_amplitude_rel_err",
@@ -1466,5 +1484,5 @@ fn compare_fe_sweep_finds_a_known_resonance() {
         assert!(out.join(file).exists(), "{file}");
     }
     let md = std::fs::read_to_string(out.join("table.md")).unwrap();
-    assert!(md.contains("FE speed sweep (5 speeds)"), "{md}");
+    assert!(md.contains("FE speed sweep (5 speeds"), "{md}");
 }

@@ -377,59 +377,116 @@ pub fn write(dir: OutputDir, case: &Case, summary: &CompareSummary) -> Result<St
     Ok(table)
 }
 
-/// The FE speed sweep: fe_sweep.csv (per FE speed), fe_sweep_lumped.csv (the twin's dense
-/// curve), fe_sweep.{png,svg} (the twin's curves with the FE's points as markers) and its
-/// Markdown table.
+/// The FE speed sweep: fe_sweep.csv (per FE speed: the FE and each lumped model there),
+/// fe_sweep_lumped.csv (each model's dense curves: from rest, continued up, continued down),
+/// fe_sweep.{png,svg} (the models' curves with the FE's points as markers) and its Markdown
+/// table.
 fn write_fe_sweep(
     dir: OutputDir,
     case: &Case,
     sweep: &crate::study::fe_sweep::FeSweep,
 ) -> Result<String, ReportError> {
     let um = |rad: f64| rad * 1e6;
+    let mut header: Vec<String> = [
+        "driver_rpm",
+        "fe_mesh_amplitude_urad",
+        "fe_dte_rms_urad",
+        "fe_dte_peak_to_peak_urad",
+        "fe_growth",
+        "fe_back_flank_share",
+    ]
+    .map(String::from)
+    .to_vec();
+    for m in &sweep.models {
+        for column in [
+            "mesh_amplitude_urad",
+            "dte_rms_urad",
+            "dte_rms_rel_err",
+            "diverged",
+        ] {
+            header.push(format!("{}_{column}", m.key));
+        }
+    }
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
     dir.csv(
         "fe_sweep.csv",
-        &[
-            "driver_rpm",
-            "fe_mesh_amplitude_urad",
-            "lumped_mesh_amplitude_urad",
-            "fe_dte_rms_urad",
-            "lumped_dte_rms_urad",
-            "dte_rms_rel_err",
-            "lumped_converged",
-        ],
-        sweep.speeds.iter().map(|s| {
-            vec![
+        &header,
+        sweep.fe.iter().enumerate().map(|(i, s)| {
+            let mut row = vec![
                 format!("{:.2}", s.speed_rpm),
-                format!("{:.5}", um(s.fe_mesh_amplitude_rad)),
-                format!("{:.5}", um(s.lumped_mesh_amplitude_rad)),
-                format!("{:.5}", um(s.fe_dte_rms_rad)),
-                format!("{:.5}", um(s.lumped_dte_rms_rad)),
-                format!("{:.4}", s.dte_rms_rel_err),
-                s.lumped_converged.to_string(),
-            ]
+                format!("{:.5}", um(s.mesh_amplitude_rad)),
+                format!("{:.5}", um(s.dte_rms_rad)),
+                format!("{:.5}", um(s.dte_peak_to_peak_rad)),
+                format!("{:.4}", s.growth),
+                format!("{:.4}", s.back_flank_share),
+            ];
+            for m in &sweep.models {
+                let l = &m.at_fe_speeds[i];
+                row.extend([
+                    format!("{:.5}", um(l.mesh_amplitude_rad)),
+                    format!("{:.5}", um(l.dte_rms_rad)),
+                    format!("{:.4}", m.dte_rms_rel_err[i]),
+                    l.diverged.to_string(),
+                ]);
+            }
+            row
         }),
     )?;
+    let rows: Vec<Vec<String>> = sweep
+        .models
+        .iter()
+        .flat_map(|m| {
+            let rest = m
+                .dense
+                .iter()
+                .map(|p| ("rest", p.speed_rpm, p.mesh_amplitude_rad, p.dte_rms_rad));
+            let up = m.curve_up.iter().map(|c| ("up", c.0, c.1, c.2));
+            let down = m.curve_down.iter().map(|c| ("down", c.0, c.1, c.2));
+            rest.chain(up)
+                .chain(down)
+                .map(|(curve, rpm, a, rms)| {
+                    vec![
+                        m.key.clone(),
+                        curve.to_string(),
+                        format!("{rpm:.2}"),
+                        format!("{:.5}", um(a)),
+                        format!("{:.5}", um(rms)),
+                    ]
+                })
+                .collect::<Vec<_>>()
+        })
+        .collect();
     dir.csv(
         "fe_sweep_lumped.csv",
-        &["driver_rpm", "mesh_amplitude_urad", "dte_rms_urad"],
-        sweep.lumped_curve.iter().map(|c| {
-            vec![
-                format!("{:.2}", c.0),
-                format!("{:.5}", um(c.1)),
-                format!("{:.5}", um(c.2)),
-            ]
-        }),
+        &[
+            "model",
+            "curve",
+            "driver_rpm",
+            "mesh_amplitude_urad",
+            "dte_rms_urad",
+        ],
+        rows.into_iter(),
     )?;
-    let curve = |pick: fn(&(f64, f64, f64)) -> f64| -> Vec<(f64, f64)> {
+    let mut series = Vec::new();
+    for (i, m) in sweep.models.iter().enumerate() {
+        let settled = |pick: fn(&crate::study::fe_sweep::LumpedSpeed) -> f64| {
+            m.dense
+                .iter()
+                .filter(|p| !p.diverged)
+                .map(|p| (p.speed_rpm, um(pick(p))))
+                .collect::<Vec<_>>()
+        };
+        series.push((
+            format!("{}, 1st mesh harmonic", m.label),
+            settled(|p| p.mesh_amplitude_rad),
+        ));
+        if i == 0 {
+            series.push((format!("{}, rms", m.label), settled(|p| p.dte_rms_rad)));
+        }
+    }
+    let points = |pick: fn(&crate::study::fe_sweep::FeSpeed) -> f64| -> Vec<(f64, f64)> {
         sweep
-            .lumped_curve
-            .iter()
-            .map(|c| (c.0, um(pick(c))))
-            .collect()
-    };
-    let points = |pick: fn(&crate::study::fe_sweep::SweepSpeed) -> f64| -> Vec<(f64, f64)> {
-        sweep
-            .speeds
+            .fe
             .iter()
             .map(|s| (s.speed_rpm, um(pick(s))))
             .collect()
@@ -438,37 +495,61 @@ fn write_fe_sweep(
         "fe_sweep",
         &LinePlot {
             title: format!(
-                "{}: explicit FE through the resonance (markers) against the lumped twin (lines)",
+                "{}: explicit FE through the resonance (markers) against the lumped models (lines, from rest)",
                 case.name()
             ),
             x_label: "driver speed [rpm]".into(),
             y_label: "DTE of the driven gear [urad]".into(),
-            series: vec![
-                ("lumped, 1st mesh harmonic".into(), curve(|c| c.1)),
-                ("lumped, rms".into(), curve(|c| c.2)),
-            ],
+            series,
             y_range: None,
             markers: vec![
                 (
                     "FE, 1st mesh harmonic".into(),
-                    points(|s| s.fe_mesh_amplitude_rad),
+                    points(|s| s.mesh_amplitude_rad),
                 ),
-                ("FE, rms".into(), points(|s| s.fe_dte_rms_rad)),
+                ("FE, rms".into(), points(|s| s.dte_rms_rad)),
             ],
         },
     )?;
-    Ok(format!(
-        "\nFE speed sweep ({} speeds): resonance {:.0} rpm (FE) / {:.0} rpm (lumped), {:+.2} %; peak 1st mesh harmonic {:.3} / {:.3} urad, {:+.1} %; DTE rms largest difference {:.1} %. {}\n",
-        sweep.speeds.len(),
+    let mut text = format!(
+        "\nFE speed sweep ({} speeds, scene {}): FE resonance {:.0} rpm (fitted ζ {:.3}), peak 1st mesh harmonic {:.3} urad. {}\n",
+        sweep.fe.len(),
+        crate::study::compare::SPEED_SCENE,
         sweep.resonance_rpm_fe,
-        sweep.resonance_rpm_lumped,
-        100.0 * sweep.resonance_rpm_rel_err,
+        sweep.fitted_damping_ratio_fe,
         um(sweep.peak_dte_mesh_amplitude_fe_rad),
-        um(sweep.peak_dte_mesh_amplitude_lumped_rad),
-        100.0 * sweep.peak_dte_mesh_amplitude_rel_err,
-        100.0 * sweep.dte_rms_max_rel_err,
         sweep.settling_note
-    ))
+    );
+    for m in &sweep.models {
+        text += &format!(
+            "\n* {}: resonance {:.0} rpm ({:+.2} %), peak 1st mesh harmonic {:.3} urad ({:+.1} %), DTE rms largest difference {:.1} % where it settled{}{}",
+            m.label,
+            m.resonance_rpm,
+            100.0 * m.resonance_rpm_rel_err,
+            um(m.peak_dte_mesh_amplitude_rad),
+            100.0 * m.peak_dte_mesh_amplitude_rel_err,
+            100.0 * m.dte_rms_max_rel_err,
+            match m.diverged_at_fe_rpm.is_empty() {
+                true => String::new(),
+                false => format!("; diverged at the FE speeds {:?} rpm", m.diverged_at_fe_rpm),
+            },
+            m.unstable_band_rpm.map_or(String::new(), |(lo, hi)| format!(
+                "; unstable (the sweep diverged) at {lo:.0}–{hi:.0} rpm"
+            )),
+        );
+    }
+    for b in &sweep.unstable_band_runs {
+        text += &format!(
+            "\n* FE at {:.0} rpm ({} the {} band {:.0}–{:.0} rpm): {}",
+            b.speed_rpm,
+            if b.inside { "inside" } else { "nearest to" },
+            b.model,
+            b.band_rpm.0,
+            b.band_rpm.1,
+            b.outcome
+        );
+    }
+    Ok(text + "\n")
 }
 
 /// Reads an explicit FE stiffness run (`geardyn fe --scene stiffness`): k(θ) from its

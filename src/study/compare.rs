@@ -41,7 +41,7 @@ use crate::lumped::{floquet_frequency, steady_state, Drive, MeshModel};
 use crate::signal::{
     amplitude_spectrum, hann_amplitude_spectrum, harmonic_amplitudes, spectrum_peaks,
 };
-use crate::stiffness::MeshStiffness;
+use crate::stiffness::{ForceLaw, MeshStiffness};
 
 use super::lumped::gear_inertias;
 use super::{Progress, StudyError};
@@ -167,6 +167,8 @@ pub struct SpeedComparison {
     pub rigid_harmonic_error_rel: Vec<f64>,
     pub lumped_converged: bool,
     pub lumped_separated: bool,
+    /// The twin's response grew without bound here (its numbers are NaN).
+    pub lumped_diverged: bool,
     /// f_mesh over the FE modal mesh mode (driver held).
     pub mesh_over_mode: f64,
     #[serde(skip)]
@@ -283,6 +285,7 @@ pub fn body_twist(case: &Case) -> [f64; 2] {
 pub fn lumped_twin(
     case: &Case,
     mesh: MeshStiffness,
+    law: Option<ForceLaw>,
     (drive, elastic): (Drive, bool),
     torque: f64,
     damping: f64,
@@ -297,7 +300,7 @@ pub fn lumped_twin(
         true => body_twist(case).iter().sum(),
         false => 0.0,
     };
-    let (mesh, _) = super::lumped::to_rims(mesh, None, twist)?;
+    let (mesh, force_law) = super::lumped::to_rims(mesh, law, twist)?;
     Ok(MeshModel {
         structure,
         back_reflection: Some(super::lumped::back_reflection(pair, &mesh)),
@@ -305,7 +308,7 @@ pub fn lumped_twin(
         damping,
         force: torque / pair.gears[1].base_radius,
         backlash: Some(pair.backlash_normal.max(0.0)),
-        force_law: None,
+        force_law,
     })
 }
 
@@ -392,7 +395,7 @@ pub fn run(
     let damping_of =
         |drive: Drive| 2.0 * zeta * (k_secant * drive.effective_mass(inertias, rb)).sqrt();
     let twin = |drive: Drive, elastic: bool, mesh: MeshStiffness| {
-        lumped_twin(case, mesh, (drive, elastic), torque, damping_of(drive))
+        lumped_twin(case, mesh, None, (drive, elastic), torque, damping_of(drive))
     };
     let constant = |k: f64| MeshStiffness::constant("mean", input.fe_stiffness.period(), k);
     // The case's lumped model (its stiffness source and force law on the case's mesh, what
@@ -483,7 +486,36 @@ pub fn run(
         .collect::<Result<_, _>>()?;
     let fe_sweep = match input.fe_sweep_rpm.as_slice() {
         [] => None,
-        rpms => Some(fe_sweep(case, &rim_model, &speeds, rpms)?),
+        rpms => {
+            // The case's model (the LTCA's force law on the case's mesh, as `sweep` integrates
+            // it) on the FE's boundary conditions and damping.
+            progress("lumped model of the FE sweep", 0, 1);
+            let ltca = super::ltca::model(case, &unmodified)?;
+            let (mesh, law, _) =
+                super::lumped::ltca_tables(case, &ltca, torque, "ltca (relief none)")?;
+            let case_model = lumped_twin(
+                case,
+                mesh,
+                Some(law),
+                (Drive::Speed, true),
+                torque,
+                damping_of(Drive::Speed),
+            )?;
+            progress("FE sweep against the lumped models", 0, 1);
+            let models = [
+                (
+                    "case_model",
+                    "case model (LTCA force law, elastic bodies)",
+                    &case_model,
+                ),
+                (
+                    "fe_k_twin",
+                    "FE-stiffness twin (the FE's k(θ), secant)",
+                    &rim_model,
+                ),
+            ];
+            Some(fe_sweep(case, input, &models, rpms)?)
+        }
     };
     let first = primary.map(|i| &speeds[i]);
     let paper = match (paper_stiffness, primary) {
@@ -585,23 +617,23 @@ fn compare_speed(
     let harmonics = |model: &MeshModel| {
         let steps = crate::sweep::steps_per_period(model, speed);
         let steady = steady_state(model, speed, steps, model.static_state(), 1e-9, 2000);
-        if steady.diverged {
-            return Err(lumped_diverged(run.speed_rpm));
-        }
         let lines = amplitude_spectrum(&steady.displacement);
-        let rms = crate::signal::rms_about_mean(&steady.displacement) / rb2;
+        // A response that grew without bound has no amplitudes: NaN, flagged, not fatal (the
+        // FE's outcome there is what the user came for).
+        let lost = if steady.diverged { f64::NAN } else { 1.0 };
+        let rms = lost * crate::signal::rms_about_mean(&steady.displacement) / rb2;
         let amplitudes: Vec<f64> = (0..HARMONICS)
-            .map(|n| lines.get(n).copied().unwrap_or(0.0) / rb2)
+            .map(|n| lost * lines.get(n).copied().unwrap_or(0.0) / rb2)
             .collect();
         let errors: Vec<f64> = amplitudes
             .iter()
             .zip(&fe_harmonics_rad)
             .map(|(l, f)| l / f - 1.0)
             .collect();
-        Ok((steady, amplitudes, errors, rms))
+        (steady, amplitudes, errors, rms)
     };
-    let (steady, lumped_harmonics_rad, harmonic_error_rel, lumped_dte_rms_rad) = harmonics(model)?;
-    let (_, lumped_rigid_harmonics_rad, rigid_harmonic_error_rel, _) = harmonics(rigid)?;
+    let (steady, lumped_harmonics_rad, harmonic_error_rel, lumped_dte_rms_rad) = harmonics(model);
+    let (_, lumped_rigid_harmonics_rad, rigid_harmonic_error_rel, _) = harmonics(rigid);
     Ok(SpeedComparison {
         speed_rpm: run.speed_rpm,
         mesh_hz,
@@ -620,48 +652,35 @@ fn compare_speed(
         rigid_harmonic_error_rel,
         lumped_converged: steady.converged,
         lumped_separated: steady.separated,
+        lumped_diverged: steady.diverged,
         mesh_over_mode: mesh_hz / mesh_mode_hz,
         fe_spectrum,
         fe_early_spectrum,
     })
 }
 
-/// The FE sweep of `speeds` at `rpms` against the lumped `twin` swept four times as densely over
-/// the same range (up-sweep; a divergence ends the curve where it happened).
+/// The FE runs of `input` at `rpms` against `models`, the case's
+/// model first ([`super::fe_sweep::run`]).
 fn fe_sweep(
     case: &Case,
-    twin: &MeshModel,
-    speeds: &[SpeedComparison],
+    input: &CompareInput,
+    models: &[(&str, &str, &MeshModel)],
     rpms: &[f64],
 ) -> Result<super::fe_sweep::FeSweep, StudyError> {
-    let at: Vec<SpeedComparison> = speeds
-        .iter()
-        .filter(|s| rpms.iter().any(|r| (r - s.speed_rpm).abs() < 1e-6 * r))
-        .cloned()
-        .collect();
-    let (lo, hi) = rpms
-        .iter()
-        .fold((f64::INFINITY, 0.0f64), |(l, h), r| (l.min(*r), h.max(*r)));
-    let n = 4 * rpms.len();
-    let dense: Vec<f64> = (0..n)
-        .map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64)
-        .collect();
-    let done = crate::sweep::continue_sweep(
-        twin,
-        &dense,
-        crate::sweep::SweepProgress::start(twin),
-        &|| false,
-    );
     let rb2 = case.pair.gears[1].base_radius;
-    let curve = done
-        .up
+    let back_contact = -case.pair.backlash_normal.max(0.0) / rb2;
+    let teeth = case.pair.gears[0].teeth() as f64;
+    let mut fe: Vec<super::fe_sweep::FeSpeed> = input
+        .fe_runs
         .iter()
-        .map(|p| (p.driver_speed_rpm, p.harmonics[0] / rb2, p.dte_rms / rb2))
+        .filter(|run| rpms.iter().any(|r| (r - run.speed_rpm).abs() < 1e-6 * r))
+        .map(|run| super::fe_sweep::FeSpeed::measure(run, teeth, back_contact))
         .collect();
-    let decay_time = 1.0 / (case.fe.mesh_damping_ratio * twin.natural_frequency());
-    super::fe_sweep::summarize(&at, curve, decay_time).ok_or_else(|| {
+    fe.sort_by(|a, b| a.speed_rpm.total_cmp(&b.speed_rpm));
+    let decay_time = 1.0 / (case.fe.mesh_damping_ratio * models[0].2.natural_frequency());
+    super::fe_sweep::run(fe, models, rb2, decay_time).ok_or_else(|| {
         StudyError::Input(
-            "--fe-sweep needs at least three FE speeds with a mesh-harmonic response".into(),
+            "--fe-sweep needs at least three FE speeds with a mesh-harmonic response, and lumped models that settle at three of four times as many".into(),
         )
     })
 }

@@ -1,52 +1,183 @@
-//! The explicit FE's speed sweep through the mesh resonance against the lumped twin
+//! The explicit FE's speed sweep through the mesh resonance against the lumped model
 //! (`geardyn compare --fe-sweep FROM:TO:N`).
 //!
 //! At each FE speed: the DTE's first mesh-harmonic amplitude and its rms about the mean, in the
-//! statistics window after the ramp's ringing ([`super::compare::SpeedComparison`]). The lumped
-//! twin (speed drive, elastic bodies, the FE's k(θ) and mesh damping, [`super::compare`]) is swept
-//! over the same range four times as densely. The resonance speed of each is the peak of a
-//! one-degree-of-freedom response |X(n)| = A/√((1 − r²)² + (2ζr)²), r = n/n_r, fitted to the
-//! first-harmonic amplitudes by least squares ([`resonance_fit`]): between eight FE speeds the
-//! fit places the peak where the samples' shape puts it, not at the nearest sample.
+//! statistics window after the ramp's ringing (as [`super::compare`] reads each run), whether it
+//! grew over that window, and how much of it the back flanks carried. Two lumped models on the
+//! FE's boundary conditions (speed drive, elastic bodies, the FE's mesh damping, no shafts or
+//! bearings) are set against it, each swept up and down over the same range four times as
+//! densely and solved at each FE speed from rest (as the FE starts):
+//! * the case's model: the LTCA's load-dependent force law W(θ, δ), what `sweep` and `run`
+//!   integrate — the headline numbers;
+//! * the FE-stiffness twin: the FE's own k(θ) as a secant law, the seed paper's chain.
+//!
+//! The resonance speed of each is the peak of a one-degree-of-freedom response
+//! |X(n)| = A/√((1 − r²)² + (2ζr)²), r = n/n_r, fitted to the first-harmonic amplitudes by
+//! least squares ([`resonance_fit`]): between eight FE speeds the fit places the peak where the
+//! samples' shape puts it, not at the nearest sample. Where a model's sweep diverges (a
+//! zero-backlash pair's flank switching, validation/lumped-twin), the speeds it diverged at in
+//! either direction form its unstable band, and the FE runs in or next to it are reported as
+//! measured.
 
 use serde::Serialize;
 
-use super::compare::SpeedComparison;
+use super::compare::FeDte;
+use crate::lumped::{steady_state, MeshModel};
+use crate::signal::{amplitude_spectrum, harmonic_amplitudes, rms_about_mean};
 
-/// One speed of the FE sweep against the lumped twin.
+/// What the FE did at one speed of the sweep (its statistics window).
 #[derive(Debug, Clone, Serialize)]
-pub struct SweepSpeed {
+pub struct FeSpeed {
     pub speed_rpm: f64,
-    /// First mesh-harmonic amplitude and rms about the mean of the DTE [rad].
-    pub fe_mesh_amplitude_rad: f64,
-    pub lumped_mesh_amplitude_rad: f64,
-    pub fe_dte_rms_rad: f64,
-    pub lumped_dte_rms_rad: f64,
-    pub dte_rms_rel_err: f64,
-    /// Whether the lumped twin reached a periodic steady state there.
-    pub lumped_converged: bool,
-    /// The FE's statistics window [s] (after the ramp's ringing).
-    pub fe_window_s: (f64, f64),
+    /// First mesh-harmonic amplitude, rms about the mean and peak-to-peak of the DTE [rad].
+    pub mesh_amplitude_rad: f64,
+    pub dte_rms_rad: f64,
+    pub dte_peak_to_peak_rad: f64,
+    /// The DTE's mean over the window [rad] (the loaded static level).
+    pub dte_mean_rad: f64,
+    /// The statistics window [s] (after the ramp's ringing).
+    pub window_s: (f64, f64),
+    /// rms about the mean of the window's last third over its first third: about 1 when the
+    /// response settled, above 1 while it grows.
+    pub growth: f64,
+    /// Share of the window with the DTE below the back flanks' first contact, −j/r_b2 from the
+    /// unloaded kinematic position (j the normal backlash): the back flanks loaded. Unmodified
+    /// flanks have no unloaded TE, and at j = 0 both flanks touch at DTE = 0.
+    pub back_flank_share: f64,
 }
 
-/// The FE sweep's headline numbers (`fe_sweep` in compare's summary).
+impl FeSpeed {
+    /// The FE `run` at one speed of the sweep; `teeth`: the driver's (f_mesh = z₁ n/60);
+    /// `back_contact_rad`: the DTE at which the back flanks touch (−j/r_b2).
+    pub fn measure(run: &FeDte, teeth: f64, back_contact_rad: f64) -> Self {
+        let (_, start) = run.window_starts();
+        let window = &run.dte[start..];
+        let third = window.len() / 3;
+        let growth = match third {
+            0 => f64::NAN,
+            _ => {
+                rms_about_mean(&window[window.len() - third..]) / rms_about_mean(&window[..third])
+            }
+        };
+        let (lo, hi) = window
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+                (l.min(*v), h.max(*v))
+            });
+        let back = window.iter().filter(|v| **v < back_contact_rad).count();
+        let mesh_hz = run.speed_rpm / 60.0 * teeth;
+        FeSpeed {
+            speed_rpm: run.speed_rpm,
+            mesh_amplitude_rad: harmonic_amplitudes(window, run.dt, mesh_hz, 1)[0],
+            dte_rms_rad: rms_about_mean(window),
+            dte_peak_to_peak_rad: hi - lo,
+            dte_mean_rad: window.iter().sum::<f64>() / window.len().max(1) as f64,
+            window_s: (start as f64 * run.dt, run.dte.len() as f64 * run.dt),
+            growth,
+            back_flank_share: back as f64 / window.len().max(1) as f64,
+        }
+    }
+}
+
+/// A lumped model's periodic steady state at one speed, reached from the static state (as the
+/// FE's run starts from its load ramp, not from the speed before).
+#[derive(Debug, Clone, Serialize)]
+pub struct LumpedSpeed {
+    pub speed_rpm: f64,
+    /// First mesh-harmonic amplitude and rms about the mean of the DTE [rad] (NaN: diverged).
+    pub mesh_amplitude_rad: f64,
+    pub dte_rms_rad: f64,
+    pub converged: bool,
+    pub separated: bool,
+    pub diverged: bool,
+}
+
+/// [`LumpedSpeed`] of `model` at `rpm`; `rb2` turns the DTE along the line of action into the
+/// driven gear's angle.
+pub fn lumped_at(model: &MeshModel, rpm: f64, rb2: f64) -> LumpedSpeed {
+    let speed = rpm * std::f64::consts::TAU / 60.0;
+    let steps = crate::sweep::steps_per_period(model, speed);
+    let steady = steady_state(model, speed, steps, model.static_state(), 1e-9, 2000);
+    let (amplitude, rms) = match steady.diverged {
+        true => (f64::NAN, f64::NAN),
+        false => (
+            amplitude_spectrum(&steady.displacement)
+                .first()
+                .copied()
+                .unwrap_or(0.0)
+                / rb2,
+            rms_about_mean(&steady.displacement) / rb2,
+        ),
+    };
+    LumpedSpeed {
+        speed_rpm: rpm,
+        mesh_amplitude_rad: amplitude,
+        dte_rms_rad: rms,
+        converged: steady.converged,
+        separated: steady.separated,
+        diverged: steady.diverged,
+    }
+}
+
+/// One lumped model against the FE sweep.
+#[derive(Debug, Clone, Serialize)]
+pub struct ModelSweep {
+    /// Short name (CSV columns) and what it is.
+    pub key: String,
+    pub label: String,
+    /// From rest at four times the FE's speeds over the same range (the fit's points).
+    pub dense: Vec<LumpedSpeed>,
+    /// The continued sweeps (each speed from the one before), ascending speed: (rpm, first
+    /// mesh-harmonic amplitude [rad], DTE rms [rad]); a direction that diverged ends there.
+    pub curve_up: Vec<(f64, f64, f64)>,
+    pub curve_down: Vec<(f64, f64, f64)>,
+    /// At the FE's speeds, from rest, and its DTE rms against the FE's (lumped/FE − 1).
+    pub at_fe_speeds: Vec<LumpedSpeed>,
+    pub dte_rms_rel_err: Vec<f64>,
+    /// The fitted resonance of the dense points [rpm], lumped/FE − 1, and the fit's ζ.
+    pub resonance_rpm: f64,
+    pub resonance_rpm_rel_err: f64,
+    pub fitted_damping_ratio: f64,
+    /// The fitted peak of the first mesh harmonic [rad] and lumped/FE − 1.
+    pub peak_dte_mesh_amplitude_rad: f64,
+    pub peak_dte_mesh_amplitude_rel_err: f64,
+    /// The largest |lumped/FE − 1| of the DTE rms over the FE speeds where the model settled.
+    pub dte_rms_max_rel_err: f64,
+    /// The FE speeds where it diverged from rest.
+    pub diverged_at_fe_rpm: Vec<f64>,
+    /// The speeds it diverged at, continued up or down or from rest: (lowest, highest) [rpm].
+    pub unstable_band_rpm: Option<(f64, f64)>,
+}
+
+/// An FE run in (or, when none falls inside, next to) a model's unstable band: what the FE did
+/// where the model leaves it.
+#[derive(Debug, Clone, Serialize)]
+pub struct BandRun {
+    pub model: String,
+    pub band_rpm: (f64, f64),
+    pub speed_rpm: f64,
+    pub inside: bool,
+    pub outcome: String,
+}
+
+/// The FE sweep's headline numbers (`fe_sweep` in compare's summary): the FE against the
+/// case's model (`models[0]`), every model in `models`.
 #[derive(Debug, Clone, Serialize)]
 pub struct FeSweep {
-    pub speeds: Vec<SweepSpeed>,
-    /// The lumped twin's dense curve: (rpm, first-harmonic amplitude [rad], DTE rms [rad]).
-    pub lumped_curve: Vec<(f64, f64, f64)>,
-    /// Resonance speeds from the fitted peaks [rpm], and the fits' damping ratios.
+    pub fe: Vec<FeSpeed>,
+    pub models: Vec<ModelSweep>,
+    /// The FE's fitted resonance [rpm], the fit's ζ and its peak first mesh harmonic [rad].
     pub resonance_rpm_fe: f64,
+    pub fitted_damping_ratio_fe: f64,
+    pub peak_dte_mesh_amplitude_fe_rad: f64,
+    /// The case's model (models[0]) against the FE.
     pub resonance_rpm_lumped: f64,
     pub resonance_rpm_rel_err: f64,
-    pub fitted_damping_ratio_fe: f64,
-    pub fitted_damping_ratio_lumped: f64,
-    /// The largest first-harmonic amplitude of each (the fitted peak) and lumped/FE − 1.
-    pub peak_dte_mesh_amplitude_fe_rad: f64,
     pub peak_dte_mesh_amplitude_lumped_rad: f64,
     pub peak_dte_mesh_amplitude_rel_err: f64,
-    /// The largest |lumped/FE − 1| of the DTE rms over the FE speeds.
     pub dte_rms_max_rel_err: f64,
+    /// The FE runs in each model's unstable band, as measured.
+    pub unstable_band_runs: Vec<BandRun>,
     /// How each FE run settled: its statistics window against the mesh mode's decay time.
     pub settling_note: String,
 }
@@ -114,65 +245,264 @@ pub fn resonance_fit(points: &[(f64, f64)]) -> Option<(f64, f64, f64)> {
     Some((nr * (1.0 - 2.0 * zeta * zeta).max(0.0).sqrt(), zeta, peak))
 }
 
-/// Summarizes the FE speeds `speeds` (their comparisons with the lumped twin) and the twin's
-/// dense `curve` (rpm, first-harmonic amplitude, rms, all [rad]); `decay_time_s` is the mesh
-/// mode's 1/(ζω_n), which each FE run's settling window is measured against.
-pub fn summarize(
-    speeds: &[SpeedComparison],
-    curve: Vec<(f64, f64, f64)>,
+/// The FE sweep `fe` (ascending speeds) against `models` (key, label, model; the case's model
+/// first): each swept four times as densely from rest and continued up and down
+/// ([`ModelSweep`]). `rb2`: the driven gear's base radius; `decay_time_s`: the mesh mode's
+/// 1/(ζω_n), which each FE run's settling is measured against. `None` with fewer than three FE
+/// speeds that have a mesh-harmonic response, or a model without three settled points.
+pub fn run(
+    fe: Vec<FeSpeed>,
+    models: &[(&str, &str, &MeshModel)],
+    rb2: f64,
     decay_time_s: f64,
 ) -> Option<FeSweep> {
-    let rows: Vec<SweepSpeed> = speeds
+    let fe_points: Vec<(f64, f64)> = fe
         .iter()
-        .map(|s| SweepSpeed {
-            speed_rpm: s.speed_rpm,
-            fe_mesh_amplitude_rad: s.fe_harmonics_rad.first().copied().unwrap_or(f64::NAN),
-            lumped_mesh_amplitude_rad: s.lumped_harmonics_rad.first().copied().unwrap_or(f64::NAN),
-            fe_dte_rms_rad: s.fe_dte_rms_rad,
-            lumped_dte_rms_rad: s.lumped_dte_rms_rad,
-            dte_rms_rel_err: s.lumped_dte_rms_rad / s.fe_dte_rms_rad - 1.0,
-            lumped_converged: s.lumped_converged,
-            fe_window_s: s.late_window_s,
-        })
+        .map(|s| (s.speed_rpm, s.mesh_amplitude_rad))
         .collect();
-    let fe_points: Vec<(f64, f64)> = rows
-        .iter()
-        .map(|r| (r.speed_rpm, r.fe_mesh_amplitude_rad))
-        .collect();
-    let lumped_points: Vec<(f64, f64)> = curve.iter().map(|c| (c.0, c.1)).collect();
     let (fe_rpm, fe_zeta, fe_peak) = resonance_fit(&fe_points)?;
-    let (lumped_rpm, lumped_zeta, lumped_peak) = resonance_fit(&lumped_points)?;
-    let dte_rms_max_rel_err = rows
+    let (lo, hi) = fe.iter().fold((f64::INFINITY, 0.0f64), |(l, h), s| {
+        (l.min(s.speed_rpm), h.max(s.speed_rpm))
+    });
+    let n = 4 * fe.len();
+    let dense: Vec<f64> = (0..n)
+        .map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64)
+        .collect();
+    let models: Vec<ModelSweep> = models
         .iter()
-        .map(|r| r.dte_rms_rel_err.abs())
-        .fold(0.0, f64::max);
-    // The shortest time between a run's ramp end (its window start less the ringing) and its
-    // window: how many decay times the response had to settle.
-    let settled = rows
+        .map(|(key, label, model)| {
+            let sweep = model_sweep(label, model, &fe, &dense, rb2, (fe_rpm, fe_peak))?;
+            Some(ModelSweep {
+                key: key.to_string(),
+                ..sweep
+            })
+        })
+        .collect::<Option<_>>()?;
+    let unstable_band_runs = models
         .iter()
-        .map(|r| r.fe_window_s.0 / decay_time_s)
+        .filter_map(|m| m.unstable_band_rpm.map(|band| (m, band)))
+        .flat_map(|(m, band)| band_runs(&m.label, band, &fe))
+        .collect();
+    // The shortest time from a run's start (ramp included) to its window: how many decay
+    // times the response had to settle.
+    let settled = fe
+        .iter()
+        .map(|s| s.window_s.0 / decay_time_s)
         .fold(f64::INFINITY, f64::min);
+    let case_model = &models[0];
     Some(FeSweep {
-        speeds: rows,
-        lumped_curve: curve,
         resonance_rpm_fe: fe_rpm,
-        resonance_rpm_lumped: lumped_rpm,
-        resonance_rpm_rel_err: lumped_rpm / fe_rpm - 1.0,
         fitted_damping_ratio_fe: fe_zeta,
-        fitted_damping_ratio_lumped: lumped_zeta,
         peak_dte_mesh_amplitude_fe_rad: fe_peak,
-        peak_dte_mesh_amplitude_lumped_rad: lumped_peak,
-        peak_dte_mesh_amplitude_rel_err: lumped_peak / fe_peak - 1.0,
-        dte_rms_max_rel_err,
+        resonance_rpm_lumped: case_model.resonance_rpm,
+        resonance_rpm_rel_err: case_model.resonance_rpm_rel_err,
+        peak_dte_mesh_amplitude_lumped_rad: case_model.peak_dte_mesh_amplitude_rad,
+        peak_dte_mesh_amplitude_rel_err: case_model.peak_dte_mesh_amplitude_rel_err,
+        dte_rms_max_rel_err: case_model.dte_rms_max_rel_err,
         settling_note: format!(
-            "each FE run's statistics window starts at least {settled:.1} decay times 1/(ζω_n) of the mesh mode after its start (the ramp included); the amplitude left of a start transient is e^-{settled:.1} of it"
+            "each FE run's statistics window starts at least {settled:.1} decay times 1/(ζω_n) of the mesh mode after its start (the ramp included): a start transient is down to e^-{settled:.1} of itself; growth (the window's last third over its first, rms) {:.3}–{:.3}",
+            fe.iter().map(|s| s.growth).fold(f64::INFINITY, f64::min),
+            fe.iter().map(|s| s.growth).fold(0.0, f64::max),
         ),
+        fe,
+        models,
+        unstable_band_runs,
     })
+}
+
+/// One model of [`run`]: `fe_fit` is the FE's fitted (resonance speed, peak amplitude).
+fn model_sweep(
+    label: &str,
+    model: &MeshModel,
+    fe: &[FeSpeed],
+    dense_rpm: &[f64],
+    rb2: f64,
+    (fe_rpm, fe_peak): (f64, f64),
+) -> Option<ModelSweep> {
+    use rayon::prelude::*;
+    let dense: Vec<LumpedSpeed> = dense_rpm
+        .par_iter()
+        .map(|rpm| lumped_at(model, *rpm, rb2))
+        .collect();
+    let at_fe_speeds: Vec<LumpedSpeed> = fe
+        .par_iter()
+        .map(|s| lumped_at(model, s.speed_rpm, rb2))
+        .collect();
+    let done = crate::sweep::continue_sweep(
+        model,
+        dense_rpm,
+        crate::sweep::SweepProgress::start(model),
+        &|| false,
+    );
+    let point = |p: &crate::sweep::SweepPoint| {
+        (p.driver_speed_rpm, p.harmonics[0] / rb2, p.dte_rms / rb2)
+    };
+    let curve_up: Vec<_> = done.up.iter().map(point).collect();
+    let curve_down: Vec<_> = done.down.iter().rev().map(point).collect();
+    let n = dense_rpm.len();
+    let mut diverged: Vec<f64> = dense
+        .iter()
+        .chain(&at_fe_speeds)
+        .filter(|s| s.diverged)
+        .map(|s| s.speed_rpm)
+        .collect();
+    if done.up.len() < n {
+        diverged.push(dense_rpm[done.up.len()]);
+    }
+    if done.down.len() < n {
+        diverged.push(dense_rpm[n - 1 - done.down.len()]);
+    }
+    let unstable_band_rpm = diverged.iter().fold(None, |band: Option<(f64, f64)>, r| {
+        Some(band.map_or((*r, *r), |(l, h)| (l.min(*r), h.max(*r))))
+    });
+    let fit_points: Vec<(f64, f64)> = dense
+        .iter()
+        .filter(|s| !s.diverged)
+        .map(|s| (s.speed_rpm, s.mesh_amplitude_rad))
+        .collect();
+    let (rpm, zeta, peak) = resonance_fit(&fit_points)?;
+    let dte_rms_rel_err: Vec<f64> = at_fe_speeds
+        .iter()
+        .zip(fe)
+        .map(|(l, f)| l.dte_rms_rad / f.dte_rms_rad - 1.0)
+        .collect();
+    let dte_rms_max_rel_err = dte_rms_rel_err
+        .iter()
+        .filter(|e| e.is_finite())
+        .fold(0.0, |m, e| e.abs().max(m));
+    Some(ModelSweep {
+        key: String::new(),
+        label: label.to_string(),
+        diverged_at_fe_rpm: at_fe_speeds
+            .iter()
+            .filter(|s| s.diverged)
+            .map(|s| s.speed_rpm)
+            .collect(),
+        dense,
+        curve_up,
+        curve_down,
+        at_fe_speeds,
+        dte_rms_rel_err,
+        resonance_rpm: rpm,
+        resonance_rpm_rel_err: rpm / fe_rpm - 1.0,
+        fitted_damping_ratio: zeta,
+        peak_dte_mesh_amplitude_rad: peak,
+        peak_dte_mesh_amplitude_rel_err: peak / fe_peak - 1.0,
+        dte_rms_max_rel_err,
+        unstable_band_rpm,
+    })
+}
+
+/// The FE runs inside `band` (or the nearest one when none is) with what they did.
+fn band_runs(model: &str, band: (f64, f64), fe: &[FeSpeed]) -> Vec<BandRun> {
+    let inside: Vec<&FeSpeed> = fe
+        .iter()
+        .filter(|s| s.speed_rpm >= band.0 && s.speed_rpm <= band.1)
+        .collect();
+    let centre = 0.5 * (band.0 + band.1);
+    let chosen = match inside.is_empty() {
+        false => inside,
+        true => fe
+            .iter()
+            .min_by(|a, b| {
+                (a.speed_rpm - centre)
+                    .abs()
+                    .total_cmp(&(b.speed_rpm - centre).abs())
+            })
+            .into_iter()
+            .collect(),
+    };
+    chosen
+        .into_iter()
+        .map(|s| BandRun {
+            model: model.to_string(),
+            band_rpm: band,
+            speed_rpm: s.speed_rpm,
+            inside: s.speed_rpm >= band.0 && s.speed_rpm <= band.1,
+            outcome: outcome(s),
+        })
+        .collect()
+}
+
+/// Growth above which a window's response counts as growing rather than settled: 10 % more
+/// rms in its last third than in its first (a settled response's sampling scatter is a few %).
+pub const GROWTH_LIMIT: f64 = 1.1;
+
+/// What the FE did at one speed, in words.
+pub fn outcome(s: &FeSpeed) -> String {
+    let state = match s.growth {
+        g if !g.is_finite() => "no window to judge",
+        g if g > GROWTH_LIMIT => "growing",
+        _ => "bounded",
+    };
+    format!(
+        "{state}: rms ×{:.2} from the window's first third to its last; DTE peak-to-peak {:.2} urad = {:.2} × its mean; back flanks loaded {:.0} % of the window",
+        s.growth,
+        s.dte_peak_to_peak_rad * 1e6,
+        s.dte_peak_to_peak_rad / s.dte_mean_rad.abs(),
+        100.0 * s.back_flank_share
+    )
 }
 
 #[cfg(test)]
 mod tests {
-    use super::resonance_fit;
+    use super::{outcome, resonance_fit, FeSpeed, GROWTH_LIMIT};
+    use crate::study::compare::FeDte;
+
+    /// A synthetic FE record: DTE = mean + A e^{λt} cos(2π f_mesh t) at 5 000 rpm, 36 teeth.
+    fn record(mean: f64, amplitude: f64, lambda: f64) -> FeDte {
+        let dt = 1e-6;
+        let mesh_hz = 5000.0 / 60.0 * 36.0;
+        FeDte {
+            source: "synthetic".into(),
+            speed_rpm: 5000.0,
+            torque_nm: 1.0,
+            dt,
+            dte: (0..30_000)
+                .map(|k| {
+                    let t = k as f64 * dt;
+                    mean + amplitude
+                        * (lambda * t).exp()
+                        * (std::f64::consts::TAU * mesh_hz * t).cos()
+                })
+                .collect(),
+            ramp_end_s: 0.01,
+            statistics_start_s: 0.012,
+            wall_s: 0.0,
+        }
+    }
+
+    /// The FE's measures on signals whose answers are known: a steady cosine has its amplitude,
+    /// rms A/√2, growth 1, and puts the back flanks in contact for acos(mean/A)/π of the cycle;
+    /// an envelope e^{λt} grows by e^{λ·2T/3} from the window's first third to its last (the
+    /// rms of each third is taken about its own mean, so the ratio is that of the envelopes at
+    /// the thirds' centres, to within the envelope's curvature over a third).
+    #[test]
+    fn the_fe_measures_read_known_signals() {
+        let (mean, a) = (1.2e-4, 2.0e-4);
+        let steady = FeSpeed::measure(&record(mean, a, 0.0), 36.0, 0.0);
+        assert!((steady.mesh_amplitude_rad / a - 1.0).abs() < 1e-3);
+        assert!((steady.dte_rms_rad / (a / 2f64.sqrt()) - 1.0).abs() < 1e-2);
+        assert!((steady.growth - 1.0).abs() < 1e-2, "{}", steady.growth);
+        let share = (mean / a).acos() / std::f64::consts::PI;
+        assert!((steady.back_flank_share - share).abs() < 2e-3);
+        assert!((steady.dte_peak_to_peak_rad / (2.0 * a) - 1.0).abs() < 1e-3);
+        assert!(outcome(&steady).starts_with("bounded"));
+        let no_contact = FeSpeed::measure(&record(mean, 0.5 * mean, 0.0), 36.0, 0.0);
+        assert_eq!(no_contact.back_flank_share, 0.0);
+
+        let lambda = 150.0;
+        let growing = FeSpeed::measure(&record(mean, 1e-6, lambda), 36.0, 0.0);
+        let window = 0.03 - 0.012;
+        let expected = (lambda * 2.0 * window / 3.0).exp();
+        assert!(
+            (growing.growth / expected - 1.0).abs() < 0.02,
+            "{} vs {expected}",
+            growing.growth
+        );
+        assert!(growing.growth > GROWTH_LIMIT);
+        assert!(outcome(&growing).starts_with("growing"));
+    }
 
     /// A synthetic one-degree-of-freedom response sampled at eight speeds from 0.8 to 1.2 × its
     /// resonance (as the FE sweep samples): the fit returns the resonance, the damping and the

@@ -131,6 +131,28 @@ pub fn base_pitch_pairs(pair: &GearPair) -> Vec<ToothPair> {
     engaged_pairs(pair, 0.0, pair.gears[0].angular_pitch(), ENGAGEMENT_MARGIN)
 }
 
+/// The pairs whose back flanks an LTCA over one base pitch loads (positions θ ∈ [0, p₁] under
+/// a reversed torque). Mirroring the pair about its centre line when driver tooth 0 sits on it
+/// (driver rotation ψ₁, [`GearPair::back_flank_reflection`] ρ = 2(ξ_p + ψ₁)) turns driver
+/// rotation θ into 2ψ₁ − θ, driver tooth s into −s, driven tooth u into 1 − u, and back-flank
+/// contacts into drive-flank ones. So the back pairs over [0, p₁] are the mirrors of the drive
+/// pairs engaged over [2ψ₁ − p₁, 2ψ₁]: drive pair (s, −s) gives back pair (−s, s + 1), the
+/// [`ToothPair::back_flank_partner`] of driver tooth −s. By ascending driver tooth. Exact for
+/// symmetric teeth without backlash; a backlash shifts the mirror by its rotation, which
+/// [`ENGAGEMENT_MARGIN`] holds.
+pub fn back_base_pitch_pairs(pair: &GearPair) -> Vec<ToothPair> {
+    let p1 = pair.gears[0].angular_pitch();
+    let psi1 =
+        pair.back_flank_reflection() / 2.0 - pair.roll_angle_at(1, pair.contact_points.pitch);
+    let mut pairs: Vec<ToothPair> =
+        engaged_pairs(pair, 2.0 * psi1 - p1, 2.0 * psi1, ENGAGEMENT_MARGIN)
+            .into_iter()
+            .map(|p| ToothPair::of_driver(-p.driver).back_flank_partner())
+            .collect();
+    pairs.sort();
+    pairs
+}
+
 /// The teeth of each gear in `pairs` (unsigned, sorted, once each).
 pub fn teeth_of(pair: &GearPair, pairs: &[ToothPair]) -> [Vec<usize>; 2] {
     let mut teeth: [Vec<usize>; 2] = [Vec::new(), Vec::new()];

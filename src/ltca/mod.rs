@@ -21,7 +21,17 @@
 //!
 //! Positions: θ₁ = j·(2π/z₁)/N, j = 0 … N−1, starting with tooth 0 of each gear at the pitch
 //! point; the driver's roll angle of tooth 0's contact is ξ = ξ_pitch + θ₁. Only the loaded
-//! (drive-side) flanks are in contact: for T > 0 the back flanks open as the driven gear lags.
+//! flanks are in contact ([`Flank`]): the drive flanks for T > 0 (the back flanks open as the
+//! driven gear lags), or, for a model on [`Flank::Back`], the back flanks under the reversed
+//! torque: candidates on gear 1's back flanks (tooth-local right), gear 2's back profile, the
+//! back pairs of [`engagement::back_base_pitch_pairs`], and the rotations counted the other way,
+//! ```text
+//! n₂ₖ → −n₂ₖ (the back side's outward normal),   aₖ = −((yₖ − O₂) × n₂ₖ)·ẑ
+//! ```
+//! so φ is gear 2's lead and φ₀ the back flanks' unloaded gap (backlash and relief included),
+//! both at the same positions θ₁ as the drive flanks'. For symmetric teeth the back flanks at
+//! θ₁ meet as the drive flanks at ρ − θ₁ ([`GearPair::back_flank_reflection`]); tests/ltca.rs
+//! holds the two models to that.
 
 pub mod body;
 pub mod contact;
@@ -71,8 +81,46 @@ pub const MIN_POSITIONS: usize = 4;
 pub const MAX_POSITIONS: usize = 100_000;
 
 /// The two bodies and the geometry an LTCA runs on.
+/// The flanks an LTCA loads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum Flank {
+    /// The drive flanks (tooth-local left), under the load torque T > 0.
+    Drive,
+    /// The back flanks (tooth-local right), under the reversed torque: the driven gear drives.
+    Back,
+}
+
+impl Flank {
+    /// The tooth-local side of the flanks.
+    pub fn side(self) -> Side {
+        match self {
+            Flank::Drive => Side::Left,
+            Flank::Back => Side::Right,
+        }
+    }
+
+    /// The tooth pairs whose flanks meet over one base pitch.
+    pub fn base_pitch_pairs(self, pair: &GearPair) -> Vec<ToothPair> {
+        match self {
+            Flank::Drive => engagement::base_pitch_pairs(pair),
+            Flank::Back => engagement::back_base_pitch_pairs(pair),
+        }
+    }
+
+    /// +1 for the drive flanks, −1 for the back: the sense of gear 2's outward normal against
+    /// the drive side's and of the rotation that closes the gap.
+    fn sense(self) -> f64 {
+        match self {
+            Flank::Drive => 1.0,
+            Flank::Back => -1.0,
+        }
+    }
+}
+
 pub struct LtcaModel {
     pub pair: GearPair,
+    /// The loaded flanks.
+    pub flank: Flank,
     /// Meshed, factorized and condensed once; shared by the models [`LtcaModel::with_relief`]
     /// derives (a relief of a few µm changes the gap, not the bodies' compliance).
     pub bodies: std::sync::Arc<[LtcaBody; 2]>,
@@ -91,7 +139,12 @@ pub struct LtcaModel {
 /// The teeth of each gear that engage over one base pitch of positions and the one after it
 /// ([`engagement::base_pitch_pairs`]): the ones an LTCA meshes fine.
 pub fn engaging_teeth(pair: &GearPair) -> [Vec<usize>; 2] {
-    engagement::teeth_of(pair, &engagement::base_pitch_pairs(pair))
+    engaging_teeth_on(pair, Flank::Drive)
+}
+
+/// [`engaging_teeth`] of the drive or the back flanks.
+pub fn engaging_teeth_on(pair: &GearPair, flank: Flank) -> [Vec<usize>; 2] {
+    engagement::teeth_of(pair, &flank.base_pitch_pairs(pair))
 }
 
 impl LtcaModel {
@@ -102,25 +155,37 @@ impl LtcaModel {
         mesh_specs: [MeshSpec; 2],
         material: BodyMaterial,
     ) -> Result<Self, LtcaError> {
+        Self::on_flank(pair, modifications, mesh_specs, material, Flank::Drive)
+    }
+
+    /// [`LtcaModel::new`] loading `flank`; `modifications` are those of that flank.
+    pub fn on_flank(
+        pair: &GearPair,
+        modifications: &[FlankModification; 2],
+        mesh_specs: [MeshSpec; 2],
+        material: BodyMaterial,
+        flank: Flank,
+    ) -> Result<Self, LtcaError> {
         let [spec1, spec2] = mesh_specs;
         let body1 = LtcaBody::new(
             &pair.gears[0],
             &modifications[0],
             &spec1,
             material,
-            Side::Left,
+            flank.side(),
         )?;
         let body2 = LtcaBody::new(
             &pair.gears[1],
             &modifications[1],
             &spec2,
             material,
-            Side::Left,
+            flank.side(),
         )?;
-        let profile = loaded_profile(pair, &modifications[1]);
+        let profile = loaded_profile(pair, &modifications[1], flank);
         // The engaged pairs whose teeth are both meshed fine (a model built on fewer fine teeth,
         // as some tests do, leaves the others out; the periodicity check then says so).
-        let pairs: Vec<ToothPair> = engagement::base_pitch_pairs(pair)
+        let pairs: Vec<ToothPair> = flank
+            .base_pitch_pairs(pair)
             .into_iter()
             .filter(|p| {
                 let (t1, t2) = p.indices(pair);
@@ -130,6 +195,7 @@ impl LtcaModel {
         let tooth_pairs = pairs.iter().map(|p| p.indices(pair)).collect();
         Ok(LtcaModel {
             pair: pair.clone(),
+            flank,
             bodies: std::sync::Arc::new([body1, body2]),
             profile,
             pairs,
@@ -146,8 +212,9 @@ impl LtcaModel {
     pub fn with_relief(&self, modifications: &[FlankModification; 2]) -> LtcaModel {
         LtcaModel {
             pair: self.pair.clone(),
+            flank: self.flank,
             bodies: self.bodies.clone(),
-            profile: loaded_profile(&self.pair, &modifications[1]),
+            profile: loaded_profile(&self.pair, &modifications[1], self.flank),
             pairs: self.pairs.clone(),
             tooth_pairs: self.tooth_pairs.clone(),
             modifications: *modifications,
@@ -233,8 +300,34 @@ impl LtcaModel {
         index: usize,
         positions: usize,
     ) -> Result<PositionGeometry, LtcaError> {
+        let driver_rotation = index as f64 / positions as f64 * self.pair.gears[0].angular_pitch();
+        self.geometry_at(index, driver_rotation)
+    }
+
+    /// The loaded state at any driver rotation θ₁ [rad] (`index` names it in errors), not only
+    /// at the positions of a cycle.
+    pub fn solve_at(
+        &self,
+        index: usize,
+        driver_rotation: f64,
+        torque: f64,
+    ) -> Result<PositionResult, LtcaError> {
+        if !(torque > 0.0 && torque.is_finite()) {
+            return Err(LtcaError::Torque { torque });
+        }
+        Ok(self
+            .geometry_at(index, driver_rotation)?
+            .solve(self, torque)?
+            .0)
+    }
+
+    fn geometry_at(
+        &self,
+        index: usize,
+        driver_rotation: f64,
+    ) -> Result<PositionGeometry, LtcaError> {
         let pair = &self.pair;
-        let driver_rotation = index as f64 / positions as f64 * pair.gears[0].angular_pitch();
+        let sense = self.flank.sense();
         let [rot1, rot2] = self.rotations(driver_rotation);
         let placement = pair.mesh_placement();
         let (o1, o2) = (placement[0].centre, placement[1].centre);
@@ -271,9 +364,9 @@ impl LtcaModel {
                 let (a, b) = (surface[segment], surface[segment + 1]);
                 let y = a + (b - a) * t;
                 let tangent = (b - a).normalize();
-                let normal = Vector2::new(tangent.y, -tangent.x);
+                let normal = sense * Vector2::new(tangent.y, -tangent.x);
                 let r = y - o2;
-                let arm = r.x * normal.y - r.y * normal.x;
+                let arm = sense * (r.x * normal.y - r.y * normal.x);
                 (arm > 0.0).then(|| Probe {
                     gap: (x - y).dot(&normal),
                     arm,
@@ -329,7 +422,9 @@ impl LtcaModel {
                     pair: pair_index,
                     gap: p.gap,
                     arm: p.arm,
-                    loa: (p.y - t1).dot(&loa_direction),
+                    // Along the back flanks' line of action, the drive one's mirror about
+                    // the centre line (the x axis).
+                    loa: (Point2::new(p.y.x, sense * p.y.y) - t1).dot(&loa_direction),
                     weights1: flank_weights(body1, &nodes1, Some(xi), true),
                     weights2: self.surface_weights(p.segment, p.t, &nodes2),
                 });
@@ -364,10 +459,14 @@ impl LtcaModel {
         })
     }
 
-    /// Gear 1's loaded (tooth-local left) flank at roll angle ξ, tooth-local frame of tooth 0.
+    /// Gear 1's loaded flank (tooth-local left for the drive, right for the back flanks) at
+    /// roll angle ξ, tooth-local frame of tooth 0.
     fn flank1(&self, roll_angle: f64) -> Point2<f64> {
         let p = self.pair.gears[0].modified_flank_point(roll_angle, &self.modifications[0]);
-        Point2::new(-p.x, p.y)
+        match self.flank.side() {
+            Side::Left => Point2::new(-p.x, p.y),
+            Side::Right => p,
+        }
     }
 
     /// Weights spreading a point of gear 2's surface (segment, parameter) over gear 2's flank
@@ -533,10 +632,12 @@ impl Periodicity {
 }
 
 /// Gear 2's loaded-side profile (tooth-local) with `modification`: dense polyline from the tip
-/// centre down to the root, with the roll angle of flank points.
+/// centre down to the root, with the roll angle of flank points (the outline's second half
+/// for the drive flanks, its first half reversed for the back flanks).
 fn loaded_profile(
     pair: &GearPair,
     modification: &FlankModification,
+    flank: Flank,
 ) -> Vec<(Point2<f64>, Segment, Option<f64>)> {
     let res = OutlineResolution {
         root: 4,
@@ -546,10 +647,11 @@ fn loaded_profile(
     };
     let outline = pair.gears[1].tooth_outline(modification, res);
     let mid = (outline.len() - 1) / 2;
-    outline[mid..]
-        .iter()
-        .map(|p| (p.position, p.segment, p.roll_angle))
-        .collect()
+    let point = |p: &crate::geometry::OutlinePoint| (p.position, p.segment, p.roll_angle);
+    match flank {
+        Flank::Drive => outline[mid..].iter().map(point).collect(),
+        Flank::Back => outline[..=mid].iter().rev().map(point).collect(),
+    }
 }
 
 /// Stride of the first-touch search's coarse pass over its 800 flank samples.

@@ -135,7 +135,16 @@ fn answers(
         torque,
         damping,
     )
-    .or_else(|_| lumped_twin(case, hub_to_hub, None, (Drive::Speed, false), torque, damping))?;
+    .or_else(|_| {
+        lumped_twin(
+            case,
+            hub_to_hub,
+            None,
+            (Drive::Speed, false),
+            torque,
+            damping,
+        )
+    })?;
     let f_n = model.natural_frequency() / std::f64::consts::TAU;
     let teeth = pair.gears[0].teeth() as f64;
     let pitch = pair.gears[0].angular_pitch();

@@ -395,7 +395,14 @@ pub fn run(
     let damping_of =
         |drive: Drive| 2.0 * zeta * (k_secant * drive.effective_mass(inertias, rb)).sqrt();
     let twin = |drive: Drive, elastic: bool, mesh: MeshStiffness| {
-        lumped_twin(case, mesh, None, (drive, elastic), torque, damping_of(drive))
+        lumped_twin(
+            case,
+            mesh,
+            None,
+            (drive, elastic),
+            torque,
+            damping_of(drive),
+        )
     };
     let constant = |k: f64| MeshStiffness::constant("mean", input.fe_stiffness.period(), k);
     // The case's lumped model (its stiffness source and force law on the case's mesh, what

@@ -55,9 +55,7 @@ impl FeSpeed {
         let third = window.len() / 3;
         let growth = match third {
             0 => f64::NAN,
-            _ => {
-                rms_about_mean(&window[window.len() - third..]) / rms_about_mean(&window[..third])
-            }
+            _ => rms_about_mean(&window[window.len() - third..]) / rms_about_mean(&window[..third]),
         };
         let (lo, hi) = window
             .iter()
@@ -334,9 +332,8 @@ fn model_sweep(
         crate::sweep::SweepProgress::start(model),
         &|| false,
     );
-    let point = |p: &crate::sweep::SweepPoint| {
-        (p.driver_speed_rpm, p.harmonics[0] / rb2, p.dte_rms / rb2)
-    };
+    let point =
+        |p: &crate::sweep::SweepPoint| (p.driver_speed_rpm, p.harmonics[0] / rb2, p.dte_rms / rb2);
     let curve_up: Vec<_> = done.up.iter().map(point).collect();
     let curve_down: Vec<_> = done.down.iter().rev().map(point).collect();
     let n = dense_rpm.len();

@@ -7,7 +7,9 @@ use serde::Serialize;
 use crate::case::Case;
 use crate::geometry::engagement::{self, ENGAGEMENT_MARGIN};
 use crate::geometry::FlankModification;
-use crate::ltca::{engaging_teeth, LtcaModel, Periodicity, PositionResult, PERIODICITY_TOLERANCE};
+use crate::ltca::{
+    engaging_teeth_on, Flank, LtcaModel, Periodicity, PositionResult, PERIODICITY_TOLERANCE,
+};
 use crate::stiffness::{self, potential_energy, IsoStiffness, MeshStiffness};
 
 use super::checks::{Check, CheckKind};
@@ -26,6 +28,31 @@ pub fn model(case: &Case, modifications: &[FlankModification; 2]) -> Result<Ltca
     )
 }
 
+/// [`model`] loading the back flanks under the reversed torque ([`Flank::Back`]);
+/// `modifications` are the back flanks'.
+pub fn back_model(
+    case: &Case,
+    modifications: &[FlankModification; 2],
+) -> Result<LtcaModel, StudyError> {
+    let mesh = &case.file.mesh;
+    back_model_with_sizes(
+        case,
+        modifications,
+        mesh.fine_element_mm * 1e-3,
+        mesh.coarse_element_mm * 1e-3,
+    )
+}
+
+/// [`back_model`] with other element sizes: flanks `fine_size`, the rest `coarse_size` [m].
+pub fn back_model_with_sizes(
+    case: &Case,
+    modifications: &[FlankModification; 2],
+    fine_size: f64,
+    coarse_size: f64,
+) -> Result<LtcaModel, StudyError> {
+    model_on_flank(case, modifications, (fine_size, coarse_size), Flank::Back)
+}
+
 /// [`model`] with other element sizes: flanks `fine_size`, the rest `coarse_size` [m].
 pub fn model_with_sizes(
     case: &Case,
@@ -33,7 +60,17 @@ pub fn model_with_sizes(
     fine_size: f64,
     coarse_size: f64,
 ) -> Result<LtcaModel, StudyError> {
-    let teeth = engaging_teeth(&case.pair);
+    model_on_flank(case, modifications, (fine_size, coarse_size), Flank::Drive)
+}
+
+/// The LTCA bodies meshed fine on the teeth whose `flank` engages, loading that flank.
+fn model_on_flank(
+    case: &Case,
+    modifications: &[FlankModification; 2],
+    (fine_size, coarse_size): (f64, f64),
+    flank: Flank,
+) -> Result<LtcaModel, StudyError> {
+    let teeth = engaging_teeth_on(&case.pair, flank);
     let spec = |fine_teeth: Vec<usize>| crate::mesh::MeshSpec {
         fine_size,
         coarse_size,
@@ -41,11 +78,12 @@ pub fn model_with_sizes(
     };
     let specs = [spec(teeth[0].clone()), spec(teeth[1].clone())];
     check_memory(case, modifications, &specs)?;
-    Ok(LtcaModel::new(
+    Ok(LtcaModel::on_flank(
         &case.pair,
         modifications,
         specs,
         case.ltca_material(),
+        flank,
     )?)
 }
 

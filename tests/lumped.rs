@@ -27,6 +27,7 @@ fn model(stiffness: PeriodicTable, te_amplitude: f64, zeta: f64) -> MeshModel {
         force: 2670.0,
         backlash: None,
         back_reflection: None,
+        back_force_law: None,
         force_law: None,
     };
     m.damping = m.damping_from_ratio(zeta);

@@ -24,6 +24,7 @@ fn model(te_amplitude: f64, backlash: Option<f64>) -> MeshModel {
         force: 2670.0,
         backlash,
         back_reflection: None,
+        back_force_law: None,
         force_law: None,
     };
     m.damping = m.damping_from_ratio(0.03);

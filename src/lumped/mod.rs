@@ -20,7 +20,10 @@
 //! teeth are apart (the usual lumped-model convention, Kahraman & Singh 1990); it is small.
 //! With a [`MeshModel::force_law`] (the LTCA's W(θ, δ), [`crate::stiffness::ForceLaw`]) the
 //! elastic force k(θ) f(δ − e(θ)) is replaced by W(θ, δ) on the drive flanks and −W(ρ − θ,
-//! −(δ + j)) on the back flanks: the stiffness grows with the load as the LTCA's does.
+//! −(δ + j)) on the back flanks: the stiffness grows with the load as the LTCA's does. With a
+//! [`MeshModel::back_force_law`] (the LTCA of the back flanks under the reversed torque) the
+//! back flanks carry −W_b(θ, −δ) instead, their gap in the law's first contact: right where the
+//! mirror is not (backlash shifts it, asymmetric flanks break it).
 //! Integration: classical Runge–Kutta 4 with an integer number of steps per mesh period, so every
 //! step lands on the same stiffness samples and the periodic steady state is detected from the
 //! state at period boundaries (Poincaré map); an adaptive Dormand–Prince 5(4) integration
@@ -161,6 +164,11 @@ pub struct MeshModel {
     /// `None`: the secant law k(θ)(δ − e(θ)) of `mesh`, linear in δ. `mesh` stays the secant at
     /// the design load (the mean stiffness of the damping ratio and the natural frequency).
     pub force_law: Option<ForceLaw>,
+    /// The back flanks' own force law W_b(θ, δ_b) (the LTCA of the back flanks under the
+    /// reversed torque, at the drive law's positions θ; δ_b = −δ, its first contact the whole
+    /// back gap, backlash and relief): when set, it replaces the mirror of `back_reflection` and
+    /// the backlash j on the back flanks.
+    pub back_force_law: Option<ForceLaw>,
 }
 
 /// State of the lumped model: the structure's coordinates q [m] and their velocities [m/s]
@@ -269,7 +277,10 @@ impl MeshModel {
     /// stiffness never lowers an eigenvalue, so this bounds every contact state the law
     /// tabulates, separation included; past its last knot the law keeps that knot's slope).
     pub fn highest_frequency(&self) -> f64 {
-        let law = self.force_law.as_ref().map_or(0.0, |law| law.max_slope());
+        let law = [&self.force_law, &self.back_force_law]
+            .into_iter()
+            .flatten()
+            .fold(0.0, |m, law| law.max_slope().max(m));
         *self
             .mode_frequencies(self.mesh.max().max(law))
             .last()
@@ -292,9 +303,10 @@ impl MeshModel {
             None => drive,
             Some(_) if drive > 0.0 => drive,
             Some(j) => {
-                let back = match self.back_reflection {
-                    Some(rho) => self.drive_force(rho - theta, -(deflection + j)),
-                    None => {
+                let back = match (&self.back_force_law, self.back_reflection) {
+                    (Some(law), _) => law.force(theta, -deflection),
+                    (None, Some(rho)) => self.drive_force(rho - theta, -(deflection + j)),
+                    (None, None) => {
                         let e = self.mesh.unloaded_te.at(theta);
                         self.drive_force(theta, 2.0 * e - deflection - j)
                     }
@@ -431,6 +443,7 @@ impl MeshModel {
                 ..self.mesh.clone()
             },
             force_law: None,
+            back_force_law: None,
             ..self.clone()
         }
     }

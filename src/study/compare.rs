@@ -309,6 +309,7 @@ pub fn lumped_twin(
         force: torque / pair.gears[1].base_radius,
         backlash: Some(pair.backlash_normal.max(0.0)),
         force_law,
+        back_force_law: None,
     })
 }
 

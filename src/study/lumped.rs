@@ -196,16 +196,35 @@ pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
     let settings = &case.lumped;
     let torque = load_torque(case)?;
     let started = std::time::Instant::now();
-    let (mut mesh, mut force_law, reference) = match &settings.stiffness {
+    let (mut mesh, mut force_law, back_law, reference) = match &settings.stiffness {
         StiffnessSource::Ltca => {
             let variant = super::relief_variant(case, settings.relief.as_deref())?;
             let ltca = super::ltca::model(case, &variant.modifications)?;
             let source = format!("ltca (relief {})", variant.name);
             let (mesh, law, reference) = ltca_tables(case, &ltca, torque, &source)?;
-            let law = (settings.force_law == ForceLawKind::LoadDependent).then_some(law);
-            (mesh, law, Some(reference))
+            let load_dependent = settings.force_law == ForceLawKind::LoadDependent;
+            // The mirror is exact for symmetric teeth without backlash (tests/ltca.rs, to 1e-5);
+            // a backlash shifts it by its rotation, so the back flanks then get their own LTCA.
+            let back_law = match load_dependent && case.pair.backlash_normal > 0.0 {
+                true => {
+                    let back = super::ltca::back_model(case, &variant.modifications)?;
+                    Some(force_law_of(
+                        case,
+                        &back,
+                        torque,
+                        &format!("{source}, back flanks"),
+                    )?)
+                }
+                false => None,
+            };
+            (
+                mesh,
+                load_dependent.then_some(law),
+                back_law,
+                Some(reference),
+            )
         }
-        source => (mesh_stiffness(case, source, torque)?, None, None),
+        source => (mesh_stiffness(case, source, torque)?, None, None, None),
     };
     let stiffness_wall_s = started.elapsed().as_secs_f64();
     // A hub-to-hub source holds the bodies' twist; elastic bodies carry it themselves.
@@ -214,6 +233,7 @@ pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
         false => 0.0,
     };
     (mesh, force_law) = to_rims(mesh, force_law, twist)?;
+    let back_law = back_law.map(|law| law_to_rims(law, twist)).transpose()?;
     let inertias = gear_inertias(case);
     let (mut model, damping_ratio) = model_on(case, mesh, torque)?;
     let law_note = match (&force_law, &settings.stiffness) {
@@ -228,7 +248,14 @@ pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
         }
         (None, _) => "; mesh force linear in the approach, k(θ)(δ − e) (the source gives one k(θ))".to_string(),
     };
+    let law_note = law_note
+        + match (&back_law, case.pair.backlash_normal > 0.0) {
+            (Some(_), _) => "; back flanks: their own force law, from the LTCA of the back flanks under the reversed torque (the backlash shifts the mirror)",
+            (None, false) => "; back flanks: the drive flanks' law mirrored about the centre line (exact for these symmetric teeth without backlash)",
+            (None, true) => "; back flanks: the drive flanks' k(θ) mirrored about the centre line with the backlash added",
+        };
     model.force_law = force_law;
+    model.back_force_law = back_law;
     let natural_frequency_hz = model.linearized().natural_frequency() / std::f64::consts::TAU;
     let self_checks = match &reference {
         Some(reference) => {
@@ -401,14 +428,19 @@ pub fn to_rims(
     let mesh = mesh
         .without_series_compliance(twist)
         .ok_or_else(|| refused("mesh compliance"))?;
-    let law =
-        match law {
-            Some(law) => Some(law.without_series_compliance(twist).ok_or_else(|| {
-                refused("mesh's tangent compliance at every load of the force law")
-            })?),
-            None => None,
-        };
-    Ok((mesh, law))
+    Ok((mesh, law.map(|law| law_to_rims(law, twist)).transpose()?))
+}
+
+/// A force law `law`, hub to hub, with the bodies' twist `twist` [m/N] taken out of series
+/// (δ′ = δ − c_b W, [`to_rims`]).
+pub fn law_to_rims(law: ForceLaw, twist: f64) -> Result<ForceLaw, StudyError> {
+    law.without_series_compliance(twist).ok_or_else(|| {
+        StudyError::Input(format!(
+            "the gear bodies' twist ({twist:.3e} m/N) is not below the mesh's tangent \
+             compliance at every load of the force law: check bore_radius_mm and the stiffness \
+             source, or set lumped.bodies = \"rigid\""
+        ))
+    })
 }
 
 /// Each gear body as the lumped model holds it (`[lumped] bodies`): elastic, hub and rim with
@@ -549,6 +581,7 @@ pub fn model_on(
         force: torque / pair.gears[1].base_radius,
         backlash,
         force_law: None,
+        back_force_law: None,
     };
     // A coefficient in the case wins over its ratio (`--damping-ratio` removes the coefficient).
     let damping_ratio = match settings.mesh_damping {

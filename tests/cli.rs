@@ -1103,16 +1103,44 @@ fn compare_reads_a_known_fe_run_and_names_its_lines() {
             .arg("--out")
             .arg(&out),
     );
-    // The chart: the reference answers itself exactly; ISO's constant k has no static-TE
-    // fluctuation (error 1); the reference's static TE peak-to-peak is the cosine's,
-    // T/(r_b2² k̄)·(1/0.9 − 1/1.1).
+    // The chart: each question against its own reference. The DTE's is the FE run's own
+    // first mesh harmonic (the synthetic 2e-5 rad); the
+    // resonance's, without an FE sweep, the driver-held FE modal on the case's mesh; k̄ and the
+    // static TE the LTCA extrapolated (a positive uncertainty). ISO's constant k has no
+    // static-TE fluctuation (error 1); the FE run's static TE peak-to-peak is the cosine's,
+    // T/(r_b2² k̄)·(1/0.9 − 1/1.1); the case's force-law row is charted beside the secant ones.
     let chart: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("accuracy_cost.json")).unwrap()).unwrap();
-    let points = chart["points"].as_array().unwrap();
-    let fe = points.iter().find(|p| p["family"] == "explicit").unwrap();
-    for key in ["mean_stiffness_error", "static_te_error", "resonance_error"] {
-        assert!(fe[key].as_f64().unwrap() < 1e-12, "{key}");
+    let references = &chart["references"];
+    let dte = &references["dte_mesh_amplitude"];
+    assert!(
+        (dte["value"].as_f64().unwrap() - 2e-5).abs() < 5e-8,
+        "{dte}"
+    );
+    // The ring (1.5e-7 rad at the window's start) leaks more into the first half.
+    assert!(dte["uncertainty"].as_f64().unwrap() < 2e-7, "{dte}");
+    let summary = read_summary(&out);
+    let modal_rpm = summary["f_natural_fe_modal_driver_held_hz"]
+        .as_f64()
+        .unwrap()
+        * 60.0
+        / 36.0;
+    let resonance = references["resonance_rpm"]["value"].as_f64().unwrap();
+    assert!(
+        (resonance / modal_rpm - 1.0).abs() < 1e-12,
+        "{resonance} vs {modal_rpm}"
+    );
+    for question in ["mean_stiffness", "static_te_peak_to_peak"] {
+        let r = &references[question];
+        assert!(r["value"].as_f64().unwrap() > 0.0, "{r}");
+        assert!(r["uncertainty"].as_f64().unwrap() > 0.0, "{r}");
+        assert!(r["source"].as_str().unwrap().contains("LTCA"), "{r}");
     }
+    let points = chart["points"].as_array().unwrap();
+    assert!(points
+        .iter()
+        .any(|p| p["method"].as_str().unwrap().ends_with("force law")));
+    let fe = points.iter().find(|p| p["family"] == "explicit").unwrap();
     let iso = points
         .iter()
         .find(|p| p["method"] == "ISO 6336-1 B")

@@ -590,6 +590,9 @@ pub struct LogScatter {
     pub y_label: String,
     /// (series name, points (x, y, label)).
     pub series: Vec<(String, Vec<LabelledPoint>)>,
+    /// Per series, a level drawn as a dashed line in its colour (e.g. the uncertainty of the
+    /// reference its errors are measured against: errors below it are not resolved).
+    pub floors: Vec<Option<f64>>,
 }
 
 impl Drawing for LogScatter {
@@ -613,7 +616,15 @@ impl Drawing for LogScatter {
                 (1e-3, 1.0)
             }
         };
-        let (x, y) = (range(|p| p.0), range(|p| p.1));
+        let (x, mut y) = (range(|p| p.0), range(|p| p.1));
+        for floor in self
+            .floors
+            .iter()
+            .flatten()
+            .filter(|f| **f > 0.0 && f.is_finite())
+        {
+            y = (y.0.min(floor / 3.0), y.1.max(floor * 3.0));
+        }
         let mut chart = ChartBuilder::on(root)
             .caption(&self.title, ("sans-serif", 18))
             .margin(15)
@@ -638,6 +649,18 @@ impl Drawing for LogScatter {
             .map_err(&err)?;
         for (i, (name, points)) in self.series.iter().enumerate() {
             let colour = PALETTE[i % PALETTE.len()];
+            if let Some(floor) = self.floors.get(i).copied().flatten() {
+                if floor > 0.0 && floor.is_finite() {
+                    chart
+                        .draw_series(DashedLineSeries::new(
+                            [(x.0, floor), (x.1, floor)],
+                            6,
+                            4,
+                            colour.stroke_width(1),
+                        ))
+                        .map_err(&err)?;
+                }
+            }
             let visible: Vec<&LabelledPoint> = points.iter().filter(shown).collect();
             chart
                 .draw_series(

@@ -1,11 +1,13 @@
 //! Accuracy against cost (`geardyn compare --chart`): every way geardyn has to the pair's mesh
 //! stiffness, charted by its wall time against its error on four questions a gear engineer
-//! asks, each measured against the finest explicit FE run given.
+//! asks, each against the best estimate of the truth for that question, drawn with its own
+//! uncertainty.
 //!
 //! # Methods (each a k(θ), e(θ) source)
 //! LTCA at three mesh levels (timed here), explicit FE stiffness scenes (read from their run
 //! folders: mesh level, mass scaling and wall time), ISO 6336-1 method B and the
-//! potential-energy method (timed here).
+//! potential-energy method (timed here), and the case's lumped model on the LTCA's
+//! load-dependent force law (the default) beside the secant LTCA rows.
 //!
 //! # Questions (each answered from the method's k(θ), the same way for every method)
 //! * mean stiffness k̄;
@@ -13,22 +15,32 @@
 //! * first resonance speed: f_mesh = f_n of the speed-driven pair with elastic bodies (the
 //!   FE's lumped twin, [`super::compare::lumped_twin`]: the bodies' twist is taken out of the
 //!   hub-to-hub LTCA and FE stiffness and given to the bodies; ISO and potential energy do not
-//!   hold it, so it is put in series first), n = 60 f_n / z₁ — its error follows
-//!   from the mean stiffness's (√k), so it is about half of it;
+//!   hold it, so it is put in series first; with the force law, its tangent at the design
+//!   load), n = 60 f_n / z₁ — its error follows from the mean stiffness's (√k), so it is about
+//!   half of it;
 //! * DTE amplitude at the mesh frequency at the primary FE run's speed
 //!   ([`super::compare::primary_run`], 3000 rpm for paper36): the lumped model's periodic
 //!   steady state on that k(θ), against the explicit FE's own DTE there.
 //!
-//! The cost of a lumped answer is the cost of its k(θ) plus the lumped solve. The reference is
-//! the finest unscaled FE run (ties broken by the longest wall time); the DTE reference is the
-//! explicit run at speed.
+//! # References ([`References`])
+//! * k̄ and the static TE: the LTCA extrapolated to zero element size ([`richardson`]) from
+//!   three flank sizes ([`REFERENCE_LEVELS`]), with the extrapolation's own size as its
+//!   uncertainty — or, where the three do not converge monotonically, the finest with the
+//!   spread of the three;
+//! * the resonance speed: the explicit FE's speed sweep (its fitted peak) when compare ran one,
+//!   else the FE modal analysis of the meshed pair on the case's mesh (driver held), with the
+//!   difference to the modal analysis on the explicit FE's mesh as its uncertainty;
+//! * the DTE amplitude: the explicit FE at that speed, with the difference between the two
+//!   halves of its statistics window as its uncertainty.
+//!
+//! The cost of a lumped answer is the cost of its k(θ) plus the lumped solve.
 
 use serde::Serialize;
 
 use crate::case::Case;
 use crate::lumped::{steady_state, Drive};
 use crate::signal::{amplitude_spectrum, harmonic_amplitudes};
-use crate::stiffness::{self, potential_energy, MeshStiffness};
+use crate::stiffness::{self, potential_energy, ForceLaw, MeshStiffness};
 
 use super::compare::{lumped_twin, FeDte};
 use super::lumped::gear_inertias;
@@ -61,16 +73,80 @@ pub struct MethodPoint {
     pub dte_amplitude_error: f64,
 }
 
+/// The best estimate of the truth for one question, with its uncertainty.
+#[derive(Debug, Clone, Serialize)]
+pub struct Reference {
+    pub value: f64,
+    /// Estimated uncertainty (absolute, the value's unit).
+    pub uncertainty: f64,
+    pub source: String,
+}
+
+impl Reference {
+    /// The uncertainty over the value: errors below it are not resolved.
+    pub fn relative_uncertainty(&self) -> f64 {
+        (self.uncertainty / self.value).abs()
+    }
+}
+
+/// The four references of the chart.
+#[derive(Debug, Clone, Serialize)]
+pub struct References {
+    pub mean_stiffness: Reference,
+    pub static_te_peak_to_peak: Reference,
+    pub resonance_rpm: Reference,
+    pub dte_mesh_amplitude: Reference,
+}
+
 /// The chart's data.
 #[derive(Debug, Clone, Serialize)]
 pub struct AccuracyCost {
     pub case: String,
-    pub reference: String,
-    pub dte_reference: String,
+    pub references: References,
     pub speed_rpm: f64,
-    pub reference_dte_mesh_amplitude_rad: f64,
     pub points: Vec<MethodPoint>,
 }
+
+/// f at zero mesh size from three sizes h₁ > h₂ > h₃ (finest last), f(h) = f₀ + c hᵖ:
+/// the observed order p solves (f₁ − f₂)/(f₂ − f₃) = (h₁ᵖ − h₂ᵖ)/(h₂ᵖ − h₃ᵖ) (bisection on
+/// [0.5, 6]; any ratio of sizes), then f₀ = f₃ − (f₂ − f₃) h₃ᵖ/(h₂ᵖ − h₃ᵖ), with |f₀ − f₃| as its
+/// uncertainty (the extrapolation is trusted to about as much as it moved; Roache's grid
+/// convergence index puts 1.25 × that on f₃). Where the differences change sign (oscillatory
+/// convergence) or the order falls outside [0.5, 6], no extrapolation: f₃, with the largest
+/// distance of f₁, f₂ from it as the uncertainty. Returns (value, uncertainty, order).
+pub fn richardson(h: [f64; 3], f: [f64; 3]) -> (f64, f64, Option<f64>) {
+    let spread = (f[0] - f[2]).abs().max((f[1] - f[2]).abs());
+    let fallback = (f[2], spread, None);
+    let (d12, d23) = (f[0] - f[1], f[1] - f[2]);
+    if d23 == 0.0 || d12 == 0.0 || d12.signum() != d23.signum() {
+        return fallback;
+    }
+    let ratio = d12 / d23;
+    let g = |p: f64| (h[0].powf(p) - h[1].powf(p)) / (h[1].powf(p) - h[2].powf(p));
+    let (mut lo, mut hi) = (0.5, 6.0);
+    if !(g(lo) <= ratio && ratio <= g(hi)) {
+        return fallback;
+    }
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if g(mid) < ratio {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let p = 0.5 * (lo + hi);
+    let extrapolated = f[2] - d23 * h[2].powf(p) / (h[1].powf(p) - h[2].powf(p));
+    (extrapolated, (extrapolated - f[2]).abs(), Some(p))
+}
+
+/// The LTCA flank element sizes of the k̄ and static-TE reference [mm] (body 1.5 mm): halving
+/// twice from 0.4 to the 0.1 mm that resolves the Hertzian zone with several elements.
+pub const REFERENCE_LEVELS: [f64; 3] = [0.4, 0.2, 0.1];
+
+/// The resonance speed's reference, as compare found it: (speed [rpm], uncertainty [rpm],
+/// source).
+pub type ResonanceReference = (f64, f64, String);
 
 /// LTCA mesh levels: flank / body element sizes [mm].
 pub const LTCA_LEVELS: [(f64, f64); 3] = [(1.0, 3.0), (0.5, 1.5), (0.2, 1.5)];
@@ -106,7 +182,7 @@ struct Answers {
 /// The four answers from one k(θ).
 fn answers(
     case: &Case,
-    mesh: &MeshStiffness,
+    (mesh, law): (&MeshStiffness, Option<&ForceLaw>),
     holds_body_twist: bool,
     torque: f64,
     speed_rpm: f64,
@@ -130,7 +206,7 @@ fn answers(
     let model = lumped_twin(
         case,
         hub_to_hub.clone(),
-        None,
+        law.cloned(),
         (Drive::Speed, true),
         torque,
         damping,
@@ -139,20 +215,19 @@ fn answers(
         lumped_twin(
             case,
             hub_to_hub,
-            None,
+            law.cloned(),
             (Drive::Speed, false),
             torque,
             damping,
         )
     })?;
-    let f_n = model.natural_frequency() / std::f64::consts::TAU;
+    // With a force law: its tangent about the design load, what small vibrations feel.
+    let f_n = match law {
+        Some(_) => model.linearized().natural_frequency(),
+        None => model.natural_frequency(),
+    } / std::f64::consts::TAU;
     let teeth = pair.gears[0].teeth() as f64;
-    let pitch = pair.gears[0].angular_pitch();
-    let bins: Vec<Option<f64>> = (0..256)
-        .map(|j| Some(mesh.stiffness.at(j as f64 / 256.0 * pitch)))
-        .collect();
-    let static_te_pp = static_te(pair, torque, &bins, &mesh.unloaded_te)
-        .map_or(f64::NAN, |te| te.peak_to_peak_rad);
+    let static_te_pp = static_te_peak_to_peak(case, mesh, torque);
     let speed = speed_rpm * std::f64::consts::TAU / 60.0;
     let steps = crate::sweep::steps_per_period(&model, speed);
     let steady = steady_state(&model, speed, steps, model.static_state(), 1e-9, 2000);
@@ -173,19 +248,72 @@ fn answers(
     })
 }
 
-/// Builds the chart's data from the FE stiffness runs (at least one unscaled) and the explicit
-/// run at speed.
+/// The static TE's peak-to-peak [rad] that `mesh` gives under `torque`, (T/(r_b2 k) + e)/r_b2
+/// over 256 positions.
+fn static_te_peak_to_peak(case: &Case, mesh: &MeshStiffness, torque: f64) -> f64 {
+    let pitch = case.pair.gears[0].angular_pitch();
+    let bins: Vec<Option<f64>> = (0..256)
+        .map(|j| Some(mesh.stiffness.at(j as f64 / 256.0 * pitch)))
+        .collect();
+    static_te(&case.pair, torque, &bins, &mesh.unloaded_te)
+        .map_or(f64::NAN, |te| te.peak_to_peak_rad)
+}
+
+/// The k̄ and static-TE references: the LTCA at [`REFERENCE_LEVELS`] extrapolated
+/// ([`richardson`]).
+fn ltca_references(
+    case: &Case,
+    torque: f64,
+    progress: Progress,
+) -> Result<(Reference, Reference), StudyError> {
+    let unmodified = [crate::geometry::FlankModification::none(); 2];
+    let mut k = [0.0; 3];
+    let mut te = [0.0; 3];
+    for (i, fine) in REFERENCE_LEVELS.iter().enumerate() {
+        progress("LTCA reference levels", i, REFERENCE_LEVELS.len());
+        let model = super::ltca::model_with_sizes(case, &unmodified, fine * 1e-3, 1.5e-3)?;
+        let results = model.run(POSITIONS, torque, &|_| {})?;
+        let mesh = stiffness::from_ltca(&case.pair, &results, torque, "ltca")
+            .map_err(StudyError::Input)?;
+        k[i] = mesh.mean();
+        te[i] = static_te_peak_to_peak(case, &mesh, torque);
+    }
+    progress("LTCA reference levels", 3, 3);
+    let reference = |f: [f64; 3], what: &str| {
+        let (value, uncertainty, order) = richardson(REFERENCE_LEVELS, f);
+        let how = match order {
+            Some(p) => format!("extrapolated to zero element size, observed order {p:.2}"),
+            None => "the finest level (the three do not converge monotonically)".into(),
+        };
+        Reference {
+            value,
+            uncertainty,
+            source: format!(
+                "{what}: LTCA at {:?} mm flanks (1.5 mm body), {how}",
+                REFERENCE_LEVELS
+            ),
+        }
+    };
+    Ok((
+        reference(k, "mean stiffness"),
+        reference(te, "static TE peak-to-peak"),
+    ))
+}
+
+/// Builds the chart's data from the FE stiffness runs, the explicit run at speed and the
+/// resonance speed's reference (compare's FE sweep or modal analysis).
 pub fn run(
     case: &Case,
     fe_runs: &[FeStiffnessRun],
     dte_run: &FeDte,
+    resonance: ResonanceReference,
     progress: Progress,
 ) -> Result<AccuracyCost, StudyError> {
     let torque = dte_run.torque_nm;
     let speed_rpm = dte_run.speed_rpm;
     // The unmodified pair, whatever the case names its variants (the runs are of it).
     let unmodified = [crate::geometry::FlankModification::none(); 2];
-    let mut rows: Vec<(String, &'static str, f64, MeshStiffness)> = Vec::new();
+    let mut rows: Vec<(String, &'static str, f64, MeshStiffness, Option<ForceLaw>)> = Vec::new();
     for (i, (fine, coarse)) in LTCA_LEVELS.iter().enumerate() {
         progress("LTCA levels", i, LTCA_LEVELS.len());
         let started = std::time::Instant::now();
@@ -198,9 +326,21 @@ pub fn run(
             "ltca",
             started.elapsed().as_secs_f64(),
             mesh,
+            None,
         ));
     }
     progress("LTCA levels", LTCA_LEVELS.len(), LTCA_LEVELS.len());
+    // The case's lumped model: the LTCA's load-dependent force law on the case's mesh.
+    let started = std::time::Instant::now();
+    let ltca = super::ltca::model(case, &unmodified)?;
+    let (mesh, law, _) = super::lumped::ltca_tables(case, &ltca, torque, "ltca force law")?;
+    rows.push((
+        format!("LTCA {} mm, force law", case.file.mesh.fine_element_mm),
+        "ltca",
+        started.elapsed().as_secs_f64(),
+        mesh,
+        Some(law),
+    ));
     let started = std::time::Instant::now();
     let iso = stiffness::iso_6336_method_b(&case.pair, torque, case.material.youngs_modulus)
         .mesh_stiffness(&case.pair, torque);
@@ -209,6 +349,7 @@ pub fn run(
         "analytic",
         started.elapsed().as_secs_f64(),
         iso,
+        None,
     ));
     let started = std::time::Instant::now();
     let pe = potential_energy::potential_energy_table(
@@ -223,6 +364,7 @@ pub fn run(
         "analytic",
         started.elapsed().as_secs_f64(),
         pe,
+        None,
     ));
     for run in fe_runs {
         let scaling = if run.mass_scaling_factor > 1.0 {
@@ -235,36 +377,49 @@ pub fn run(
             "explicit",
             run.wall_s,
             run.stiffness.clone(),
+            None,
         ));
     }
-    let reference = fe_runs
-        .iter()
-        .enumerate()
-        .filter(|(_, r)| r.mass_scaling_factor <= 1.0)
-        .min_by(|(_, a), (_, b)| {
-            a.fine_mm
-                .total_cmp(&b.fine_mm)
-                .then(b.wall_s.total_cmp(&a.wall_s))
-        })
-        .map(|(i, _)| LTCA_LEVELS.len() + 2 + i)
-        .ok_or_else(|| {
-            StudyError::Input(
-                "the chart needs an unscaled explicit FE stiffness run as its reference".into(),
-            )
-        })?;
+    let (mean_stiffness, static_te_peak_to_peak) = ltca_references(case, torque, progress)?;
     let mesh_hz = speed_rpm / 60.0 * case.pair.gears[0].teeth() as f64;
-    let late = ((dte_run.statistics_start_s / dte_run.dt) as usize).min(dte_run.dte.len());
-    let reference_dte = harmonic_amplitudes(&dte_run.dte[late..], dte_run.dt, mesh_hz, 1)[0];
+    let (_, late) = dte_run.window_starts();
+    let window = &dte_run.dte[late..];
+    let amplitude = |x: &[f64]| harmonic_amplitudes(x, dte_run.dt, mesh_hz, 1)[0];
+    let halves = window.split_at(window.len() / 2);
+    let references = References {
+        mean_stiffness,
+        static_te_peak_to_peak,
+        resonance_rpm: Reference {
+            value: resonance.0,
+            uncertainty: resonance.1,
+            source: resonance.2,
+        },
+        dte_mesh_amplitude: Reference {
+            value: amplitude(window),
+            uncertainty: (amplitude(halves.0) - amplitude(halves.1)).abs(),
+            source: format!(
+                "explicit FE at {speed_rpm:.0} rpm ({}); uncertainty: its two window halves apart",
+                dte_run.source
+            ),
+        },
+    };
     let all: Vec<Answers> = rows
         .iter()
-        .map(|(_, family, _, mesh)| answers(case, mesh, *family != "analytic", torque, speed_rpm))
+        .map(|(_, family, _, mesh, law)| {
+            answers(
+                case,
+                (mesh, law.as_ref()),
+                *family != "analytic",
+                torque,
+                speed_rpm,
+            )
+        })
         .collect::<Result<_, _>>()?;
-    let r = &all[reference];
-    let error = |a: f64, b: f64| (a / b - 1.0).abs();
+    let error = |a: f64, r: &Reference| (a / r.value - 1.0).abs();
     let points = rows
         .iter()
         .zip(&all)
-        .map(|((method, family, wall, _), a)| MethodPoint {
+        .map(|((method, family, wall, _, _), a)| MethodPoint {
             method: method.clone(),
             family,
             wall_s: wall + a.lumped_s,
@@ -272,18 +427,46 @@ pub fn run(
             static_te_peak_to_peak_rad: a.static_te_pp,
             resonance_rpm: a.resonance_rpm,
             dte_mesh_amplitude_rad: a.dte_amplitude,
-            mean_stiffness_error: error(a.mean, r.mean),
-            static_te_error: error(a.static_te_pp, r.static_te_pp),
-            resonance_error: error(a.resonance_rpm, r.resonance_rpm),
-            dte_amplitude_error: error(a.dte_amplitude, reference_dte),
+            mean_stiffness_error: error(a.mean, &references.mean_stiffness),
+            static_te_error: error(a.static_te_pp, &references.static_te_peak_to_peak),
+            resonance_error: error(a.resonance_rpm, &references.resonance_rpm),
+            dte_amplitude_error: error(a.dte_amplitude, &references.dte_mesh_amplitude),
         })
         .collect();
     Ok(AccuracyCost {
         case: case.name().to_string(),
-        reference: rows[reference].0.clone(),
-        dte_reference: format!("explicit FE at {speed_rpm:.0} rpm ({})", dte_run.source),
+        references,
         speed_rpm,
-        reference_dte_mesh_amplitude_rad: reference_dte,
         points,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::richardson;
+
+    /// Known answers: f = f₀ + c hᵖ at three sizes of any ratio gives f₀ and p back (no
+    /// uncertainty left but the extrapolation's size); oscillating values give the finest
+    /// with the spread; an order outside [0.5, 6] is not extrapolated.
+    #[test]
+    fn richardson_recovers_a_known_limit() {
+        for (f0, c, p, h) in [
+            (4.0e8, 3.0e10, 1.0, [0.4, 0.2, 0.1]),
+            (5.0e-5, 2.0e-3, 2.0, [1.0, 0.5, 0.2]),
+            (1.0, -0.3, 1.5, [0.4, 0.25, 0.1]),
+        ] {
+            let f = h.map(|h: f64| f0 + c * h.powf(p));
+            let (value, uncertainty, order) = richardson(h, f);
+            assert!((value / f0 - 1.0).abs() < 1e-9, "{value} vs {f0}");
+            assert!((order.unwrap() - p).abs() < 1e-6);
+            let moved = (f[2] - f0).abs();
+            assert!((uncertainty / moved - 1.0).abs() < 1e-6);
+        }
+        let (value, uncertainty, order) = richardson([0.4, 0.2, 0.1], [1.0, 1.2, 1.1]);
+        assert_eq!((value, order), (1.1, None));
+        assert!((uncertainty - 0.1).abs() < 1e-12);
+        // Differences 1e-3 then 1e-6 at halving: order ≈ 10, not believed.
+        let (value, _, order) = richardson([0.4, 0.2, 0.1], [1.001001, 1.000001, 1.0]);
+        assert_eq!((value, order), (1.0, None));
+    }
 }

@@ -693,6 +693,35 @@ fn fe_sweep(
     })
 }
 
+/// The first resonance speed's reference for the accuracy chart: the explicit FE's speed sweep
+/// (its fitted peak, with the fit's jackknife uncertainty) when compare ran one, else the FE
+/// modal analysis on the case's mesh, driver held (the explicit FE's boundary), with its
+/// difference to the modal analysis on the explicit FE's mesh as the uncertainty.
+pub fn resonance_reference(
+    case: &Case,
+    summary: &CompareSummary,
+) -> super::accuracy::ResonanceReference {
+    let per_hz = 60.0 / case.pair.gears[0].teeth() as f64;
+    match &summary.fe_sweep {
+        Some(sweep) => (
+            sweep.resonance_rpm_fe,
+            sweep.resonance_rpm_fe_uncertainty,
+            format!(
+                "explicit FE speed sweep ({} speeds), fitted peak; uncertainty: leave-one-out jackknife of the fit",
+                sweep.fe.len()
+            ),
+        ),
+        None => {
+            let held = &summary.driver_held;
+            (
+                per_hz * held.fe_modal_case_mesh_mean_hz,
+                per_hz * (held.fe_modal_case_mesh_mean_hz - held.fe_modal_mean_hz).abs(),
+                "FE modal analysis of the meshed pair on the case's mesh, driver held (f_mesh = f_n); uncertainty: its difference to the explicit FE's mesh".into(),
+            )
+        }
+    }
+}
+
 /// The error of a lumped steady state that grew without bound at `speed_rpm`.
 pub fn lumped_diverged(speed_rpm: f64) -> StudyError {
     StudyError::Input(format!(

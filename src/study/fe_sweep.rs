@@ -164,8 +164,10 @@ pub struct BandRun {
 pub struct FeSweep {
     pub fe: Vec<FeSpeed>,
     pub models: Vec<ModelSweep>,
-    /// The FE's fitted resonance [rpm], the fit's ζ and its peak first mesh harmonic [rad].
+    /// The FE's fitted resonance [rpm], its jackknife uncertainty [rpm]
+    /// ([`resonance_uncertainty`]), the fit's ζ and its peak first mesh harmonic [rad].
     pub resonance_rpm_fe: f64,
+    pub resonance_rpm_fe_uncertainty: f64,
     pub fitted_damping_ratio_fe: f64,
     pub peak_dte_mesh_amplitude_fe_rad: f64,
     /// The case's model (models[0]) against the FE.
@@ -243,6 +245,33 @@ pub fn resonance_fit(points: &[(f64, f64)]) -> Option<(f64, f64, f64)> {
     Some((nr * (1.0 - 2.0 * zeta * zeta).max(0.0).sqrt(), zeta, peak))
 }
 
+/// The jackknife standard error of [`resonance_fit`]'s peak speed: the fit repeated with each
+/// point left out, √((n − 1)/n Σ(nᵢ − n̄)²) (Efron & Tibshirani, *An Introduction to the
+/// Bootstrap*, §11.2). Zero for points on an exact one-DOF curve; it grows as the points
+/// disagree with that shape or leave the peak unsampled. NaN with fewer than four points.
+pub fn resonance_uncertainty(points: &[(f64, f64)]) -> f64 {
+    let n = points.len();
+    if n < 4 {
+        return f64::NAN;
+    }
+    let fits: Vec<f64> = (0..n)
+        .filter_map(|skip| {
+            let rest: Vec<(f64, f64)> = points
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| *i != skip)
+                .map(|(_, p)| *p)
+                .collect();
+            resonance_fit(&rest).map(|f| f.0)
+        })
+        .collect();
+    if fits.len() != n {
+        return f64::NAN;
+    }
+    let mean = fits.iter().sum::<f64>() / n as f64;
+    ((n - 1) as f64 / n as f64 * fits.iter().map(|f| (f - mean).powi(2)).sum::<f64>()).sqrt()
+}
+
 /// The FE sweep `fe` (ascending speeds) against `models` (key, label, model; the case's model
 /// first): each swept four times as densely from rest and continued up and down
 /// ([`ModelSweep`]). `rb2`: the driven gear's base radius; `decay_time_s`: the mesh mode's
@@ -290,6 +319,7 @@ pub fn run(
     let case_model = &models[0];
     Some(FeSweep {
         resonance_rpm_fe: fe_rpm,
+        resonance_rpm_fe_uncertainty: resonance_uncertainty(&fe_points),
         fitted_damping_ratio_fe: fe_zeta,
         peak_dte_mesh_amplitude_fe_rad: fe_peak,
         resonance_rpm_lumped: case_model.resonance_rpm,
@@ -519,6 +549,16 @@ mod tests {
                 })
                 .collect();
             let (got_nr, got_zeta, peak) = resonance_fit(&points).unwrap();
+            // On an exact one-DOF curve every leave-one-out fit finds the same peak.
+            let jackknife = super::resonance_uncertainty(&points);
+            assert!(jackknife < 1e-3 * nr, "{jackknife}");
+            // Scatter of ±3 % on the amplitudes moves the fits apart.
+            let noisy: Vec<(f64, f64)> = points
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (p.0, p.1 * if i % 2 == 0 { 1.03 } else { 0.97 }))
+                .collect();
+            assert!(super::resonance_uncertainty(&noisy) > jackknife);
             let true_peak = a / (2.0 * zeta * (1.0 - zeta * zeta).sqrt());
             let peak_speed = nr * (1.0 - 2.0 * zeta * zeta).sqrt();
             assert!(

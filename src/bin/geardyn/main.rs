@@ -337,7 +337,14 @@ fn compare(
     if let Some(folders) = chart {
         let primary = cmp::primary_run(&case, &input.fe_runs)
             .context("the chart needs an FE run at speed")?;
-        accuracy_chart(args, &case, folders, &input.fe_runs[primary], &dir)?;
+        let resonance = cmp::resonance_reference(&case, &summary);
+        accuracy_chart(
+            args,
+            &case,
+            folders,
+            (&input.fe_runs[primary], resonance),
+            &dir,
+        )?;
     }
     println!("wrote {}", dir.display());
     Ok(())
@@ -348,7 +355,7 @@ fn accuracy_chart(
     args: &CommonArgs,
     case: &Case,
     folders: &[PathBuf],
-    dte_run: &study::compare::FeDte,
+    (dte_run, resonance): (&study::compare::FeDte, study::accuracy::ResonanceReference),
     dir: &Path,
 ) -> Result<()> {
     let mut folders = folders.to_vec();
@@ -367,7 +374,7 @@ fn accuracy_chart(
         .map(|d| report::compare::read_fe_stiffness_run(d, pitch).map_err(anyhow::Error::msg))
         .collect::<Result<Vec<_>>>()?;
     let bar = staged_bar();
-    let chart = study::accuracy::run(case, &runs, dte_run, &stage(&bar))?;
+    let chart = study::accuracy::run(case, &runs, dte_run, resonance, &stage(&bar))?;
     bar.finish_and_clear();
     print!(
         "{}",

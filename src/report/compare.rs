@@ -56,7 +56,14 @@ pub fn read_fe_run(dir: &Path) -> Result<FeDte, String> {
             .ok_or_else(|| format!("{shown}/history.csv has no column {name}"))
     };
     let (time_col, dte_col) = (column("time_s")?, column("dte_rad")?);
-    let (mut time, mut dte) = (Vec::new(), Vec::new());
+    // The back flanks' contact forces of every pair (absent from older or synthetic runs).
+    let back_cols: Vec<usize> = headers
+        .iter()
+        .enumerate()
+        .filter(|(_, h)| h.starts_with("force_back_"))
+        .map(|(i, _)| i)
+        .collect();
+    let (mut time, mut dte, mut back) = (Vec::new(), Vec::new(), Vec::new());
     for record in reader.records() {
         let record = record.map_err(|e| format!("{shown}/history.csv: {e}"))?;
         let value = |i: usize| {
@@ -66,6 +73,14 @@ pub fn read_fe_run(dir: &Path) -> Result<FeDte, String> {
         };
         time.push(value(time_col)?);
         dte.push(value(dte_col)?);
+        if !back_cols.is_empty() {
+            back.push(
+                back_cols
+                    .iter()
+                    .map(|&i| value(i))
+                    .sum::<Result<f64, String>>()?,
+            );
+        }
     }
     if time.len() < 16 {
         return Err(format!("{shown}/history.csv holds {} samples", time.len()));
@@ -78,6 +93,7 @@ pub fn read_fe_run(dir: &Path) -> Result<FeDte, String> {
         torque_nm: number(&["scene", "torque"])?,
         dt,
         dte,
+        back_flank_force: back,
         ramp_end_s: number(&["scene", "ramp_time"])?,
         statistics_start_s: number(&["statistics_start_s"])?,
         wall_s: number(&["total_wall_s"])?,
@@ -394,6 +410,7 @@ fn write_fe_sweep(
         "fe_dte_peak_to_peak_urad",
         "fe_growth",
         "fe_back_flank_share",
+        "fe_back_flank_force_max_n",
     ]
     .map(String::from)
     .to_vec();
@@ -419,6 +436,7 @@ fn write_fe_sweep(
                 format!("{:.5}", um(s.dte_peak_to_peak_rad)),
                 format!("{:.4}", s.growth),
                 format!("{:.4}", s.back_flank_share),
+                format!("{:.1}", s.back_flank_force_max_n),
             ];
             for m in &sweep.models {
                 let l = &m.at_fe_speeds[i];

@@ -67,6 +67,9 @@ pub struct FeDte {
     /// Uniform sampling interval [s] and the angular DTE of the driven gear [rad].
     pub dt: f64,
     pub dte: Vec<f64>,
+    /// The back flanks' total contact force at the same samples [N]; empty when the run's
+    /// history does not hold it.
+    pub back_flank_force: Vec<f64>,
     /// End of the ramp, and the start of the statistics (the ramp's ringing decayed) [s].
     pub ramp_end_s: f64,
     pub statistics_start_s: f64,

@@ -40,10 +40,14 @@ pub struct FeSpeed {
     /// rms about the mean of the window's last third over its first third: about 1 when the
     /// response settled, above 1 while it grows.
     pub growth: f64,
-    /// Share of the window with the DTE below the back flanks' first contact, −j/r_b2 from the
-    /// unloaded kinematic position (j the normal backlash): the back flanks loaded. Unmodified
-    /// flanks have no unloaded TE, and at j = 0 both flanks touch at DTE = 0.
+    /// Share of the window with the back flanks loaded: from the run's back-flank contact
+    /// forces where its history holds them (any force > 0), else from the DTE below the back
+    /// flanks' first contact, −j/r_b2 from the unloaded kinematic position (j the normal
+    /// backlash; unmodified flanks have no unloaded TE, and at j = 0 both flanks touch at
+    /// DTE = 0).
     pub back_flank_share: f64,
+    /// The largest back-flank contact force over the window [N] (NaN without the forces).
+    pub back_flank_force_max_n: f64,
 }
 
 impl FeSpeed {
@@ -62,7 +66,15 @@ impl FeSpeed {
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
                 (l.min(*v), h.max(*v))
             });
-        let back = window.iter().filter(|v| **v < back_contact_rad).count();
+        let forces = run.back_flank_force.get(start..).unwrap_or(&[]);
+        let back = match forces.is_empty() {
+            true => window.iter().filter(|v| **v < back_contact_rad).count(),
+            false => forces.iter().filter(|f| **f > 0.0).count(),
+        };
+        let back_max = match forces.is_empty() {
+            true => f64::NAN,
+            false => forces.iter().copied().fold(0.0, f64::max),
+        };
         let mesh_hz = run.speed_rpm / 60.0 * teeth;
         FeSpeed {
             speed_rpm: run.speed_rpm,
@@ -73,6 +85,7 @@ impl FeSpeed {
             window_s: (start as f64 * run.dt, run.dte.len() as f64 * run.dt),
             growth,
             back_flank_share: back as f64 / window.len().max(1) as f64,
+            back_flank_force_max_n: back_max,
         }
     }
 }
@@ -463,11 +476,15 @@ pub fn outcome(s: &FeSpeed) -> String {
         _ => "bounded",
     };
     format!(
-        "{state}: rms ×{:.2} from the window's first third to its last; DTE peak-to-peak {:.2} urad = {:.2} × its mean; back flanks loaded {:.0} % of the window",
+        "{state}: rms ×{:.2} from the window's first third to its last; DTE peak-to-peak {:.2} urad = {:.2} × its mean; back flanks loaded {:.0} % of the window{}",
         s.growth,
         s.dte_peak_to_peak_rad * 1e6,
         s.dte_peak_to_peak_rad / s.dte_mean_rad.abs(),
-        100.0 * s.back_flank_share
+        100.0 * s.back_flank_share,
+        match s.back_flank_force_max_n.is_finite() {
+            true => format!(", up to {:.0} N", s.back_flank_force_max_n),
+            false => String::new(),
+        }
     )
 }
 
@@ -493,6 +510,7 @@ mod tests {
                         * (std::f64::consts::TAU * mesh_hz * t).cos()
                 })
                 .collect(),
+            back_flank_force: Vec::new(),
             ramp_end_s: 0.01,
             statistics_start_s: 0.012,
             wall_s: 0.0,
@@ -517,6 +535,15 @@ mod tests {
         assert!(outcome(&steady).starts_with("bounded"));
         let no_contact = FeSpeed::measure(&record(mean, 0.5 * mean, 0.0), 36.0, 0.0);
         assert_eq!(no_contact.back_flank_share, 0.0);
+        // With the back flanks' forces in the record they decide: loaded in every fourth
+        // sample of the window → 1/4, whatever the DTE.
+        let mut with_forces = record(mean, 0.5 * mean, 0.0);
+        with_forces.back_flank_force = (0..with_forces.dte.len())
+            .map(|k| if k % 4 == 0 { 120.0 } else { 0.0 })
+            .collect();
+        let measured = FeSpeed::measure(&with_forces, 36.0, 0.0);
+        assert!((measured.back_flank_share - 0.25).abs() < 1e-3);
+        assert_eq!(measured.back_flank_force_max_n, 120.0);
 
         let lambda = 150.0;
         let growing = FeSpeed::measure(&record(mean, 1e-6, lambda), 36.0, 0.0);

@@ -842,27 +842,62 @@ fn sections(
             ),
         ],
     });
+    let mut frequency_text = vec![format!(
+        "Mesh mode, both gears free: FE modal {} Hz, the lumped model (as the sweeps integrate it) {} Hz; driver held: {} / {} Hz. compare/table.md lists every method.",
+        show(s.mesh_mode_fe_modal_free_hz, 0),
+        show(s.mesh_mode_lumped_free_hz, 0),
+        show(s.mesh_mode_fe_modal_driver_held_hz, 0),
+        show(s.mesh_mode_lumped_driver_held_hz, 0),
+    )];
+    let mut frequency_plots = spectra(dir);
+    if let Some(sweep) = compare.as_ref().and_then(|c| c.get("fe_sweep")) {
+        let n = |key: &str| number(compare, &["fe_sweep", key]);
+        frequency_text.push(format!(
+            "The explicit FE through the resonance ({} speeds, speed drive as the FE): resonance {} rpm (FE) against {} rpm (the case's lumped model, {}); peak first mesh harmonic {}; DTE rms at most {} apart. Where a lumped model's sweep diverged, compare/table.md says what the FE did there.",
+            sweep.get("fe").and_then(|f| f.as_array()).map_or(0, |f| f.len()),
+            show(n("resonance_rpm_fe"), 0),
+            show(n("resonance_rpm_lumped"), 0),
+            n("resonance_rpm_rel_err").map_or("–".into(), |r| format!("{:+.2} %", 100.0 * r)),
+            n("peak_dte_mesh_amplitude_rel_err").map_or("–".into(), |r| format!("{:+.1} %", 100.0 * r)),
+            n("dte_rms_max_rel_err").map_or("–".into(), |r| format!("{:.1} %", 100.0 * r)),
+        ));
+        frequency_plots.push((
+            "Explicit FE through the resonance (markers) against the lumped models (lines)".into(),
+            "compare/fe_sweep.png".into(),
+        ));
+    }
     out.push(Section {
         title: "FE against lumped frequencies".into(),
-        text: vec![format!(
-            "Mesh mode, both gears free: FE modal {} Hz, the lumped model (as the sweeps integrate it) {} Hz; driver held: {} / {} Hz. compare/table.md lists every method.",
-            show(s.mesh_mode_fe_modal_free_hz, 0),
-            show(s.mesh_mode_lumped_free_hz, 0),
-            show(s.mesh_mode_fe_modal_driver_held_hz, 0),
-            show(s.mesh_mode_lumped_driver_held_hz, 0),
-        )],
+        text: frequency_text,
         tables: vec![Table {
             name: "mesh_mode",
             caption: "Mesh-mode frequency by method [Hz]".into(),
-            header: ["method", "both gears free", "driver held"].map(String::from).to_vec(),
+            header: ["method", "both gears free", "driver held"]
+                .map(String::from)
+                .to_vec(),
             rows: [
-                ("lumped √(k/m), rigid gears, k LTCA on the explicit mesh", "lumped_ltca_secant_hz"),
-                ("lumped, elastic bodies, k LTCA tangent on the explicit mesh", "lumped_ltca_tangent_elastic_hz"),
+                (
+                    "lumped √(k/m), rigid gears, k LTCA on the explicit mesh",
+                    "lumped_ltca_secant_hz",
+                ),
+                (
+                    "lumped, elastic bodies, k LTCA tangent on the explicit mesh",
+                    "lumped_ltca_tangent_elastic_hz",
+                ),
                 ("lumped √(k/m), rigid gears, k FE DTE", "lumped_fe_hz"),
                 ("lumped, elastic bodies, k FE DTE", "lumped_fe_elastic_hz"),
-                ("FE modal on the explicit mesh (mean over positions)", "fe_modal_mean_hz"),
-                ("the lumped model as the sweeps (the case's mesh)", "lumped_model_hz"),
-                ("FE modal on the case's mesh (mean over positions)", "fe_modal_case_mesh_mean_hz"),
+                (
+                    "FE modal on the explicit mesh (mean over positions)",
+                    "fe_modal_mean_hz",
+                ),
+                (
+                    "the lumped model as the sweeps (the case's mesh)",
+                    "lumped_model_hz",
+                ),
+                (
+                    "FE modal on the case's mesh (mean over positions)",
+                    "fe_modal_case_mesh_mean_hz",
+                ),
             ]
             .iter()
             .map(|(method, key)| {
@@ -874,7 +909,7 @@ fn sections(
             })
             .collect(),
         }],
-        plots: spectra(dir),
+        plots: frequency_plots,
     });
     out
 }

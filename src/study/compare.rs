@@ -696,6 +696,28 @@ fn fe_sweep(
     })
 }
 
+/// Speeds of the FE speed sweep `run --full` makes.
+pub const FE_SWEEP_SPEEDS: usize = 9;
+
+/// The FE speed sweep of `run --full`: [`FE_SWEEP_SPEEDS`] driver speeds from 0.8 to 1.2 × the
+/// speed-driven pair's resonance (f_mesh = f_n of the case's lumped model on the explicit FE's
+/// boundary: speed drive, no shafts or bearings; within 1 % of the FE modal analysis on the
+/// paper pair, validation/frequencies), to 10 rpm.
+pub fn fe_sweep_speeds(case: &Case) -> Result<Vec<f64>, StudyError> {
+    let mut on_fe_boundary = case.clone();
+    on_fe_boundary.lumped.drive = Drive::Speed;
+    on_fe_boundary.lumped.shafts = [None; 2];
+    on_fe_boundary.lumped.bearings = false;
+    let setup = super::lumped::setup(&on_fe_boundary)?;
+    let resonance = super::lumped::speed_for_mesh_frequency(case, setup.natural_frequency_hz);
+    Ok((0..FE_SWEEP_SPEEDS)
+        .map(|i| {
+            let factor = 0.8 + 0.4 * i as f64 / (FE_SWEEP_SPEEDS - 1) as f64;
+            (factor * resonance / 10.0).round() * 10.0
+        })
+        .collect())
+}
+
 /// The first resonance speed's reference for the accuracy chart: the explicit FE's speed sweep
 /// (its fitted peak, with the fit's jackknife uncertainty) when compare ran one, else the FE
 /// modal analysis on the case's mesh, driver held (the explicit FE's boundary), with its

@@ -35,6 +35,9 @@ pub struct RunPlan {
     pub modal_positions: usize,
     /// Also the labelled paper-stiffness study (needs an FE run at speed).
     pub paper_stiffness: bool,
+    /// Also the explicit FE's speed sweep through the resonance
+    /// ([`super::compare::fe_sweep_speeds`]).
+    pub fe_sweep: bool,
 }
 
 impl RunPlan {
@@ -67,6 +70,7 @@ impl RunPlan {
             // its rows; the headline frequencies come from the case's mesh (compare).
             modal_positions: if full { 16 } else { 4 },
             paper_stiffness: full,
+            fe_sweep: full,
         }
     }
 }

@@ -263,6 +263,10 @@ fn stages(
         .then_some(high_run)
         .into_iter()
         .collect();
+    let fe_sweep = match plan.fe_sweep {
+        true => study::compare::fe_sweep_speeds(case)?,
+        false => Vec::new(),
+    };
     compare(
         &sub("compare"),
         &plan.compare_speeds_rpm,
@@ -273,6 +277,6 @@ fn stages(
             plan.paper_stiffness,
         ),
         None,
-        Vec::new(),
+        fe_sweep,
     )
 }

@@ -29,9 +29,9 @@
 //! n₂ₖ → −n₂ₖ (the back side's outward normal),   aₖ = −((yₖ − O₂) × n₂ₖ)·ẑ
 //! ```
 //! so φ is gear 2's lead and φ₀ the back flanks' unloaded gap (backlash and relief included),
-//! both at the same positions θ₁ as the drive flanks'. For symmetric teeth the back flanks at
-//! θ₁ meet as the drive flanks at ρ − θ₁ ([`GearPair::back_flank_reflection`]); tests/ltca.rs
-//! holds the two models to that.
+//! both at the same positions θ₁ as the drive flanks'. For symmetric teeth without backlash the
+//! back flanks at driver rotation θ₁ meet as the drive flanks at 2ψ₁ − θ₁ (roll angle ξ → ρ − ξ,
+//! [`GearPair::back_flank_reflection`]); tests/ltca.rs holds the two models to that.
 
 pub mod body;
 pub mod contact;
@@ -80,7 +80,6 @@ pub enum LtcaError {
 pub const MIN_POSITIONS: usize = 4;
 pub const MAX_POSITIONS: usize = 100_000;
 
-/// The two bodies and the geometry an LTCA runs on.
 /// The flanks an LTCA loads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum Flank {
@@ -117,6 +116,7 @@ impl Flank {
     }
 }
 
+/// The two bodies and the geometry an LTCA runs on.
 pub struct LtcaModel {
     pub pair: GearPair,
     /// The loaded flanks.
@@ -328,6 +328,10 @@ impl LtcaModel {
     ) -> Result<PositionGeometry, LtcaError> {
         let pair = &self.pair;
         let sense = self.flank.sense();
+        let back_gap = match self.flank {
+            Flank::Drive => 0.0,
+            Flank::Back => pair.backlash_normal.max(0.0),
+        };
         let [rot1, rot2] = self.rotations(driver_rotation);
         let placement = pair.mesh_placement();
         let (o1, o2) = (placement[0].centre, placement[1].centre);
@@ -404,8 +408,9 @@ impl LtcaModel {
             let Some((xi_contact, closing)) = best else {
                 continue;
             };
-            // A pair whose first touch needs more rotation than a tooth can deflect stays open.
-            if closing * pair.gears[1].base_radius > 0.05 * gear1.module() {
+            // A pair whose first touch needs more rotation than a tooth can deflect stays open
+            // (beyond the backlash, which the back flanks' gap holds as a whole).
+            if closing * pair.gears[1].base_radius - back_gap > 0.05 * gear1.module() {
                 continue;
             }
             unloaded = unloaded.min(closing);

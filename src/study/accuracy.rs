@@ -113,8 +113,12 @@ pub struct AccuracyCost {
 /// uncertainty (the extrapolation is trusted to about as much as it moved; Roache's grid
 /// convergence index puts 1.25 × that on f₃). Where the differences change sign (oscillatory
 /// convergence) or the order falls outside [0.5, 6], no extrapolation: f₃, with the largest
-/// distance of f₁, f₂ from it as the uncertainty. Returns (value, uncertainty, order).
+/// distance of f₁, f₂ from it as the uncertainty. Sizes not strictly falling, or a value not
+/// finite: f₃ with a NaN uncertainty. Returns (value, uncertainty, order).
 pub fn richardson(h: [f64; 3], f: [f64; 3]) -> (f64, f64, Option<f64>) {
+    if !(f.iter().all(|v| v.is_finite()) && h[0] > h[1] && h[1] > h[2] && h[2] > 0.0) {
+        return (f[2], f64::NAN, None);
+    }
     let spread = (f[0] - f[2]).abs().max((f[1] - f[2]).abs());
     let fallback = (f[2], spread, None);
     let (d12, d23) = (f[0] - f[1], f[1] - f[2]);
@@ -182,7 +186,7 @@ struct Answers {
 /// The four answers from one k(θ).
 fn answers(
     case: &Case,
-    (mesh, law): (&MeshStiffness, Option<&ForceLaw>),
+    (mesh, laws): (&MeshStiffness, Option<&(ForceLaw, Option<ForceLaw>)>),
     holds_body_twist: bool,
     torque: f64,
     speed_rpm: f64,
@@ -203,10 +207,11 @@ fn answers(
     };
     let m = Drive::Speed.effective_mass(gear_inertias(case), rb);
     let damping = 2.0 * case.fe.mesh_damping_ratio * (hub_to_hub.mean() * m).sqrt();
+    let (law, back_law) = laws.cloned().map_or((None, None), |(l, b)| (Some(l), b));
     let model = lumped_twin(
         case,
         hub_to_hub.clone(),
-        law.cloned(),
+        (law.clone(), back_law.clone()),
         (Drive::Speed, true),
         torque,
         damping,
@@ -215,14 +220,14 @@ fn answers(
         lumped_twin(
             case,
             hub_to_hub,
-            law.cloned(),
+            (law, back_law),
             (Drive::Speed, false),
             torque,
             damping,
         )
     })?;
     // With a force law: its tangent about the design load, what small vibrations feel.
-    let f_n = match law {
+    let f_n = match laws {
         Some(_) => model.linearized().natural_frequency(),
         None => model.natural_frequency(),
     } / std::f64::consts::TAU;
@@ -283,7 +288,7 @@ fn ltca_references(
         let (value, uncertainty, order) = richardson(REFERENCE_LEVELS, f);
         let how = match order {
             Some(p) => format!("extrapolated to zero element size, observed order {p:.2}"),
-            None => "the finest level (the three do not converge monotonically)".into(),
+            None => "the finest level, with the three levels' spread (they do not converge monotonically at an order in [0.5, 6])".into(),
         };
         Reference {
             value,
@@ -313,7 +318,8 @@ pub fn run(
     let speed_rpm = dte_run.speed_rpm;
     // The unmodified pair, whatever the case names its variants (the runs are of it).
     let unmodified = [crate::geometry::FlankModification::none(); 2];
-    let mut rows: Vec<(String, &'static str, f64, MeshStiffness, Option<ForceLaw>)> = Vec::new();
+    type Laws = (ForceLaw, Option<ForceLaw>);
+    let mut rows: Vec<(String, &'static str, f64, MeshStiffness, Option<Laws>)> = Vec::new();
     for (i, (fine, coarse)) in LTCA_LEVELS.iter().enumerate() {
         progress("LTCA levels", i, LTCA_LEVELS.len());
         let started = std::time::Instant::now();
@@ -332,14 +338,13 @@ pub fn run(
     progress("LTCA levels", LTCA_LEVELS.len(), LTCA_LEVELS.len());
     // The case's lumped model: the LTCA's load-dependent force law on the case's mesh.
     let started = std::time::Instant::now();
-    let ltca = super::ltca::model(case, &unmodified)?;
-    let (mesh, law, _) = super::lumped::ltca_tables(case, &ltca, torque, "ltca force law")?;
+    let laws = super::lumped::ltca_laws(case, &unmodified, torque, "ltca force law", true)?;
     rows.push((
         format!("LTCA {} mm, force law", case.file.mesh.fine_element_mm),
         "ltca",
         started.elapsed().as_secs_f64(),
-        mesh,
-        Some(law),
+        laws.mesh,
+        Some((laws.law, laws.back_law)),
     ));
     let started = std::time::Instant::now();
     let iso = stiffness::iso_6336_method_b(&case.pair, torque, case.material.youngs_modulus)
@@ -468,5 +473,10 @@ mod tests {
         // Differences 1e-3 then 1e-6 at halving: order ≈ 10, not believed.
         let (value, _, order) = richardson([0.4, 0.2, 0.1], [1.001001, 1.000001, 1.0]);
         assert_eq!((value, order), (1.0, None));
+        // Sizes out of order, a NaN: no answer but the finest value.
+        let (value, uncertainty, order) = richardson([0.1, 0.2, 0.4], [1.0, 1.1, 1.2]);
+        assert!(value == 1.2 && uncertainty.is_nan() && order.is_none());
+        let (_, uncertainty, _) = richardson([0.4, 0.2, 0.1], [f64::NAN, 1.1, 1.0]);
+        assert!(uncertainty.is_nan());
     }
 }

@@ -288,7 +288,7 @@ pub fn body_twist(case: &Case) -> [f64; 2] {
 pub fn lumped_twin(
     case: &Case,
     mesh: MeshStiffness,
-    law: Option<ForceLaw>,
+    (law, back_law): (Option<ForceLaw>, Option<ForceLaw>),
     (drive, elastic): (Drive, bool),
     torque: f64,
     damping: f64,
@@ -304,6 +304,9 @@ pub fn lumped_twin(
         false => 0.0,
     };
     let (mesh, force_law) = super::lumped::to_rims(mesh, law, twist)?;
+    let back_force_law = back_law
+        .map(|law| super::lumped::law_to_rims(law, twist))
+        .transpose()?;
     Ok(MeshModel {
         structure,
         back_reflection: Some(super::lumped::back_reflection(pair, &mesh)),
@@ -312,7 +315,7 @@ pub fn lumped_twin(
         force: torque / pair.gears[1].base_radius,
         backlash: Some(pair.backlash_normal.max(0.0)),
         force_law,
-        back_force_law: None,
+        back_force_law,
     })
 }
 
@@ -402,7 +405,7 @@ pub fn run(
         lumped_twin(
             case,
             mesh,
-            None,
+            (None, None),
             (drive, elastic),
             torque,
             damping_of(drive),
@@ -498,16 +501,16 @@ pub fn run(
     let fe_sweep = match input.fe_sweep_rpm.as_slice() {
         [] => None,
         rpms => {
-            // The case's model (the LTCA's force law on the case's mesh, as `sweep` integrates
-            // it) on the FE's boundary conditions and damping.
+            // The default lumped model of the unmodified pair (the LTCA's load-dependent force
+            // law on the case's mesh, the back flanks' own where the pair has backlash) on the
+            // FE's boundary conditions and damping.
             progress("lumped model of the FE sweep", 0, 1);
-            let ltca = super::ltca::model(case, &unmodified)?;
-            let (mesh, law, _) =
-                super::lumped::ltca_tables(case, &ltca, torque, "ltca (relief none)")?;
+            let laws =
+                super::lumped::ltca_laws(case, &unmodified, torque, "ltca (relief none)", true)?;
             let case_model = lumped_twin(
                 case,
-                mesh,
-                Some(law),
+                laws.mesh,
+                (Some(laws.law), laws.back_law),
                 (Drive::Speed, true),
                 torque,
                 damping_of(Drive::Speed),
@@ -516,7 +519,7 @@ pub fn run(
             let models = [
                 (
                     "case_model",
-                    "case model (LTCA force law, elastic bodies)",
+                    "lumped model (LTCA force law, elastic bodies)",
                     &case_model,
                 ),
                 (
@@ -685,7 +688,11 @@ fn fe_sweep(
         .fe_runs
         .iter()
         .filter(|run| rpms.iter().any(|r| (r - run.speed_rpm).abs() < 1e-6 * r))
-        .map(|run| super::fe_sweep::FeSpeed::measure(run, teeth, back_contact))
+        // A back-flank force above 1e-3 of the static mesh force counts as contact.
+        .map(|run| {
+            let threshold = 1e-3 * run.torque_nm / rb2;
+            super::fe_sweep::FeSpeed::measure(run, teeth, back_contact, threshold)
+        })
         .collect();
     fe.sort_by(|a, b| a.speed_rpm.total_cmp(&b.speed_rpm));
     let decay_time = 1.0 / (case.fe.mesh_damping_ratio * models[0].2.natural_frequency());
@@ -729,10 +736,10 @@ pub fn resonance_reference(
     let per_hz = 60.0 / case.pair.gears[0].teeth() as f64;
     match &summary.fe_sweep {
         Some(sweep) => (
-            sweep.resonance_rpm_fe,
-            sweep.resonance_rpm_fe_uncertainty,
+            sweep.undamped_resonance_rpm_fe,
+            sweep.undamped_resonance_rpm_fe_uncertainty,
             format!(
-                "explicit FE speed sweep ({} speeds), fitted peak; uncertainty: leave-one-out jackknife of the fit",
+                "explicit FE speed sweep ({} speeds), the fitted one-DOF response's undamped resonance; uncertainty: its leave-one-out jackknife",
                 sweep.fe.len()
             ),
         ),

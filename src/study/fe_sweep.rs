@@ -7,13 +7,14 @@
 //! FE's boundary conditions (speed drive, elastic bodies, the FE's mesh damping, no shafts or
 //! bearings) are set against it, each swept up and down over the same range four times as
 //! densely and solved at each FE speed from rest (as the FE starts):
-//! * the case's model: the LTCA's load-dependent force law W(θ, δ), what `sweep` and `run`
-//!   integrate — the headline numbers;
+//! * the default lumped model of the unmodified pair: the LTCA's load-dependent force law
+//!   W(θ, δ) (the back flanks' own where the pair has backlash), as `sweep` and `run` integrate
+//!   it for the case's default settings — the headline numbers;
 //! * the FE-stiffness twin: the FE's own k(θ) as a secant law, the seed paper's chain.
 //!
 //! The resonance speed of each is the peak of a one-degree-of-freedom response
 //! |X(n)| = A/√((1 − r²)² + (2ζr)²), r = n/n_r, fitted to the first-harmonic amplitudes by
-//! least squares ([`resonance_fit`]): between eight FE speeds the fit places the peak where the
+//! least squares ([`resonance_fit`]): between the FE speeds the fit places the peak where the
 //! samples' shape puts it, not at the nearest sample. Where a model's sweep diverges (a
 //! zero-backlash pair's flank switching, validation/lumped-twin), the speeds it diverged at in
 //! either direction form its unstable band, and the FE runs in or next to it are reported as
@@ -41,7 +42,7 @@ pub struct FeSpeed {
     /// response settled, above 1 while it grows.
     pub growth: f64,
     /// Share of the window with the back flanks loaded: from the run's back-flank contact
-    /// forces where its history holds them (any force > 0), else from the DTE below the back
+    /// forces where its history holds them (above a threshold, [`FeSpeed::measure`]), else from the DTE below the back
     /// flanks' first contact, −j/r_b2 from the unloaded kinematic position (j the normal
     /// backlash; unmodified flanks have no unloaded TE, and at j = 0 both flanks touch at
     /// DTE = 0).
@@ -52,8 +53,15 @@ pub struct FeSpeed {
 
 impl FeSpeed {
     /// The FE `run` at one speed of the sweep; `teeth`: the driver's (f_mesh = z₁ n/60);
-    /// `back_contact_rad`: the DTE at which the back flanks touch (−j/r_b2).
-    pub fn measure(run: &FeDte, teeth: f64, back_contact_rad: f64) -> Self {
+    /// `back_contact_rad`: the DTE at which the back flanks touch (−j/r_b2);
+    /// `back_force_threshold_n`: the back-flank force that counts as contact (the history's
+    /// interval means carry the penalty contact's grazing noise).
+    pub fn measure(
+        run: &FeDte,
+        teeth: f64,
+        back_contact_rad: f64,
+        back_force_threshold_n: f64,
+    ) -> Self {
         let (_, start) = run.window_starts();
         let window = &run.dte[start..];
         let third = window.len() / 3;
@@ -69,7 +77,10 @@ impl FeSpeed {
         let forces = run.back_flank_force.get(start..).unwrap_or(&[]);
         let back = match forces.is_empty() {
             true => window.iter().filter(|v| **v < back_contact_rad).count(),
-            false => forces.iter().filter(|f| **f > 0.0).count(),
+            false => forces
+                .iter()
+                .filter(|f| **f > back_force_threshold_n)
+                .count(),
         };
         let back_max = match forces.is_empty() {
             true => f64::NAN,
@@ -177,10 +188,13 @@ pub struct BandRun {
 pub struct FeSweep {
     pub fe: Vec<FeSpeed>,
     pub models: Vec<ModelSweep>,
-    /// The FE's fitted resonance [rpm], its jackknife uncertainty [rpm]
-    /// ([`resonance_uncertainty`]), the fit's ζ and its peak first mesh harmonic [rad].
+    /// The FE's fitted resonance (the response's peak) [rpm], the fit's ζ and its peak first
+    /// mesh harmonic [rad].
     pub resonance_rpm_fe: f64,
-    pub resonance_rpm_fe_uncertainty: f64,
+    /// The fit's undamped resonance, f_mesh = f_n [rpm] ([`undamped_resonance`]), and its
+    /// jackknife standard error [rpm] ([`jackknife`] over the FE speeds).
+    pub undamped_resonance_rpm_fe: f64,
+    pub undamped_resonance_rpm_fe_uncertainty: f64,
     pub fitted_damping_ratio_fe: f64,
     pub peak_dte_mesh_amplitude_fe_rad: f64,
     /// The case's model (models[0]) against the FE.
@@ -258,31 +272,37 @@ pub fn resonance_fit(points: &[(f64, f64)]) -> Option<(f64, f64, f64)> {
     Some((nr * (1.0 - 2.0 * zeta * zeta).max(0.0).sqrt(), zeta, peak))
 }
 
-/// The jackknife standard error of [`resonance_fit`]'s peak speed: the fit repeated with each
-/// point left out, √((n − 1)/n Σ(nᵢ − n̄)²) (Efron & Tibshirani, *An Introduction to the
-/// Bootstrap*, §11.2). Zero for points on an exact one-DOF curve; it grows as the points
-/// disagree with that shape or leave the peak unsampled. NaN with fewer than four points.
-pub fn resonance_uncertainty(points: &[(f64, f64)]) -> f64 {
+/// The jackknife standard error of an `estimate` from `points`: the estimate repeated with each
+/// point left out, √((n − 1)/n Σ(θᵢ − θ̄)²) (Efron & Tibshirani, *An Introduction to the
+/// Bootstrap*, §11.2; for the mean it is s/√n exactly). NaN with fewer than four points or when
+/// a leave-one-out estimate fails.
+pub fn jackknife<T: Copy>(points: &[T], estimate: impl Fn(&[T]) -> Option<f64>) -> f64 {
     let n = points.len();
     if n < 4 {
         return f64::NAN;
     }
-    let fits: Vec<f64> = (0..n)
+    let estimates: Vec<f64> = (0..n)
         .filter_map(|skip| {
-            let rest: Vec<(f64, f64)> = points
+            let rest: Vec<T> = points
                 .iter()
                 .enumerate()
                 .filter(|(i, _)| *i != skip)
                 .map(|(_, p)| *p)
                 .collect();
-            resonance_fit(&rest).map(|f| f.0)
+            estimate(&rest)
         })
         .collect();
-    if fits.len() != n {
+    if estimates.len() != n {
         return f64::NAN;
     }
-    let mean = fits.iter().sum::<f64>() / n as f64;
-    ((n - 1) as f64 / n as f64 * fits.iter().map(|f| (f - mean).powi(2)).sum::<f64>()).sqrt()
+    let mean = estimates.iter().sum::<f64>() / n as f64;
+    ((n - 1) as f64 / n as f64 * estimates.iter().map(|e| (e - mean).powi(2)).sum::<f64>()).sqrt()
+}
+
+/// [`resonance_fit`]'s undamped resonance n_r = n_peak/√(1 − 2ζ²) [rpm]: f_mesh = f_n, what a
+/// natural frequency predicts (the peak of the displacement lies ζ² lower).
+pub fn undamped_resonance(points: &[(f64, f64)]) -> Option<f64> {
+    resonance_fit(points).map(|(peak, zeta, _)| peak / (1.0 - 2.0 * zeta * zeta).max(1e-12).sqrt())
 }
 
 /// The FE sweep `fe` (ascending speeds) against `models` (key, label, model; the case's model
@@ -332,7 +352,8 @@ pub fn run(
     let case_model = &models[0];
     Some(FeSweep {
         resonance_rpm_fe: fe_rpm,
-        resonance_rpm_fe_uncertainty: resonance_uncertainty(&fe_points),
+        undamped_resonance_rpm_fe: fe_rpm / (1.0 - 2.0 * fe_zeta * fe_zeta).max(1e-12).sqrt(),
+        undamped_resonance_rpm_fe_uncertainty: jackknife(&fe_points, undamped_resonance),
         fitted_damping_ratio_fe: fe_zeta,
         peak_dte_mesh_amplitude_fe_rad: fe_peak,
         resonance_rpm_lumped: case_model.resonance_rpm,
@@ -490,7 +511,20 @@ pub fn outcome(s: &FeSpeed) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::{outcome, resonance_fit, FeSpeed, GROWTH_LIMIT};
+    use super::{jackknife, outcome, resonance_fit, FeSpeed, GROWTH_LIMIT};
+
+    /// The jackknife's standard error of the mean is s/√n exactly (s the sample standard
+    /// deviation): a scale or a (n − 1)/n slip shows.
+    #[test]
+    fn the_jackknife_of_the_mean_is_its_standard_error() {
+        let x = [3.0, 7.5, -1.25, 4.0, 10.0, 2.5];
+        let n = x.len() as f64;
+        let mean = x.iter().sum::<f64>() / n;
+        let s = (x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+        let got = jackknife(&x, |p| Some(p.iter().sum::<f64>() / p.len() as f64));
+        assert!((got / (s / n.sqrt()) - 1.0).abs() < 1e-12, "{got}");
+        assert!(jackknife(&x[..3], |_| Some(1.0)).is_nan());
+    }
     use crate::study::compare::FeDte;
 
     /// A synthetic FE record: DTE = mean + A e^{λt} cos(2π f_mesh t) at 5 000 rpm, 36 teeth.
@@ -525,7 +559,7 @@ mod tests {
     #[test]
     fn the_fe_measures_read_known_signals() {
         let (mean, a) = (1.2e-4, 2.0e-4);
-        let steady = FeSpeed::measure(&record(mean, a, 0.0), 36.0, 0.0);
+        let steady = FeSpeed::measure(&record(mean, a, 0.0), 36.0, 0.0, 1.0);
         assert!((steady.mesh_amplitude_rad / a - 1.0).abs() < 1e-3);
         assert!((steady.dte_rms_rad / (a / 2f64.sqrt()) - 1.0).abs() < 1e-2);
         assert!((steady.growth - 1.0).abs() < 1e-2, "{}", steady.growth);
@@ -533,7 +567,7 @@ mod tests {
         assert!((steady.back_flank_share - share).abs() < 2e-3);
         assert!((steady.dte_peak_to_peak_rad / (2.0 * a) - 1.0).abs() < 1e-3);
         assert!(outcome(&steady).starts_with("bounded"));
-        let no_contact = FeSpeed::measure(&record(mean, 0.5 * mean, 0.0), 36.0, 0.0);
+        let no_contact = FeSpeed::measure(&record(mean, 0.5 * mean, 0.0), 36.0, 0.0, 1.0);
         assert_eq!(no_contact.back_flank_share, 0.0);
         // With the back flanks' forces in the record they decide: loaded in every fourth
         // sample of the window → 1/4, whatever the DTE.
@@ -541,12 +575,12 @@ mod tests {
         with_forces.back_flank_force = (0..with_forces.dte.len())
             .map(|k| if k % 4 == 0 { 120.0 } else { 0.0 })
             .collect();
-        let measured = FeSpeed::measure(&with_forces, 36.0, 0.0);
+        let measured = FeSpeed::measure(&with_forces, 36.0, 0.0, 1.0);
         assert!((measured.back_flank_share - 0.25).abs() < 1e-3);
         assert_eq!(measured.back_flank_force_max_n, 120.0);
 
         let lambda = 150.0;
-        let growing = FeSpeed::measure(&record(mean, 1e-6, lambda), 36.0, 0.0);
+        let growing = FeSpeed::measure(&record(mean, 1e-6, lambda), 36.0, 0.0, 1.0);
         let window = 0.03 - 0.012;
         let expected = (lambda * 2.0 * window / 3.0).exp();
         assert!(
@@ -576,16 +610,11 @@ mod tests {
                 })
                 .collect();
             let (got_nr, got_zeta, peak) = resonance_fit(&points).unwrap();
-            // On an exact one-DOF curve every leave-one-out fit finds the same peak.
-            let jackknife = super::resonance_uncertainty(&points);
-            assert!(jackknife < 1e-3 * nr, "{jackknife}");
-            // Scatter of ±3 % on the amplitudes moves the fits apart.
-            let noisy: Vec<(f64, f64)> = points
-                .iter()
-                .enumerate()
-                .map(|(i, p)| (p.0, p.1 * if i % 2 == 0 { 1.03 } else { 0.97 }))
-                .collect();
-            assert!(super::resonance_uncertainty(&noisy) > jackknife);
+            let undamped = super::undamped_resonance(&points).unwrap();
+            assert!((undamped / nr - 1.0).abs() < 1e-4, "{undamped} vs {nr}");
+            // On an exact one-DOF curve every leave-one-out fit finds the same resonance.
+            let spread = super::jackknife(&points, super::undamped_resonance);
+            assert!(spread < 1e-3 * nr, "{spread}");
             let true_peak = a / (2.0 * zeta * (1.0 - zeta * zeta).sqrt());
             let peak_speed = nr * (1.0 - 2.0 * zeta * zeta).sqrt();
             assert!(

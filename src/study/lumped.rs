@@ -199,29 +199,20 @@ pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
     let (mut mesh, mut force_law, back_law, reference) = match &settings.stiffness {
         StiffnessSource::Ltca => {
             let variant = super::relief_variant(case, settings.relief.as_deref())?;
-            let ltca = super::ltca::model(case, &variant.modifications)?;
             let source = format!("ltca (relief {})", variant.name);
-            let (mesh, law, reference) = ltca_tables(case, &ltca, torque, &source)?;
             let load_dependent = settings.force_law == ForceLawKind::LoadDependent;
-            // The mirror is exact for symmetric teeth without backlash (tests/ltca.rs, to 1e-5);
-            // a backlash shifts it by its rotation, so the back flanks then get their own LTCA.
-            let back_law = match load_dependent && case.pair.backlash_normal > 0.0 {
-                true => {
-                    let back = super::ltca::back_model(case, &variant.modifications)?;
-                    Some(force_law_of(
-                        case,
-                        &back,
-                        torque,
-                        &format!("{source}, back flanks"),
-                    )?)
-                }
-                false => None,
-            };
+            let laws = ltca_laws(
+                case,
+                &variant.modifications,
+                torque,
+                &source,
+                load_dependent,
+            )?;
             (
-                mesh,
-                load_dependent.then_some(law),
-                back_law,
-                Some(reference),
+                laws.mesh,
+                load_dependent.then_some(laws.law),
+                laws.back_law,
+                Some(laws.reference),
             )
         }
         source => (mesh_stiffness(case, source, torque)?, None, None, None),
@@ -280,6 +271,51 @@ pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
         model_note,
         self_checks,
         body_twist: structure_body_twist(case),
+    })
+}
+
+/// The LTCA's answers the lumped model is built from ([`ltca_laws`]).
+pub struct LtcaLaws {
+    /// The secant k(θ), e(θ) at the design torque (hub to hub).
+    pub mesh: MeshStiffness,
+    /// The drive flanks' force law (hub to hub).
+    pub law: ForceLaw,
+    /// The back flanks' own law where the mirror of the drive flanks is not exact.
+    pub back_law: Option<ForceLaw>,
+    pub reference: QuasiStaticReference,
+}
+
+/// The case's LTCA with `modifications` about the design `torque`: [`ltca_tables`], and with
+/// `back` the back flanks' own force law wherever the pair has a backlash. The mirror is exact
+/// for symmetric teeth without backlash (tests/ltca.rs: 7e-6 of the loaded approach); a
+/// backlash shifts it by its rotation (3 % of the STE where a pair enters), so the back flanks
+/// then get the LTCA of the back flanks under the reversed torque.
+pub fn ltca_laws(
+    case: &Case,
+    modifications: &[crate::geometry::FlankModification; 2],
+    torque: f64,
+    source: &str,
+    back: bool,
+) -> Result<LtcaLaws, StudyError> {
+    let ltca = super::ltca::model(case, modifications)?;
+    let (mesh, law, reference) = ltca_tables(case, &ltca, torque, source)?;
+    let back_law = match back && case.pair.backlash_normal > 0.0 {
+        true => {
+            let back = super::ltca::back_model(case, modifications)?;
+            Some(force_law_of(
+                case,
+                &back,
+                torque,
+                &format!("{source}, back flanks"),
+            )?)
+        }
+        false => None,
+    };
+    Ok(LtcaLaws {
+        mesh,
+        law,
+        back_law,
+        reference,
     })
 }
 

@@ -93,6 +93,7 @@ pub fn integrators(case: &Case) -> Result<IntegratorSummary, StudyError> {
         m.backlash = backlash;
         // The schemes are held to theory on this linear law, not the case's force law.
         m.force_law = None;
+        m.back_force_law = None;
         m
     };
     let smooth = variant(0.2, None);

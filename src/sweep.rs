@@ -13,7 +13,8 @@
 use rayon::prelude::*;
 
 use crate::lumped::{
-    floquet_max_multiplier, periodic_orbit, record_periods, steady_state, MeshModel, State,
+    largest_modulus, linear_floquet_multipliers, periodic_orbit, record_periods, steady_state,
+    MeshModel, State,
 };
 use crate::signal::{amplitude_spectrum, strongest_lines};
 
@@ -230,7 +231,7 @@ pub fn refined_up_sweep(model: &MeshModel, rpms: &[f64], refinement: usize) -> R
 }
 
 fn analyse(
-    model: &MeshModel,
+    (model, linear): (&MeshModel, &MeshModel),
     rpm: f64,
     start: State,
     direction: &str,
@@ -248,7 +249,9 @@ fn analyse(
             driver_speed_rpm: rpm,
             direction: direction.into(),
             periods: s.periods,
-            floquet_max_multiplier: floquet_max_multiplier(model, speed, steps),
+            floquet_max_multiplier: largest_modulus(&linear_floquet_multipliers(
+                linear, speed, steps,
+            )),
             orbit_floquet_max_multiplier: orbit(start),
             last_orbit_floquet_max_multiplier: None,
             bound_m: model.divergence_bound(),
@@ -281,7 +284,7 @@ fn analyse(
         separated: s.separated,
         harmonics,
         peaks,
-        floquet_linear: floquet_max_multiplier(model, speed, steps),
+        floquet_linear: largest_modulus(&linear_floquet_multipliers(linear, speed, steps)),
         floquet_orbit: orbit(s.start),
         periods: s.periods,
         converged: s.converged,
@@ -352,12 +355,14 @@ pub fn continue_sweep(
     progress: SweepProgress,
     stop: &(dyn Fn() -> bool + Sync),
 ) -> SweepProgress {
+    // The drive flanks' linearization does not depend on the speed: once for the sweep.
+    let linear = model.linearized();
     let run = |order: Vec<f64>, mut points: Vec<SweepPoint>, mut state: State, direction| {
         for rpm in order.into_iter().skip(points.len()) {
             if stop() {
                 break;
             }
-            match analyse(model, rpm, state, direction) {
+            match analyse((model, &linear), rpm, state, direction) {
                 Ok((point, next)) => {
                     state = next;
                     points.push(point);
@@ -421,10 +426,12 @@ pub fn peaks(rpms: &[f64], values: &[f64]) -> Vec<f64> {
 /// Independent points in parallel (no continuation), for maps such as Floquet stability: the
 /// largest multiplier of the linearized drive flanks at each speed.
 pub fn floquet_map(model: &MeshModel, rpms: &[f64]) -> Vec<f64> {
+    let linear = model.linearized();
     rpms.par_iter()
         .map(|rpm| {
             let speed = rpm * 2.0 * std::f64::consts::PI / 60.0;
-            floquet_max_multiplier(model, speed, steps_per_period(model, speed))
+            let steps = steps_per_period(model, speed);
+            largest_modulus(&linear_floquet_multipliers(&linear, speed, steps))
         })
         .collect()
 }

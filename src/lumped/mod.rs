@@ -608,7 +608,7 @@ pub fn floquet_max_multiplier(
 }
 
 /// The largest |λ| of a set of Floquet multipliers.
-fn largest_modulus(multipliers: &[nalgebra::Complex<f64>]) -> f64 {
+pub fn largest_modulus(multipliers: &[nalgebra::Complex<f64>]) -> f64 {
     multipliers.iter().map(|l| l.norm()).fold(0.0, f64::max)
 }
 
@@ -619,13 +619,23 @@ pub fn floquet_multipliers(
     driver_speed: f64,
     steps_per_period: usize,
 ) -> Vec<nalgebra::Complex<f64>> {
-    let linear = model.linearized();
-    let active = model.active_components();
+    linear_floquet_multipliers(&model.linearized(), driver_speed, steps_per_period)
+}
+
+/// [`floquet_multipliers`] of a model already [`MeshModel::linearized`]: the linearization
+/// (the law's tangent about the quasi-static state at every position) does not depend on the
+/// speed, so a sweep or a map makes it once.
+pub fn linear_floquet_multipliers(
+    linear: &MeshModel,
+    driver_speed: f64,
+    steps_per_period: usize,
+) -> Vec<nalgebra::Complex<f64>> {
+    let active = linear.active_components();
     let n = active.len();
     let mut monodromy = DMatrix::zeros(n, n);
     for (column, &i) in active.iter().enumerate() {
         let end = integrate_period(
-            &linear,
+            linear,
             driver_speed,
             steps_per_period,
             State::unit(i),

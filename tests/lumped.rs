@@ -758,6 +758,54 @@ fn the_orbit_of_the_switched_model_shows_where_the_sweep_diverges() {
     assert!(message.contains("ends between the two speeds"), "{message}");
 }
 
+/// The stability map predicts where the sweep will diverge before it does: on the issue's case
+/// (secant law, elastic bodies, ζ = 0.05, zero backlash) the first speed of a 10 rpm grid at
+/// which the map (each speed shot on its own from the quasi-static state) finds no period-one
+/// orbit or one with a multiplier above 1 lies within 1 % of the speed at which the up-sweep
+/// through the same grid diverges (issue 29's target; measured: both at 7 320 rpm).
+#[test]
+fn the_stability_map_predicts_the_divergence_onset() {
+    let path = std::env::temp_dir().join(format!("geardyn-onset-{}.toml", std::process::id()));
+    std::fs::write(&path, geardyn::samples::paper36_case().text).unwrap();
+    let case = geardyn::case::Case::load_with(
+        Some(&path),
+        &[
+            geardyn::case::Override::set("lumped.force_law", "secant"),
+            geardyn::case::Override::set("lumped.bodies", "elastic"),
+        ],
+    )
+    .unwrap();
+    std::fs::remove_file(&path).ok();
+    let m = geardyn::study::lumped::setup(&case).unwrap().model;
+    let grid: Vec<f64> = (0..=20).map(|i| 7200.0 + 10.0 * i as f64).collect();
+    let map = geardyn::sweep::orbit_floquet_map(&m, &grid);
+    let predicted = grid
+        .iter()
+        .zip(&map)
+        .find(|(_, multiplier)| multiplier.is_none_or(|l| l > 1.0))
+        .map(|(rpm, _)| *rpm)
+        .expect("the map flags an onset in 7200-7400 rpm");
+    let rpms: Vec<f64> = std::iter::once(5000.0)
+        .chain(grid.iter().copied())
+        .collect();
+    let done = geardyn::sweep::continue_sweep(
+        &m,
+        &rpms,
+        geardyn::sweep::SweepProgress::start(&m),
+        &|| false,
+    );
+    assert!(
+        done.up.len() < rpms.len(),
+        "the up-sweep diverges in the grid"
+    );
+    let observed = rpms[done.up.len()];
+    println!("onset: predicted {predicted} rpm, observed {observed} rpm");
+    assert!(
+        (predicted / observed - 1.0).abs() < 0.01,
+        "predicted {predicted} rpm, observed {observed} rpm"
+    );
+}
+
 /// The orbit's Floquet multipliers through the flank switches, against a switched system whose
 /// growth rate is known in closed form. Zero backlash, no load, no TE, the back flanks reading
 /// the drive flanks' stiffness mirrored about θ = 0 (ρ = 0), and a stiffness even in θ: a step

@@ -850,7 +850,12 @@ fn sections(
         show(s.mesh_mode_lumped_driver_held_hz, 0),
     )];
     let mut frequency_plots = spectra(dir);
-    if let Some(sweep) = compare.as_ref().and_then(|c| c.get("fe_sweep")) {
+    // A compare without the FE sweep writes `"fe_sweep": null`.
+    if let Some(sweep) = compare
+        .as_ref()
+        .and_then(|c| c.get("fe_sweep"))
+        .filter(|v| !v.is_null())
+    {
         let n = |key: &str| number(compare, &["fe_sweep", key]);
         frequency_text.push(format!(
             "The explicit FE through the resonance ({} speeds, speed drive as the FE): resonance {} rpm (FE) against {} rpm (the case's lumped model, {}); peak first mesh harmonic {}; DTE rms at most {} apart. Where a lumped model's sweep diverged, compare/table.md says what the FE did there.",

@@ -483,7 +483,7 @@ fn write_fe_sweep(
             "mesh_amplitude_urad",
             "dte_rms_urad",
         ],
-        rows.into_iter(),
+        rows,
     )?;
     let mut series = Vec::new();
     for (i, m) in sweep.models.iter().enumerate() {

@@ -151,7 +151,10 @@ fn the_back_flanks_carry_their_own_law_with_backlash() {
             _ => 0.0,
         };
         let none = [geardyn::geometry::FlankModification::none(); 2];
-        let back = geardyn::study::ltca::back_model(&case, &none).unwrap();
+        let sizes = geardyn::study::ltca::element_sizes(&case);
+        let back =
+            geardyn::study::ltca::model_on_flank(&case, &none, sizes, geardyn::ltca::Flank::Back)
+                .unwrap();
         let rb2 = case.pair.gears[1].base_radius;
         let pitch = case.pair.gears[0].angular_pitch();
         let positions = law.knots.len();

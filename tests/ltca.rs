@@ -5,7 +5,7 @@
 use std::sync::OnceLock;
 
 use geardyn::case::Case;
-use geardyn::ltca::{LtcaError, LtcaModel, PositionResult};
+use geardyn::ltca::{Flank, LtcaError, LtcaModel, PositionResult};
 use geardyn::samples;
 
 const TORQUE: f64 = 143.6;
@@ -411,7 +411,8 @@ fn the_back_flanks_mirror_the_drive_flanks_of_symmetric_teeth() {
             assert!(case.pair.backlash_normal > 0.05 * case.pair.gears[0].module());
         }
         let drive = geardyn::study::ltca::model_with_sizes(&case, &none, fine, coarse).unwrap();
-        let back = geardyn::study::ltca::back_model_with_sizes(&case, &none, fine, coarse).unwrap();
+        let back = geardyn::study::ltca::model_on_flank(&case, &none, (fine, coarse), Flank::Back)
+            .unwrap();
         let torque = case.operating_points[0].torque;
         let (results, periodicity) = back.run_checked(8, torque, &|_| {}).unwrap();
         assert!(periodicity.holds(), "{name}: {periodicity:?}");

@@ -707,6 +707,20 @@ fn the_orbit_multipliers_of_a_linear_model_are_its_monodromy() {
     assert!(centre > 1.0 && floquet_max_multiplier(&m, driver_speed(1.5 * wn), 512) < 1.0);
 }
 
+/// The issue's case: the paper pair (the embedded case) with the secant law and elastic
+/// bodies, ζ = 0.05, zero backlash.
+fn issue_secant_model() -> MeshModel {
+    let case = geardyn::case::Case::load_with(
+        None,
+        &[
+            geardyn::case::Override::set("lumped.force_law", "secant"),
+            geardyn::case::Override::set("lumped.bodies", "elastic"),
+        ],
+    )
+    .unwrap();
+    geardyn::study::lumped::setup(&case).unwrap().model
+}
+
 /// Where the teeth separate and hit the back flanks the linearized drive flanks say nothing of
 /// stability; the integrated model's orbit does. With the secant law, rims and ζ = 0.05 the
 /// paper pair at zero backlash diverges near 7 330 rpm (issue 29) while the drive flanks
@@ -716,18 +730,7 @@ fn the_orbit_multipliers_of_a_linear_model_are_its_monodromy() {
 /// message says so. Far below (5 000 rpm) the orbit's multiplier is the linearization's.
 #[test]
 fn the_orbit_of_the_switched_model_shows_where_the_sweep_diverges() {
-    let path = std::env::temp_dir().join(format!("geardyn-orbit-{}.toml", std::process::id()));
-    std::fs::write(&path, geardyn::samples::paper36_case().text).unwrap();
-    let case = geardyn::case::Case::load_with(
-        Some(&path),
-        &[
-            geardyn::case::Override::set("lumped.force_law", "secant"),
-            geardyn::case::Override::set("lumped.bodies", "elastic"),
-        ],
-    )
-    .unwrap();
-    std::fs::remove_file(&path).ok();
-    let m = geardyn::study::lumped::setup(&case).unwrap().model;
+    let m = issue_secant_model();
     let rpms = [5000.0, 7200.0, 7240.0, 7280.0, 7300.0, 7330.0];
     let done = geardyn::sweep::continue_sweep(
         &m,
@@ -765,18 +768,7 @@ fn the_orbit_of_the_switched_model_shows_where_the_sweep_diverges() {
 /// through the same grid diverges (issue 29's target; measured: both at 7 320 rpm).
 #[test]
 fn the_stability_map_predicts_the_divergence_onset() {
-    let path = std::env::temp_dir().join(format!("geardyn-onset-{}.toml", std::process::id()));
-    std::fs::write(&path, geardyn::samples::paper36_case().text).unwrap();
-    let case = geardyn::case::Case::load_with(
-        Some(&path),
-        &[
-            geardyn::case::Override::set("lumped.force_law", "secant"),
-            geardyn::case::Override::set("lumped.bodies", "elastic"),
-        ],
-    )
-    .unwrap();
-    std::fs::remove_file(&path).ok();
-    let m = geardyn::study::lumped::setup(&case).unwrap().model;
+    let m = issue_secant_model();
     let grid: Vec<f64> = (0..=20).map(|i| 7200.0 + 10.0 * i as f64).collect();
     let map = geardyn::sweep::orbit_floquet_map(&m, &grid);
     let predicted = grid

@@ -38,8 +38,8 @@
 use serde::Serialize;
 
 use crate::case::Case;
-use crate::lumped::{steady_state, Drive};
-use crate::signal::{amplitude_spectrum, harmonic_amplitudes};
+use crate::lumped::Drive;
+use crate::signal::harmonic_amplitudes;
 use crate::stiffness::{self, potential_energy, ForceLaw, MeshStiffness};
 
 use super::compare::{lumped_twin, FeDte};
@@ -233,17 +233,11 @@ fn answers(
     } / std::f64::consts::TAU;
     let teeth = pair.gears[0].teeth() as f64;
     let static_te_pp = static_te_peak_to_peak(case, mesh, torque);
-    let speed = speed_rpm * std::f64::consts::TAU / 60.0;
-    let steps = crate::sweep::steps_per_period(&model, speed);
-    let steady = steady_state(&model, speed, steps, model.static_state(), 1e-9, 2000);
-    if steady.diverged {
+    let at_speed = super::fe_sweep::lumped_at(&model, speed_rpm, rb[1]);
+    if at_speed.diverged {
         return Err(super::compare::lumped_diverged(speed_rpm));
     }
-    let dte_amplitude = amplitude_spectrum(&steady.displacement)
-        .first()
-        .copied()
-        .unwrap_or(0.0)
-        / rb[1];
+    let dte_amplitude = at_speed.mesh_amplitude_rad;
     Ok(Answers {
         mean: mesh.mean(),
         static_te_pp,

@@ -69,11 +69,7 @@ impl FeSpeed {
             0 => f64::NAN,
             _ => rms_about_mean(&window[window.len() - third..]) / rms_about_mean(&window[..third]),
         };
-        let (lo, hi) = window
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
-                (l.min(*v), h.max(*v))
-            });
+        let (lo, hi) = crate::signal::extremes(window);
         let forces = run.back_flank_force.get(start..).unwrap_or(&[]);
         let back = match forces.is_empty() {
             true => window.iter().filter(|v| **v < back_contact_rad).count(),

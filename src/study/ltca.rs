@@ -19,38 +19,13 @@ use crate::signal::largest;
 /// Both gear bodies of the case for the LTCA, meshed fine on the engaging teeth with the case's
 /// element sizes, factorized and condensed.
 pub fn model(case: &Case, modifications: &[FlankModification; 2]) -> Result<LtcaModel, StudyError> {
-    let mesh = &case.file.mesh;
-    model_with_sizes(
-        case,
-        modifications,
-        mesh.fine_element_mm * 1e-3,
-        mesh.coarse_element_mm * 1e-3,
-    )
+    model_on_flank(case, modifications, element_sizes(case), Flank::Drive)
 }
 
-/// [`model`] loading the back flanks under the reversed torque ([`Flank::Back`]);
-/// `modifications` are the back flanks'.
-pub fn back_model(
-    case: &Case,
-    modifications: &[FlankModification; 2],
-) -> Result<LtcaModel, StudyError> {
+/// The case's LTCA element sizes: flanks, the rest [m].
+pub fn element_sizes(case: &Case) -> (f64, f64) {
     let mesh = &case.file.mesh;
-    back_model_with_sizes(
-        case,
-        modifications,
-        mesh.fine_element_mm * 1e-3,
-        mesh.coarse_element_mm * 1e-3,
-    )
-}
-
-/// [`back_model`] with other element sizes: flanks `fine_size`, the rest `coarse_size` [m].
-pub fn back_model_with_sizes(
-    case: &Case,
-    modifications: &[FlankModification; 2],
-    fine_size: f64,
-    coarse_size: f64,
-) -> Result<LtcaModel, StudyError> {
-    model_on_flank(case, modifications, (fine_size, coarse_size), Flank::Back)
+    (mesh.fine_element_mm * 1e-3, mesh.coarse_element_mm * 1e-3)
 }
 
 /// [`model`] with other element sizes: flanks `fine_size`, the rest `coarse_size` [m].
@@ -63,8 +38,10 @@ pub fn model_with_sizes(
     model_on_flank(case, modifications, (fine_size, coarse_size), Flank::Drive)
 }
 
-/// The LTCA bodies meshed fine on the teeth whose `flank` engages, loading that flank.
-fn model_on_flank(
+/// The LTCA bodies meshed fine on the teeth whose `flank` engages, loading that flank
+/// ([`Flank::Back`]: the back flanks under the reversed torque, `modifications` theirs), with
+/// flank elements `fine_size` and the rest `coarse_size` [m].
+pub fn model_on_flank(
     case: &Case,
     modifications: &[FlankModification; 2],
     (fine_size, coarse_size): (f64, f64),

@@ -10,7 +10,7 @@
 
 use crate::case::BodyModel;
 use crate::case::{Case, Override, StiffnessSource};
-use crate::ltca::{LtcaModel, PositionResult};
+use crate::ltca::{Flank, LtcaModel, PositionResult};
 use crate::lumped::{
     Bearings, Drive, DrivetrainSpec, ForceLawKind, GearBody, MeshModel, Structure,
 };
@@ -301,7 +301,8 @@ pub fn ltca_laws(
     let (mesh, law, reference) = ltca_tables(case, &ltca, torque, source)?;
     let back_law = match back && case.pair.backlash_normal > 0.0 {
         true => {
-            let back = super::ltca::back_model(case, modifications)?;
+            let sizes = super::ltca::element_sizes(case);
+            let back = super::ltca::model_on_flank(case, modifications, sizes, Flank::Back)?;
             Some(force_law_of(
                 case,
                 &back,

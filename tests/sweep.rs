@@ -2,7 +2,7 @@
 //! excitation the teeth separate near resonance and the up- and down-sweeps part (jump with
 //! hysteresis, softening: the resonance bends to lower speed).
 
-use geardyn::lumped::{MeshModel, Structure};
+use geardyn::lumped::{DampingSite, MeshModel, Structure};
 use geardyn::stiffness::{MeshStiffness, PeriodicTable};
 use geardyn::sweep::{peaks, sweep};
 use std::f64::consts::PI;
@@ -21,6 +21,7 @@ fn model(te_amplitude: f64, backlash: Option<f64>) -> MeshModel {
             }),
         ),
         damping: 0.0,
+        damping_site: DampingSite::MeshDeflection,
         force: 2670.0,
         backlash,
         back_reflection: None,

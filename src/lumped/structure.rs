@@ -115,6 +115,7 @@ pub struct Structure {
     inv_mass_damping: [[f64; MAX_DOFS]; MAX_DOFS],
     inv_mass_mesh: [f64; MAX_DOFS],
     inv_mass_load: [f64; MAX_DOFS],
+    inv_mass_te: [f64; MAX_DOFS],
 }
 
 /// A natural mode of the structure with a given mesh stiffness.
@@ -416,6 +417,7 @@ impl Structure {
             inv_mass_damping: to_square(&inverse * &damping),
             inv_mass_mesh: to_vector(&mesh),
             inv_mass_load: to_vector(&load),
+            inv_mass_te: to_vector(&te),
             names,
             mass,
             stiffness,
@@ -429,14 +431,15 @@ impl Structure {
         }
     }
 
-    /// Accelerations M⁻¹(F l − K q − C v − g W) into `out`.
+    /// Accelerations M⁻¹(F l − K q − C v − g W − h D) into `out`: W the mesh force, D a force
+    /// on the hub-to-hub transmission error (the FE's dashpot, [`super::DampingSite`]).
     #[inline]
     pub(crate) fn accelerations(
         &self,
         q: &[f64; MAX_DOFS],
         v: &[f64; MAX_DOFS],
         force: f64,
-        mesh_force: f64,
+        [mesh_force, te_force]: [f64; 2],
         out: &mut [f64; MAX_DOFS],
     ) {
         let n = self.dofs;
@@ -444,6 +447,7 @@ impl Structure {
             let (k, c) = (&self.inv_mass_stiffness[i], &self.inv_mass_damping[i]);
             *a = force * self.inv_mass_load[i]
                 - mesh_force * self.inv_mass_mesh[i]
+                - te_force * self.inv_mass_te[i]
                 - (0..n).map(|j| k[j] * q[j] + c[j] * v[j]).sum::<f64>();
         }
     }

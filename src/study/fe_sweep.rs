@@ -4,8 +4,9 @@
 //! At each FE speed: the DTE's first mesh-harmonic amplitude and its rms about the mean, in the
 //! statistics window after the ramp's ringing (as [`super::compare`] reads each run), whether it
 //! grew over that window, and how much of it the back flanks carried. Two lumped models on the
-//! FE's boundary conditions (speed drive, elastic bodies, the FE's mesh damping, no shafts or
-//! bearings) are set against it, each swept up and down over the same range four times as
+//! FE's boundary conditions (speed drive, elastic bodies, the FE's mesh dashpot where the FE
+//! has it — on the driven hub's DTE rate while a flank touches —, no shafts or bearings) are set
+//! against it, each swept up and down over the same range four times as
 //! densely and solved at each FE speed from rest (as the FE starts):
 //! * the default lumped model of the unmodified pair: the LTCA's load-dependent force law
 //!   W(θ, δ) (the back flanks' own where the pair has backlash), as `sweep` and `run` integrate

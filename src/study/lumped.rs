@@ -12,7 +12,7 @@ use crate::case::BodyModel;
 use crate::case::{Case, Override, StiffnessSource};
 use crate::ltca::{Flank, LtcaModel, PositionResult};
 use crate::lumped::{
-    Bearings, Drive, DrivetrainSpec, ForceLawKind, GearBody, MeshModel, Structure,
+    Bearings, DampingSite, Drive, DrivetrainSpec, ForceLawKind, GearBody, MeshModel, Structure,
 };
 use crate::stiffness::{self, potential_energy, ForceLaw, MeshStiffness};
 
@@ -615,6 +615,7 @@ pub fn model_on(
         back_reflection: Some(back_reflection(pair, &mesh)),
         mesh,
         damping: 0.0,
+        damping_site: DampingSite::MeshDeflection,
         force: torque / pair.gears[1].base_radius,
         backlash,
         force_law: None,

@@ -297,6 +297,18 @@ fn compare(
         .iter()
         .map(|d| read(d))
         .collect::<Result<Vec<_>>>()?;
+    // Finished runs given inside the sweep's range join it (a point added near the peak).
+    let mut fe_sweep = fe_sweep;
+    if let (Some(&from), Some(&to)) = (fe_sweep.first(), fe_sweep.last()) {
+        let inside: Vec<f64> = runs
+            .iter()
+            .map(|r| r.speed_rpm)
+            .filter(|rpm| (from..=to).contains(rpm))
+            .collect();
+        fe_sweep.extend(inside);
+        fe_sweep.sort_by(f64::total_cmp);
+        fe_sweep.dedup_by(|a, b| (*a - *b).abs() < 1e-6 * b.abs());
+    }
     let mut all_speeds: Vec<f64> = speeds.iter().chain(&fe_sweep).copied().collect();
     all_speeds.sort_by(f64::total_cmp);
     all_speeds.dedup_by(|a, b| (*a - *b).abs() < 1e-6 * b.abs());

@@ -13,8 +13,8 @@
 use rayon::prelude::*;
 
 use crate::lumped::{
-    largest_modulus, linear_floquet_multipliers, periodic_orbit, record_periods, steady_state,
-    MeshModel, State,
+    largest_modulus, linear_floquet_multipliers, periodic_orbit, record_periods, settle,
+    steady_state, MeshModel, State,
 };
 use crate::signal::{amplitude_spectrum, strongest_lines};
 
@@ -238,7 +238,7 @@ fn analyse(
 ) -> Result<(SweepPoint, State), SweepDivergence> {
     let speed = rpm * 2.0 * std::f64::consts::PI / 60.0;
     let steps = steps_per_period(model, speed);
-    let s = steady_state(model, speed, steps, start, STEADY_TOLERANCE, MAX_PERIODS);
+    let (s, settled_orbit) = settle(model, speed, steps, start, STEADY_TOLERANCE, MAX_PERIODS);
     // The orbit where the response settled; else the one shooting finds from where this
     // speed started (unstable, or the response would have settled on it).
     let orbit = |from: State| {
@@ -285,7 +285,10 @@ fn analyse(
         harmonics,
         peaks,
         floquet_linear: largest_modulus(&linear_floquet_multipliers(linear, speed, steps)),
-        floquet_orbit: orbit(s.start),
+        floquet_orbit: match settled_orbit {
+            Some(o) => Some(o.max_multiplier()),
+            None => orbit(s.start),
+        },
         periods: s.periods,
         converged: s.converged,
     };

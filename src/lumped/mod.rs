@@ -48,7 +48,7 @@ pub mod structure;
 
 use nalgebra::DMatrix;
 
-pub use structure::{DrivetrainSpec, GearBody, Mode, Shaft, Structure, MAX_DOFS};
+pub use structure::{DrivetrainSpec, GearBody, Mode, Shaft, Structure, Tangent, MAX_DOFS};
 
 use crate::stiffness::{ForceLaw, MeshStiffness, PeriodicTable};
 
@@ -358,9 +358,10 @@ impl MeshModel {
     /// into tension below first contact; [`MeshModel::mesh_force`] decides what that means).
     fn drive_force(&self, theta: f64, deflection: f64) -> f64 {
         match &self.force_law {
+            Some(law) if self.backlash.is_some() => law.force(theta, deflection),
             Some(law) => {
                 let first = law.first_contact(theta);
-                if deflection > first || self.backlash.is_some() {
+                if deflection > first {
                     law.force(theta, deflection)
                 } else {
                     // The no-separation model: the law's first-contact slope into tension.
@@ -369,6 +370,101 @@ impl MeshModel {
             }
             None => self.mesh.stiffness.at(theta) * (deflection - self.mesh.unloaded_te.at(theta)),
         }
+    }
+
+    /// [`MeshModel::mesh_force`] and its slope dW/dδ [N/m], for the variational equation: the
+    /// one-sided slope at a kink where a flank carries load; where no flank does (W = 0: apart,
+    /// or exactly at a first contact, as on an unloaded orbit that stays on the switch) the mean
+    /// of both sides' slopes, by a central difference over ±1e-12 m.
+    pub fn mesh_force_and_slope(&self, theta: f64, deflection: f64) -> (f64, f64) {
+        let (force, slope) = self.loaded_force_and_slope(theta, deflection);
+        if force != 0.0 {
+            return (force, slope);
+        }
+        const STEP: f64 = 1e-12;
+        let plus = self.mesh_force(theta, deflection + STEP);
+        let minus = self.mesh_force(theta, deflection - STEP);
+        (force, (plus - minus) / (2.0 * STEP))
+    }
+
+    /// [`MeshModel::mesh_force_and_slope`] with the one-sided slopes of the loaded flank.
+    fn loaded_force_and_slope(&self, theta: f64, deflection: f64) -> (f64, f64) {
+        let drive = self.drive_force_and_slope(theta, deflection);
+        match self.backlash {
+            None => drive,
+            Some(_) if drive.0 > 0.0 => drive,
+            Some(j) => {
+                // W = −W_b(…, −δ …): dW/dδ = +W_b′.
+                let (back, slope) = match (&self.back_force_law, self.back_reflection) {
+                    (Some(law), _) => law.force_and_slope(theta, -deflection),
+                    (None, Some(rho)) => self.drive_force_and_slope(rho - theta, -(deflection + j)),
+                    (None, None) => {
+                        let e = self.mesh.unloaded_te.at(theta);
+                        self.drive_force_and_slope(theta, 2.0 * e - deflection - j)
+                    }
+                };
+                match back > 0.0 {
+                    true => (-back, slope),
+                    false => (-0.0, 0.0),
+                }
+            }
+        }
+    }
+
+    /// [`MeshModel::drive_force`] and its slope.
+    fn drive_force_and_slope(&self, theta: f64, deflection: f64) -> (f64, f64) {
+        match &self.force_law {
+            Some(law) if self.backlash.is_some() => law.force_and_slope(theta, deflection),
+            Some(law) => {
+                let first = law.first_contact(theta);
+                if deflection > first {
+                    law.force_and_slope(theta, deflection)
+                } else {
+                    let slope = law.force_and_slope(theta, first + 1e-12).1;
+                    (slope * (deflection - first), slope)
+                }
+            }
+            None => {
+                let k = self.mesh.stiffness.at(theta);
+                (k * (deflection - self.mesh.unloaded_te.at(theta)), k)
+            }
+        }
+    }
+
+    /// The mesh damper's coefficients on g and on h at this state (c on its site; the hub
+    /// site's only while a flank touches, [`DampingSite`]).
+    fn damper(&self, elastic_force: f64) -> [f64; 2] {
+        match self.damping_site {
+            DampingSite::MeshDeflection => [self.damping, 0.0],
+            DampingSite::HubTransmissionError => {
+                let touching = elastic_force != 0.0 || self.backlash.is_none();
+                [0.0, f64::from(touching) * self.damping]
+            }
+        }
+    }
+
+    /// Whether the vector field is continuous across every contact switch (the force law and
+    /// the secant law are; the hub site's damper switches on and off with the contact): then
+    /// the variational equation gives the period map's exact Jacobian, with no saltation.
+    fn continuous_field(&self) -> bool {
+        self.damping_site == DampingSite::MeshDeflection || self.backlash.is_none()
+    }
+
+    /// The time derivative ([`MeshModel::derivative`]) and its Jacobian over the active
+    /// components (q then v, 2n × 2n) at roll angle θ.
+    fn derivative_and_jacobian(&self, theta: f64, s: &State, jacobian: &mut Tangent) -> State {
+        let structure = &self.structure;
+        let (elastic, slope) = self.mesh_force_and_slope(theta, structure.mesh_of(&s.q));
+        let [c_mesh, c_hub] = self.damper(elastic);
+        let w = elastic + c_mesh * structure.mesh_of(&s.v);
+        let hub = c_hub * structure.te_of(&s.v);
+        let mut d = State {
+            q: s.v,
+            v: [0.0; MAX_DOFS],
+        };
+        structure.accelerations(&s.q, &s.v, self.force, [w, hub], &mut d.v);
+        structure.state_jacobian(slope, [c_mesh, c_hub], jacobian);
+        d
     }
 
     /// The mesh deflection δ under the static force F at roll angle θ: the model's quasi-static
@@ -452,16 +548,9 @@ impl MeshModel {
     pub fn derivative(&self, theta: f64, s: &State) -> State {
         let structure = &self.structure;
         let elastic = self.mesh_force(theta, structure.mesh_of(&s.q));
-        let (w, hub) = match self.damping_site {
-            DampingSite::MeshDeflection => (elastic + self.damping * structure.mesh_of(&s.v), 0.0),
-            DampingSite::HubTransmissionError => {
-                let touching = elastic != 0.0 || self.backlash.is_none();
-                (
-                    elastic,
-                    f64::from(touching) * self.damping * structure.te_of(&s.v),
-                )
-            }
-        };
+        let [c_mesh, c_hub] = self.damper(elastic);
+        let w = elastic + c_mesh * structure.mesh_of(&s.v);
+        let hub = c_hub * structure.te_of(&s.v);
         let mut d = State {
             q: s.v,
             v: [0.0; MAX_DOFS],
@@ -589,6 +678,14 @@ pub fn steady_state(
         diverged: false,
     };
     let omega_scale = model.highest_frequency().max(driver_speed);
+    // The mesh force of the period kept only, from its angles and deflections (an evaluation
+    // of the law per step saved in every other period).
+    let mut samples = vec![(0.0, 0.0); steps_per_period];
+    let mesh_forces = |out: &mut SteadyState, samples: &[(f64, f64)]| {
+        for (force, &(theta, deflection)) in out.mesh_force.iter_mut().zip(samples) {
+            *force = model.mesh_force(theta, deflection);
+        }
+    };
     for period in 1..=max_periods {
         let start = state;
         state = integrate_period(
@@ -599,13 +696,14 @@ pub fn steady_state(
             |j, theta, s| {
                 out.displacement[j] = model.transmission_error(s);
                 out.velocity[j] = model.transmission_error_rate(s);
-                out.mesh_force[j] = model.mesh_force(theta, model.mesh_deflection(s));
+                samples[j] = (theta, model.mesh_deflection(s));
             },
         );
         out.periods = period;
         out.start = start;
         if divergence.diverged(&state) {
             out.diverged = true;
+            mesh_forces(&mut out, &samples);
             return out;
         }
         let change = (0..model.structure.dofs)
@@ -620,8 +718,103 @@ pub fn steady_state(
             break;
         }
     }
+    mesh_forces(&mut out, &samples);
     out.separated = model.backlash.is_some() && out.mesh_force.iter().any(|f| *f <= 0.0);
     out
+}
+
+/// The change of the state over a period at which [`settle`] tries to jump to the period-one
+/// orbit, of the static deflection: small enough that the one-period map is close to linear
+/// about it (its second-order terms are ~1e-6 of the state).
+pub const SHOOTING_START: f64 = 1e-3;
+
+/// The steady state of [`steady_state`], reached faster, and the period-one orbit it lies on
+/// (`None` where it did not settle on one). Integrated period by period from `initial`; once a
+/// period changes the state by less than [`SHOOTING_START`] of the static deflection, shooting
+/// ([`periodic_orbit`], tolerance `tolerance`) finds the orbit the motion is heading for. It is
+/// taken only if it is what forward integration converges to: stable (|λ| < 1), and no farther
+/// from the state than the linear map lets the state still travel, 2|Δ|/(1 − |λ|) with Δ the
+/// last period's change (so on a hysteresis branch the continuation keeps its branch). Then one
+/// period integrated from it must come back to `tolerance`, else the integration goes on. The
+/// result is the same steady state to `tolerance`; `periods` counts the periods integrated.
+pub fn settle(
+    model: &MeshModel,
+    driver_speed: f64,
+    steps_per_period: usize,
+    initial: State,
+    tolerance: f64,
+    max_periods: usize,
+) -> (SteadyState, Option<PeriodicOrbit>) {
+    let static_deflection = (model.force / model.mesh.mean()).abs().max(1e-30);
+    let omega = model.highest_frequency();
+    let distance = |a: &State, b: &State| {
+        (0..model.structure.dofs)
+            .map(|i| (a.q[i] - b.q[i]).abs().max((a.v[i] - b.v[i]).abs() / omega))
+            .fold(0.0, f64::max)
+    };
+    let mut state = initial;
+    let mut periods = 0;
+    let mut tried = false;
+    while periods < max_periods {
+        let start = state;
+        state = integrate_period(model, driver_speed, steps_per_period, start, |_, _, _| {});
+        periods += 1;
+        let change = distance(&state, &start);
+        if !change.is_finite()
+            || model.has_diverged(&state)
+            || change < tolerance * static_deflection
+        {
+            break;
+        }
+        if tried || change > SHOOTING_START * static_deflection {
+            continue;
+        }
+        tried = true;
+        let Some(orbit) = periodic_orbit(model, driver_speed, steps_per_period, state, tolerance)
+        else {
+            continue;
+        };
+        let rho = orbit.max_multiplier();
+        if rho < 1.0 && distance(&orbit.start, &state) <= 2.0 * change / (1.0 - rho) {
+            let landed = steady_state(
+                model,
+                driver_speed,
+                steps_per_period,
+                orbit.start,
+                tolerance,
+                1,
+            );
+            if landed.converged {
+                return (
+                    SteadyState {
+                        periods: periods + 1,
+                        ..landed
+                    },
+                    Some(orbit),
+                );
+            }
+        }
+    }
+    // Plain integration from where it got (it records the last period and decides).
+    let rest = steady_state(
+        model,
+        driver_speed,
+        steps_per_period,
+        state,
+        tolerance,
+        max_periods.saturating_sub(periods).max(1),
+    );
+    let orbit = match rest.converged {
+        true => periodic_orbit(model, driver_speed, steps_per_period, rest.start, tolerance),
+        false => None,
+    };
+    (
+        SteadyState {
+            periods: periods + rest.periods,
+            ..rest
+        },
+        orbit,
+    )
 }
 
 /// The DTE ([`MeshModel::transmission_error`]) over `periods` whole mesh periods from `start` (θ = 0), `steps_per_period` samples
@@ -696,13 +889,98 @@ pub fn linear_floquet_multipliers(
 }
 
 /// The one-period map P of the model as it is integrated — load, unloaded TE, force law,
-/// separation and back flanks included — at `x` (θ = 0), and its Jacobian ∂P/∂x there by
-/// central differences of [`integrate_period`] (positions perturbed by 1e-5 of the static
-/// deflection, velocities by as much times the highest natural frequency ω). The Jacobian is in
-/// the balanced coordinates (q, v/ω) over the active components: same eigenvalues. Where a
-/// perturbed path crosses a contact switch the differences average the two sides' slopes (the
-/// saltation of a piecewise-smooth system, to the perturbation's size).
+/// separation and back flanks included — at `x` (θ = 0), and its Jacobian ∂P/∂x there, in the
+/// balanced coordinates (q, v/ω) over the active components (ω the highest natural frequency;
+/// same eigenvalues). Where the vector field is continuous across the contact switches
+/// ([`MeshModel::continuous_field`]: W is, a flank's force starting from zero, and a damper
+/// that acts always), the variational equation integrated alongside ([`period_map_variational`]):
+/// the exact derivative of the RK4 map, at about the cost of one period. Else (the hub site's
+/// damper switches with the contact, a jump the variational equation misses) central
+/// differences of [`integrate_period`] ([`period_map_differences`]).
 fn period_map_jacobian(
+    model: &MeshModel,
+    driver_speed: f64,
+    steps_per_period: usize,
+    x: State,
+) -> (State, DMatrix<f64>) {
+    match model.continuous_field() {
+        true => period_map_variational(model, driver_speed, steps_per_period, x),
+        false => period_map_differences(model, driver_speed, steps_per_period, x),
+    }
+}
+
+/// P(x) and ∂P/∂x by the variational equation: with every RK4 stage k_i = f(x_i) also
+/// K_i = A(x_i)(Φ + c_i h K_{i−1}), A = ∂f/∂x ([`MeshModel::derivative_and_jacobian`]), and
+/// Φ ← Φ + h/6 (K₁ + 2K₂ + 2K₃ + K₄) from Φ = I: the derivative of the RK4 map itself (RK4 is
+/// linear in its stages). With W continuous a path crossing a switch needs no saltation
+/// (Leine & Nijmeijer 2004, *Dynamics and Bifurcations of Non-Smooth Mechanical Systems*,
+/// ch. 3), and the kinks' one-sided slopes are the derivative.
+pub fn period_map_variational(
+    model: &MeshModel,
+    driver_speed: f64,
+    steps_per_period: usize,
+    x: State,
+) -> (State, DMatrix<f64>) {
+    let n = model.structure.dofs;
+    let m = 2 * n;
+    let h = model.mesh.period() / driver_speed / steps_per_period as f64;
+    let mut phi: Tangent = [[0.0; 2 * MAX_DOFS]; 2 * MAX_DOFS];
+    for (i, row) in phi.iter_mut().enumerate().take(m) {
+        row[i] = 1.0;
+    }
+    let stages = std::cell::RefCell::new([[[0.0; 2 * MAX_DOFS]; 2 * MAX_DOFS]; 4]);
+    let stage = std::cell::Cell::new(0);
+    let derivative = |t: f64, s: &State| {
+        let i = stage.get();
+        stage.set(i + 1);
+        model.derivative_and_jacobian(driver_speed * t, s, &mut stages.borrow_mut()[i])
+    };
+    let mut state = x;
+    let mut k: [Tangent; 4] = [[[0.0; 2 * MAX_DOFS]; 2 * MAX_DOFS]; 4];
+    let mut shifted: Tangent = [[0.0; 2 * MAX_DOFS]; 2 * MAX_DOFS];
+    for j in 0..steps_per_period {
+        stage.set(0);
+        state = rk4_step(derivative, j as f64 * h, &state, h);
+        let a = stages.borrow();
+        for (i, fraction) in [0.0, 0.5, 0.5, 1.0].into_iter().enumerate() {
+            for r in 0..m {
+                for c in 0..m {
+                    shifted[r][c] = match i {
+                        0 => phi[r][c],
+                        _ => phi[r][c] + fraction * h * k[i - 1][r][c],
+                    };
+                }
+            }
+            for r in 0..m {
+                for c in 0..m {
+                    k[i][r][c] = (0..m).map(|l| a[i][r][l] * shifted[l][c]).sum();
+                }
+            }
+        }
+        for r in 0..m {
+            for c in 0..m {
+                phi[r][c] +=
+                    h / 6.0 * (k[0][r][c] + 2.0 * k[1][r][c] + 2.0 * k[2][r][c] + k[3][r][c]);
+            }
+        }
+    }
+    let omega = model.highest_frequency();
+    let jacobian = DMatrix::from_fn(m, m, |r, c| {
+        let balance = match (r < n, c < n) {
+            (true, false) => omega,
+            (false, true) => 1.0 / omega,
+            _ => 1.0,
+        };
+        phi[r][c] * balance
+    });
+    (state, jacobian)
+}
+
+/// P(x) and ∂P/∂x by central differences of [`integrate_period`] (positions perturbed by 1e-5
+/// of the static deflection, velocities by as much times ω). Where a perturbed path crosses a
+/// contact switch the differences average the two sides' slopes (the saltation of a
+/// piecewise-smooth system, to the perturbation's size).
+pub fn period_map_differences(
     model: &MeshModel,
     driver_speed: f64,
     steps_per_period: usize,

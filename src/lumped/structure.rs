@@ -43,6 +43,9 @@ use super::{Bearings, Drive};
 /// at most).
 pub const MAX_DOFS: usize = 8;
 
+/// A Jacobian over a structure's state (q then v, 2n × 2n of the first entries).
+pub type Tangent = [[f64; 2 * MAX_DOFS]; 2 * MAX_DOFS];
+
 /// One gear's body: inertias [kg·m²] of hub and rim and the torsional compliance between them
 /// [rad/(N·m)] (0: a rigid body, hub and rim one inertia).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -449,6 +452,34 @@ impl Structure {
                 - mesh_force * self.inv_mass_mesh[i]
                 - te_force * self.inv_mass_te[i]
                 - (0..n).map(|j| k[j] * q[j] + c[j] * v[j]).sum::<f64>();
+        }
+    }
+
+    /// The Jacobian of (q̇, v̇) = (v, a) over (q, v) into the first 2n × 2n entries of `out`:
+    /// ∂a/∂q = −M⁻¹K − M⁻¹g W′ gᵀ, ∂a/∂v = −M⁻¹C − M⁻¹g c_g gᵀ − M⁻¹h c_h hᵀ, with W′ the mesh
+    /// force's slope dW/dδ and c_g, c_h the dampers on the mesh deflection and on the hubs' TE.
+    pub(crate) fn state_jacobian(
+        &self,
+        mesh_slope: f64,
+        [c_mesh, c_hub]: [f64; 2],
+        out: &mut Tangent,
+    ) {
+        let n = self.dofs;
+        for row in out.iter_mut().take(n) {
+            row[..2 * n].fill(0.0);
+        }
+        for (i, row) in out.iter_mut().enumerate().take(n) {
+            row[n + i] = 1.0;
+        }
+        let (g, h) = (&self.mesh_direction, &self.te_direction);
+        for i in 0..n {
+            let (k, c) = (&self.inv_mass_stiffness[i], &self.inv_mass_damping[i]);
+            let (mg, mh) = (self.inv_mass_mesh[i], self.inv_mass_te[i]);
+            let row = &mut out[n + i];
+            for j in 0..n {
+                row[j] = -k[j] - mg * mesh_slope * g[j];
+                row[n + j] = -c[j] - mg * c_mesh * g[j] - mh * c_hub * h[j];
+            }
         }
     }
 

@@ -143,8 +143,15 @@ impl ForceLaw {
     /// The positions' indices and weight around θ (measured from [`ForceLaw::origin`]).
     fn bracket(&self, theta: f64) -> (usize, usize, f64) {
         let n = self.knots.len();
-        let u = (theta / self.period).rem_euclid(1.0) * n as f64;
-        let i = (u.floor() as usize).min(n - 1);
+        // The fraction of a period without fmod or floor calls (the sweep's hot path): a
+        // truncation, moved down by one period for negative angles.
+        let periods = theta / self.period;
+        let mut fraction = periods - periods.trunc();
+        if fraction < 0.0 {
+            fraction += 1.0;
+        }
+        let u = fraction * n as f64;
+        let i = (u as usize).min(n - 1);
         (i, (i + 1) % n, u - i as f64)
     }
 
@@ -168,9 +175,12 @@ impl ForceLaw {
             .fold(0.0, f64::max)
     }
 
-    /// Mesh force W(θ, δ) [N].
+    /// Mesh force W(θ, δ) [N] (as [`ForceLaw::force_and_slope`], without the slope).
     pub fn force(&self, theta: f64, deflection: f64) -> f64 {
-        self.force_and_slope(theta, deflection).0
+        let (i, j, t) = self.bracket(theta);
+        let wi = position_force_only(&self.knots[i], deflection);
+        let wj = position_force_only(&self.knots[j], deflection);
+        wi * (1.0 - t) + wj * t
     }
 
     /// First contact, the approach where W starts to grow at θ [m] (the unloaded TE).
@@ -255,6 +265,28 @@ fn limit_slopes(knots: &mut [Knot]) {
     };
 }
 
+/// One position's W(δ), as [`position_force`] without the slope.
+#[inline]
+fn position_force_only(knots: &[Knot], deflection: f64) -> f64 {
+    let first = knots[0];
+    if deflection <= first.deflection {
+        return 0.0;
+    }
+    let last = *knots.last().expect("knots");
+    if deflection >= last.deflection {
+        return last.force + last.slope * (deflection - last.deflection);
+    }
+    let k = knots.partition_point(|knot| knot.deflection <= deflection) - 1;
+    let (a, b) = (knots[k], knots[k + 1]);
+    let h = b.deflection - a.deflection;
+    let t = (deflection - a.deflection) / h;
+    // Hermite basis in Horner form: (1 − t)²(1 + 2t), t(1 − t)², t²(3 − 2t), t²(t − 1).
+    let s = 1.0 - t;
+    let (h00, h10) = (s * s * (1.0 + 2.0 * t), t * s * s);
+    let (h01, h11) = (t * t * (3.0 - 2.0 * t), t * t * (t - 1.0));
+    h00 * a.force + h10 * h * a.slope + h01 * b.force + h11 * h * b.slope
+}
+
 /// One position's W(δ) and dW/dδ: zero below first contact, cubic Hermite between knots, linear
 /// past the last.
 fn position_force(knots: &[Knot], deflection: f64) -> (f64, f64) {
@@ -273,11 +305,10 @@ fn position_force(knots: &[Knot], deflection: f64) -> (f64, f64) {
     let (a, b) = (knots[k], knots[k + 1]);
     let h = b.deflection - a.deflection;
     let t = (deflection - a.deflection) / h;
-    let (t2, t3) = (t * t, t * t * t);
-    let h00 = 2.0 * t3 - 3.0 * t2 + 1.0;
-    let h10 = t3 - 2.0 * t2 + t;
-    let h01 = -2.0 * t3 + 3.0 * t2;
-    let h11 = t3 - t2;
+    let t2 = t * t;
+    let s = 1.0 - t;
+    let (h00, h10) = (s * s * (1.0 + 2.0 * t), t * s * s);
+    let (h01, h11) = (t2 * (3.0 - 2.0 * t), t2 * (t - 1.0));
     let force = h00 * a.force + h10 * h * a.slope + h01 * b.force + h11 * h * b.slope;
     let d00 = (6.0 * t2 - 6.0 * t) / h;
     let d10 = 3.0 * t2 - 4.0 * t + 1.0;
@@ -406,5 +437,33 @@ mod tests {
         assert!(law.force(theta, 1e-9) > 0.0);
         // Periodic: one period on is the same place.
         assert_eq!(law.force(theta + 1.0, 2e-6), law.force(theta, 2e-6));
+    }
+
+    /// `force` (the fast path without the slope) is `force_and_slope`'s force to round-off
+    /// everywhere: below first contact, between knots, past the last, and at angles before the
+    /// origin and periods on, where the bracket folds θ into the period.
+    #[test]
+    fn the_force_alone_is_the_force_of_force_and_slope() {
+        let loads = [50.0, 200.0, 600.0, 1500.0, 4000.0];
+        let law = law_of(vec![
+            power_law(3e8, 1.4, 0.0, &loads),
+            power_law(5e8, 1.2, 1e-6, &loads),
+            power_law(4e8, 1.3, 0.5e-6, &loads),
+        ]);
+        for i in -40..=40 {
+            let theta = 0.0731 * i as f64;
+            let period = law.period;
+            // Folding by whole periods changes nothing.
+            assert!((law.force(theta + 3.0 * period, 4e-6) - law.force(theta, 4e-6)).abs() < 1e-9);
+            for k in 0..60 {
+                let d = -1e-6 + k as f64 * 0.25e-6;
+                let (w, _) = law.force_and_slope(theta, d);
+                let fast = law.force(theta, d);
+                assert!(
+                    (fast - w).abs() <= 1e-12 * w.abs().max(1.0),
+                    "θ {theta}, δ {d}: {fast} vs {w}"
+                );
+            }
+        }
     }
 }

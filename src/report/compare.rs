@@ -488,10 +488,13 @@ fn write_fe_sweep(
     let mut series = Vec::new();
     for (i, m) in sweep.models.iter().enumerate() {
         let settled = |pick: fn(&crate::study::fe_sweep::LumpedSpeed) -> f64| {
+            // Diverged speeds as gaps in the line.
             m.dense
                 .iter()
-                .filter(|p| !p.diverged)
-                .map(|p| (p.speed_rpm, um(pick(p))))
+                .map(|p| match p.diverged {
+                    true => (p.speed_rpm, f64::NAN),
+                    false => (p.speed_rpm, um(pick(p))),
+                })
                 .collect::<Vec<_>>()
         };
         series.push((

@@ -544,11 +544,14 @@ impl Drawing for LinePlot {
             .map_err(&err)?;
         for (i, (name, data)) in self.series.iter().enumerate() {
             let colour = PALETTE[i % PALETTE.len()];
+            // A point that is not finite (a model that diverged there) breaks the line: no
+            // segment is drawn across a gap the data do not cover.
             chart
-                .draw_series(LineSeries::new(
-                    data.iter().copied().filter(|p| p.1.is_finite()),
-                    colour.stroke_width(2),
-                ))
+                .draw_series(
+                    data.split(|p| !p.1.is_finite())
+                        .filter(|run| !run.is_empty())
+                        .map(|run| PathElement::new(run.to_vec(), colour.stroke_width(2))),
+                )
                 .map_err(&err)?
                 .label(name)
                 .legend(move |(x, y)| {
@@ -805,5 +808,53 @@ mod tests {
         );
         assert_eq!(without_folders(r"C:\runs\k.csv"), "k.csv");
         assert_eq!(without_folders("ltca (relief none)"), "ltca (relief none)");
+    }
+}
+
+#[cfg(test)]
+mod line_gaps {
+    use super::*;
+
+    /// A series with a point that is not finite is drawn as two lines, none across the gap: the
+    /// SVG holds one polyline per finite run (and the legend's sample line).
+    #[test]
+    fn a_gap_in_a_series_breaks_its_line() {
+        let polylines = |data: Vec<(f64, f64)>| {
+            let plot = LinePlot {
+                title: "gap".into(),
+                x_label: "x".into(),
+                y_label: "y".into(),
+                series: vec![("s".into(), data)],
+                y_range: None,
+                markers: Vec::new(),
+            };
+            register_font();
+            let mut text = String::new();
+            {
+                let area = SVGBackend::with_string(&mut text, (400, 300)).into_drawing_area();
+                plot.draw(&area).unwrap();
+                area.present().unwrap();
+            }
+            text.matches("<polyline").count()
+        };
+        let whole = polylines(vec![
+            (0.0, 1.0),
+            (1.0, 2.0),
+            (2.0, 1.5),
+            (3.0, 1.0),
+            (4.0, 2.0),
+        ]);
+        let gap = polylines(vec![
+            (0.0, 1.0),
+            (1.0, 2.0),
+            (2.0, f64::NAN),
+            (3.0, 1.0),
+            (4.0, 2.0),
+        ]);
+        assert_eq!(
+            gap,
+            whole + 1,
+            "{whole} polylines without the gap, {gap} with it"
+        );
     }
 }

@@ -70,6 +70,7 @@ pub struct SweepPoint {
     /// did not settle, or grew without bound); `None` where no period-one orbit was found.
     #[serde(default)]
     pub floquet_orbit: Option<f64>,
+    /// Mesh periods integrated for the point, forward and by the shooting ([`settle`]).
     pub periods: usize,
     pub converged: bool,
 }

@@ -955,7 +955,8 @@ fn the_hub_dashpot_damps_the_mesh_mode_by_its_modal_share() {
 }
 
 /// The FE's dashpot acts only while a flank touches: a rigid pair coasting through its backlash
-/// keeps its relative speed with the hub site and loses it with the mesh site's damper.
+/// keeps its relative speed with the hub site and loses it with the mesh site's damper; in
+/// contact the two sites damp alike.
 #[test]
 fn the_hub_dashpot_is_off_while_the_teeth_are_apart() {
     let coast = |site: DampingSite| {
@@ -974,4 +975,33 @@ fn the_hub_dashpot_is_off_while_the_teeth_are_apart() {
     };
     assert_eq!(coast(DampingSite::HubTransmissionError), 1.0);
     assert!(coast(DampingSite::MeshDeflection) < 0.99);
+    // With the same backlash, while the drive flanks touch, the hub site damps as the mesh
+    // site does (a rigid pair: g = h): the relative speed decays alike.
+    let touching = |site: DampingSite| {
+        let mut model = model(PeriodicTable::constant(PERIOD, K_MEAN), 0.0, 0.05);
+        model.force = 0.0;
+        model.backlash = Some(1e-4);
+        model.damping_site = site;
+        let s = State::from((2e-6, -1e-3));
+        let h = 1e-7;
+        (0..100).fold(s, |s, n| {
+            geardyn::lumped::rk4_step(|t, s| model.derivative(t, s), n as f64 * h, &s, h)
+        })
+    };
+    let (hub, mesh) = (
+        touching(DampingSite::HubTransmissionError),
+        touching(DampingSite::MeshDeflection),
+    );
+    assert!(hub.q[0] > 0.0, "still in contact: {}", hub.q[0]);
+    assert!(
+        (hub.v[0] / mesh.v[0] - 1.0).abs() < 1e-12,
+        "{} vs {}",
+        hub.v[0],
+        mesh.v[0]
+    );
+    assert!(
+        (hub.v[0] / -1e-3 - 1.0).abs() > 1e-3,
+        "damped: {}",
+        hub.v[0]
+    );
 }

@@ -625,7 +625,7 @@ pub fn rk4_step(f: impl Fn(f64, &State) -> State, t: f64, s: &State, h: f64) -> 
 /// One period of the periodic steady state.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SteadyState {
-    /// Mesh periods integrated until the state repeated.
+    /// Mesh periods integrated until the state repeated (with [`settle`]: the shooting's too).
     pub periods: usize,
     pub converged: bool,
     /// The state at the start of the recorded period (θ = 0).
@@ -728,15 +728,23 @@ pub fn steady_state(
 /// about it (its second-order terms are ~1e-6 of the state).
 pub const SHOOTING_START: f64 = 1e-3;
 
+/// The largest multiplier of an orbit [`settle`] jumps to: one that the motion approaches by at
+/// least 0.1 % per period (closer to 1 the free vibration hardly decays, and plain
+/// integration's verdict stands).
+pub const SHOOTING_MAX_MULTIPLIER: f64 = 0.999;
+
 /// The steady state of [`steady_state`], reached faster, and the period-one orbit it lies on
 /// (`None` where it did not settle on one). Integrated period by period from `initial`; once a
 /// period changes the state by less than [`SHOOTING_START`] of the static deflection, shooting
 /// ([`periodic_orbit`], tolerance `tolerance`) finds the orbit the motion is heading for. It is
-/// taken only if it is what forward integration converges to: stable (|λ| < 1), and no farther
-/// from the state than the linear map lets the state still travel, 2|Δ|/(1 − |λ|) with Δ the
-/// last period's change (so on a hysteresis branch the continuation keeps its branch). Then one
-/// period integrated from it must come back to `tolerance`, else the integration goes on. The
-/// result is the same steady state to `tolerance`; `periods` counts the periods integrated.
+/// taken only if it is what forward integration converges to: stable with a margin
+/// (|λ| ≤ [`SHOOTING_MAX_MULTIPLIER`]), and no farther from the state than the linear map lets
+/// the state still travel, 2|Δ|/(1 − |λ|) with Δ the last period's change (so on a hysteresis
+/// branch the continuation keeps its branch). Then one period integrated from it must come back
+/// to `tolerance`, else the integration goes on. Where it settles, diverges or runs out without
+/// an orbit, the last period is integrated again by [`steady_state`] (which records it and
+/// decides, as it would have). The result is the same steady state to `tolerance`; `periods`
+/// counts every period integrated, the shooting's included ([`PeriodicOrbit::periods`]).
 pub fn settle(
     model: &MeshModel,
     driver_speed: f64,
@@ -746,26 +754,34 @@ pub fn settle(
     max_periods: usize,
 ) -> (SteadyState, Option<PeriodicOrbit>) {
     let static_deflection = (model.force / model.mesh.mean()).abs().max(1e-30);
-    let omega = model.highest_frequency();
+    // steady_state's measure of a period's change.
+    let omega_scale = model.highest_frequency().max(driver_speed);
     let distance = |a: &State, b: &State| {
         (0..model.structure.dofs)
-            .map(|i| (a.q[i] - b.q[i]).abs().max((a.v[i] - b.v[i]).abs() / omega))
+            .map(|i| {
+                (a.q[i] - b.q[i])
+                    .abs()
+                    .max((a.v[i] - b.v[i]).abs() / omega_scale)
+            })
             .fold(0.0, f64::max)
     };
+    let divergence = model.divergence_check();
     let mut state = initial;
-    let mut periods = 0;
+    let (mut periods, mut shooting_periods) = (0, 0);
     let mut tried = false;
-    while periods < max_periods {
+    while periods + 1 < max_periods {
         let start = state;
         state = integrate_period(model, driver_speed, steps_per_period, start, |_, _, _| {});
-        periods += 1;
         let change = distance(&state, &start);
         if !change.is_finite()
-            || model.has_diverged(&state)
+            || divergence.diverged(&state)
             || change < tolerance * static_deflection
         {
+            // steady_state integrates this period again, records it and decides.
+            state = start;
             break;
         }
+        periods += 1;
         if tried || change > SHOOTING_START * static_deflection {
             continue;
         }
@@ -774,8 +790,11 @@ pub fn settle(
         else {
             continue;
         };
+        shooting_periods = orbit.periods;
         let rho = orbit.max_multiplier();
-        if rho < 1.0 && distance(&orbit.start, &state) <= 2.0 * change / (1.0 - rho) {
+        if rho <= SHOOTING_MAX_MULTIPLIER
+            && distance(&orbit.start, &state) <= 2.0 * change / (1.0 - rho)
+        {
             let landed = steady_state(
                 model,
                 driver_speed,
@@ -787,7 +806,7 @@ pub fn settle(
             if landed.converged {
                 return (
                     SteadyState {
-                        periods: periods + 1,
+                        periods: periods + shooting_periods + 1,
                         ..landed
                     },
                     Some(orbit),
@@ -795,22 +814,22 @@ pub fn settle(
             }
         }
     }
-    // Plain integration from where it got (it records the last period and decides).
     let rest = steady_state(
         model,
         driver_speed,
         steps_per_period,
         state,
         tolerance,
-        max_periods.saturating_sub(periods).max(1),
+        max_periods - periods,
     );
     let orbit = match rest.converged {
         true => periodic_orbit(model, driver_speed, steps_per_period, rest.start, tolerance),
         false => None,
     };
+    let orbit_periods = orbit.as_ref().map_or(0, |o| o.periods);
     (
         SteadyState {
-            periods: periods + rest.periods,
+            periods: periods + shooting_periods + rest.periods + orbit_periods,
             ..rest
         },
         orbit,
@@ -1022,6 +1041,9 @@ pub struct PeriodicOrbit {
     pub multipliers: Vec<nalgebra::Complex<f64>>,
     /// Newton iterations the shooting took (0: `start` was given on the orbit).
     pub iterations: usize,
+    /// Mesh periods the shooting integrated, counted as plain ones: a variational Jacobian as
+    /// one, a differenced one as 2n + 1, each trial step as one.
+    pub periods: usize,
 }
 
 impl PeriodicOrbit {
@@ -1070,9 +1092,15 @@ pub fn periodic_orbit(
         }
         y
     };
+    let jacobian_periods = match model.continuous_field() {
+        true => 1,
+        false => n + 1,
+    };
+    let mut periods = 0;
     let mut x = guess;
     for iteration in 0..=SHOOTING_ITERATIONS {
         let (end, jacobian) = period_map_jacobian(model, driver_speed, steps_per_period, x);
+        periods += jacobian_periods;
         if divergence.diverged(&end) {
             return None;
         }
@@ -1082,6 +1110,7 @@ pub fn periodic_orbit(
                 start: x,
                 multipliers: jacobian.complex_eigenvalues().iter().copied().collect(),
                 iterations: iteration,
+                periods,
             });
         }
         let step = (jacobian - DMatrix::identity(n, n)).lu().solve(&r)?;
@@ -1091,6 +1120,7 @@ pub fn periodic_orbit(
         for _ in 0..=SHOOTING_HALVINGS {
             let trial = moved(&x, &step, alpha);
             let end = map(trial);
+            periods += 1;
             if !divergence.diverged(&end) && residual(&trial, &end).norm() < norm {
                 accepted = Some(trial);
                 break;

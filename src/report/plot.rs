@@ -546,10 +546,19 @@ impl Drawing for LinePlot {
             let colour = PALETTE[i % PALETTE.len()];
             // A point that is not finite (a model that diverged there) breaks the line: no
             // segment is drawn across a gap the data do not cover.
+            let runs = || data.split(|p| !p.1.is_finite());
+            // A point alone between gaps has no line to be on: a dot.
             chart
                 .draw_series(
-                    data.split(|p| !p.1.is_finite())
-                        .filter(|run| !run.is_empty())
+                    runs()
+                        .filter(|run| run.len() == 1)
+                        .map(|run| Circle::new(run[0], 2, colour.filled())),
+                )
+                .map_err(&err)?;
+            chart
+                .draw_series(
+                    runs()
+                        .filter(|run| run.len() > 1)
                         .map(|run| PathElement::new(run.to_vec(), colour.stroke_width(2))),
                 )
                 .map_err(&err)?

@@ -265,57 +265,70 @@ fn limit_slopes(knots: &mut [Knot]) {
     };
 }
 
-/// One position's W(δ), as [`position_force`] without the slope.
+/// Where δ lies in a position's knots.
+enum Segment {
+    /// Below first contact: no force.
+    Apart,
+    /// Past the last knot: that knot's tangent.
+    Beyond(Knot),
+    /// Between knots a and b, h = δ_b − δ_a apart, at t = (δ − δ_a)/h.
+    Within(Knot, Knot, f64, f64),
+}
+
 #[inline]
-fn position_force_only(knots: &[Knot], deflection: f64) -> f64 {
-    let first = knots[0];
-    if deflection <= first.deflection {
-        return 0.0;
+fn segment(knots: &[Knot], deflection: f64) -> Segment {
+    if deflection <= knots[0].deflection {
+        return Segment::Apart;
     }
     let last = *knots.last().expect("knots");
     if deflection >= last.deflection {
-        return last.force + last.slope * (deflection - last.deflection);
+        return Segment::Beyond(last);
     }
     let k = knots.partition_point(|knot| knot.deflection <= deflection) - 1;
     let (a, b) = (knots[k], knots[k + 1]);
     let h = b.deflection - a.deflection;
-    let t = (deflection - a.deflection) / h;
-    // Hermite basis in Horner form: (1 − t)²(1 + 2t), t(1 − t)², t²(3 − 2t), t²(t − 1).
+    Segment::Within(a, b, h, (deflection - a.deflection) / h)
+}
+
+/// The cubic Hermite force between knots a and b: basis (1 − t)²(1 + 2t), t(1 − t)²,
+/// t²(3 − 2t), t²(t − 1).
+#[inline]
+fn hermite_force(a: &Knot, b: &Knot, h: f64, t: f64) -> f64 {
     let s = 1.0 - t;
     let (h00, h10) = (s * s * (1.0 + 2.0 * t), t * s * s);
     let (h01, h11) = (t * t * (3.0 - 2.0 * t), t * t * (t - 1.0));
     h00 * a.force + h10 * h * a.slope + h01 * b.force + h11 * h * b.slope
 }
 
+/// One position's W(δ), as [`position_force`] without the slope.
+#[inline]
+fn position_force_only(knots: &[Knot], deflection: f64) -> f64 {
+    match segment(knots, deflection) {
+        Segment::Apart => 0.0,
+        Segment::Beyond(last) => last.force + last.slope * (deflection - last.deflection),
+        Segment::Within(a, b, h, t) => hermite_force(&a, &b, h, t),
+    }
+}
+
 /// One position's W(δ) and dW/dδ: zero below first contact, cubic Hermite between knots, linear
 /// past the last.
 fn position_force(knots: &[Knot], deflection: f64) -> (f64, f64) {
-    let first = knots[0];
-    if deflection <= first.deflection {
-        return (0.0, 0.0);
-    }
-    let last = *knots.last().expect("knots");
-    if deflection >= last.deflection {
-        return (
+    match segment(knots, deflection) {
+        Segment::Apart => (0.0, 0.0),
+        Segment::Beyond(last) => (
             last.force + last.slope * (deflection - last.deflection),
             last.slope,
-        );
+        ),
+        Segment::Within(a, b, h, t) => {
+            let t2 = t * t;
+            let d00 = (6.0 * t2 - 6.0 * t) / h;
+            let d10 = 3.0 * t2 - 4.0 * t + 1.0;
+            let d01 = (-6.0 * t2 + 6.0 * t) / h;
+            let d11 = 3.0 * t2 - 2.0 * t;
+            let slope = d00 * a.force + d10 * a.slope + d01 * b.force + d11 * b.slope;
+            (hermite_force(&a, &b, h, t), slope)
+        }
     }
-    let k = knots.partition_point(|knot| knot.deflection <= deflection) - 1;
-    let (a, b) = (knots[k], knots[k + 1]);
-    let h = b.deflection - a.deflection;
-    let t = (deflection - a.deflection) / h;
-    let t2 = t * t;
-    let s = 1.0 - t;
-    let (h00, h10) = (s * s * (1.0 + 2.0 * t), t * s * s);
-    let (h01, h11) = (t2 * (3.0 - 2.0 * t), t2 * (t - 1.0));
-    let force = h00 * a.force + h10 * h * a.slope + h01 * b.force + h11 * h * b.slope;
-    let d00 = (6.0 * t2 - 6.0 * t) / h;
-    let d10 = 3.0 * t2 - 4.0 * t + 1.0;
-    let d01 = (-6.0 * t2 + 6.0 * t) / h;
-    let d11 = 3.0 * t2 - 2.0 * t;
-    let slope = d00 * a.force + d10 * a.slope + d01 * b.force + d11 * b.slope;
-    (force, slope)
 }
 
 #[cfg(test)]
@@ -453,6 +466,12 @@ mod tests {
         for i in -40..=40 {
             let theta = 0.0731 * i as f64;
             let period = law.period;
+            // The bracket's folding against fmod's.
+            let (i0, j0, t0) = law.bracket(theta);
+            let u = (theta / period).rem_euclid(1.0) * 3.0;
+            let k = (u.floor() as usize).min(2);
+            assert_eq!((i0, j0), (k, (k + 1) % 3), "θ {theta}");
+            assert!((t0 - (u - k as f64)).abs() < 1e-12, "θ {theta}");
             // Folding by whole periods changes nothing.
             assert!((law.force(theta + 3.0 * period, 4e-6) - law.force(theta, 4e-6)).abs() < 1e-9);
             for k in 0..60 {

@@ -337,8 +337,19 @@ pub fn ltca_tables(
     source: &str,
 ) -> Result<(MeshStiffness, ForceLaw, QuasiStaticReference), StudyError> {
     let check_torques: Vec<f64> = QUASI_STATIC_LOADS.iter().map(|f| f * torque).collect();
-    let law = force_law_of(case, ltca, torque, source)?;
-    let check_cycles = ltca.run_torques(2 * FORCE_LAW_POSITIONS, &check_torques)?;
+    let law_torques: Vec<f64> = force_law_loads().iter().map(|f| f * torque).collect();
+    // One pass over the check's positions for every torque: the law's positions are every
+    // other one of them (the same angles, bit for bit), so each position's geometry (its
+    // compliance solves, the costly part) is made once for both.
+    let all: Vec<f64> = law_torques.iter().chain(&check_torques).copied().collect();
+    let mut cycles = ltca.run_torques(2 * FORCE_LAW_POSITIONS, &all)?;
+    let check_cycles = cycles.split_off(law_torques.len());
+    let law_cycles: Vec<Vec<PositionResult>> = cycles
+        .into_iter()
+        .map(|cycle| cycle.into_iter().step_by(2).collect())
+        .collect();
+    let law = ForceLaw::from_ltca(&case.pair, &law_torques, &law_cycles, source)
+        .map_err(StudyError::Input)?;
     let design = QUASI_STATIC_LOADS
         .iter()
         .position(|f| *f == 1.0)

@@ -48,13 +48,12 @@
 //! The elastic bodies' stiffness damping is tuned to the element scale (ζ at ω_max) and is a few
 //! ppm at the mesh mode, which would ring on undamped after every engagement. A dashpot on the
 //! driven hub against the DTE rate, T_d = −c_t (φ̇₂ − φ̇₂,kin), c_t = 2ζ√(k_m R_b2² I₂), acting
-//! only while the teeth are in contact (no torque across open teeth), gives the mesh mode of
-//! rigid gears the damping ratio ζ — the lumped model's viscous mesh damping c = 2ζ√(k̄ m) with
-//! the driver at prescribed speed (m = I₂/R_b2²). k_m is the pair's own mean mesh stiffness (the
-//! LTCA on the same bodies, which the caller passes), so ζ is the lumped model's at the same
-//! nominal value. With the bodies' twist the driven hub moves more in the mesh mode than the
-//! mesh deflection does, and the mode gets more than ζ (1.29 ζ on the paper pair by its lumped
-//! twin, which carries the dashpot where the FE does: `lumped::DampingSite`).
+//! only while the teeth are in contact (no torque across open teeth), gives the mesh mode the
+//! damping ratio ζ — the lumped model's viscous mesh damping c = 2ζ√(k̄ m) with the driver at
+//! prescribed speed (m = I₂/R_b2²). k_m is the pair's own mean mesh stiffness hub to hub (the
+//! LTCA on the same bodies, which the caller passes, their twist included), so ζ is the lumped
+//! model's at the same nominal value; with the bodies' twist too (0.0495 for 0.05 on the paper
+//! pair by its lumped twin, which carries the dashpot where the FE does: `lumped::DampingSite`).
 //!
 //! # Settling after the ramp
 //! The ramp leaves the mesh mode ringing; statistics start when that ringing has decayed to

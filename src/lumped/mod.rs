@@ -136,9 +136,10 @@ pub enum DampingSite {
     /// On the hub-to-hub transmission error, a force c ḣ along h, only while a flank touches
     /// (W ≠ 0): the explicit FE's dashpot on the driven hub against the DTE rate, which the FE's
     /// lumped twin must carry where the FE carries it. With elastic bodies the hubs move more
-    /// in the mesh mode than the mesh deflection does (the driver's rim follows the driven
-    /// gear through its body's twist), so the same c damps the mesh mode more here: 1.29 × on
-    /// the paper pair, driver at speed.
+    /// in the mesh mode than the mesh deflection does (the driver's rim follows the driven gear
+    /// through its body's twist), so the same c damps the mesh mode more here: 1.29 × on the
+    /// paper pair, driver at speed (c sized on the hub-to-hub stiffness gives the mode ζ here,
+    /// ζ/1.29 on the mesh deflection).
     HubTransmissionError,
 }
 

@@ -237,9 +237,8 @@ pub struct CompareSummary {
     pub modal: Vec<PairModes>,
     pub mesh_damping_n_s_per_m: f64,
     /// The mesh mode's damping ratio that the FE's dashpot gives its elastic-body lumped twin
-    /// (driver at speed; [`MeshModel::mesh_mode_damping_ratio`]): fe.mesh_damping_ratio sizes
-    /// the dashpot for rigid gears, and with the bodies' twist the hubs move more in the mesh
-    /// mode than the mesh deflection does.
+    /// (driver at speed; [`MeshModel::mesh_mode_damping_ratio`]): about fe.mesh_damping_ratio,
+    /// the dashpot being sized on the hub-to-hub stiffness and acting on the hub.
     pub mesh_mode_damping_ratio_fe_twin: f64,
     /// Only with `--paper-stiffness`.
     pub paper_stiffness: Option<PaperStiffness>,
@@ -290,7 +289,7 @@ pub fn body_twist(case: &Case) -> [f64; 2] {
 /// taken out of `mesh`, mesh force T/r_b2, the FE's mesh dashpot `damping` [N·s/m] where the FE
 /// has it (on the hub-to-hub TE rate while a flank touches, [`DampingSite::HubTransmissionError`];
 /// with elastic bodies it damps the mesh mode 1.29 × as much as the same c on the mesh
-/// deflection, paper pair), and with zero
+/// deflection would: the FE's ζ, not ζ/1.29, paper pair), and with zero
 /// backlash the back flanks engaging with their own mirrored k and e. `elastic = false`: rigid
 /// gears behind the whole hub-to-hub k.
 pub fn lumped_twin(

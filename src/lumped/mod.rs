@@ -454,8 +454,17 @@ impl MeshModel {
     /// The time derivative ([`MeshModel::derivative`]) and its Jacobian over the active
     /// components (q then v, 2n × 2n) at roll angle θ.
     fn derivative_and_jacobian(&self, theta: f64, s: &State, jacobian: &mut Tangent) -> State {
+        let (elastic, slope) = self.mesh_force_and_slope(theta, self.structure.mesh_of(&s.q));
+        let (d, dampers) = self.derivative_under(elastic, s);
+        self.structure.state_jacobian(slope, dampers, jacobian);
+        d
+    }
+
+    /// The time derivative with the elastic mesh force W(θ, δ) given, and the dampers'
+    /// coefficients [c_g, c_h] it used.
+    #[inline]
+    fn derivative_under(&self, elastic: f64, s: &State) -> (State, [f64; 2]) {
         let structure = &self.structure;
-        let (elastic, slope) = self.mesh_force_and_slope(theta, structure.mesh_of(&s.q));
         let [c_mesh, c_hub] = self.damper(elastic);
         let w = elastic + c_mesh * structure.mesh_of(&s.v);
         let hub = c_hub * structure.te_of(&s.v);
@@ -464,8 +473,7 @@ impl MeshModel {
             v: [0.0; MAX_DOFS],
         };
         structure.accelerations(&s.q, &s.v, self.force, [w, hub], &mut d.v);
-        structure.state_jacobian(slope, [c_mesh, c_hub], jacobian);
-        d
+        (d, [c_mesh, c_hub])
     }
 
     /// The mesh deflection δ under the static force F at roll angle θ: the model's quasi-static
@@ -547,17 +555,8 @@ impl MeshModel {
     /// m_e p̈ = F − W, m₁ÿ₁ + c₁ẏ₁ + k₁y₁ = −W, m₂ÿ₂ + c₂ẏ₂ + k₂y₂ = W).
     /// (W is the mesh force on the driven gear along the line of action; the driver takes −W.)
     pub fn derivative(&self, theta: f64, s: &State) -> State {
-        let structure = &self.structure;
-        let elastic = self.mesh_force(theta, structure.mesh_of(&s.q));
-        let [c_mesh, c_hub] = self.damper(elastic);
-        let w = elastic + c_mesh * structure.mesh_of(&s.v);
-        let hub = c_hub * structure.te_of(&s.v);
-        let mut d = State {
-            q: s.v,
-            v: [0.0; MAX_DOFS],
-        };
-        structure.accelerations(&s.q, &s.v, self.force, [w, hub], &mut d.v);
-        d
+        let elastic = self.mesh_force(theta, self.structure.mesh_of(&s.q));
+        self.derivative_under(elastic, s).0
     }
 
     /// The linear model of the Floquet analysis: no load, no TE, no separation; with a force

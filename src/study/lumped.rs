@@ -337,7 +337,7 @@ pub fn ltca_tables(
     source: &str,
 ) -> Result<(MeshStiffness, ForceLaw, QuasiStaticReference), StudyError> {
     let check_torques: Vec<f64> = QUASI_STATIC_LOADS.iter().map(|f| f * torque).collect();
-    let law_torques: Vec<f64> = force_law_loads().iter().map(|f| f * torque).collect();
+    let law_torques = force_law_torques(torque);
     // One pass over the check's positions for every torque: the law's positions are every
     // other one of them (the same angles, bit for bit), so each position's geometry (its
     // compliance solves, the costly part) is made once for both.
@@ -348,8 +348,7 @@ pub fn ltca_tables(
         .into_iter()
         .map(|cycle| cycle.into_iter().step_by(2).collect())
         .collect();
-    let law = ForceLaw::from_ltca(&case.pair, &law_torques, &law_cycles, source)
-        .map_err(StudyError::Input)?;
+    let law = law_from_cycles(case, &law_torques, &law_cycles, source)?;
     let design = QUASI_STATIC_LOADS
         .iter()
         .position(|f| *f == 1.0)
@@ -377,9 +376,24 @@ pub fn force_law_of(
     torque: f64,
     source: &str,
 ) -> Result<ForceLaw, StudyError> {
-    let law_torques: Vec<f64> = force_law_loads().iter().map(|f| f * torque).collect();
+    let law_torques = force_law_torques(torque);
     let cycles = ltca.run_torques(FORCE_LAW_POSITIONS, &law_torques)?;
-    ForceLaw::from_ltca(&case.pair, &law_torques, &cycles, source).map_err(StudyError::Input)
+    law_from_cycles(case, &law_torques, &cycles, source)
+}
+
+/// The torques of the force law about the design `torque` ([`force_law_loads`] × it).
+fn force_law_torques(torque: f64) -> Vec<f64> {
+    force_law_loads().iter().map(|f| f * torque).collect()
+}
+
+/// The force law from the LTCA's cycles at the law's torques.
+fn law_from_cycles(
+    case: &Case,
+    torques: &[f64],
+    cycles: &[Vec<PositionResult>],
+    source: &str,
+) -> Result<ForceLaw, StudyError> {
+    ForceLaw::from_ltca(&case.pair, torques, cycles, source).map_err(StudyError::Input)
 }
 
 /// The model's quasi-static TE, hub to hub ([`MeshModel::quasi_static_transmission_error`]:

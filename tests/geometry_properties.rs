@@ -6,6 +6,7 @@ use geardyn::geometry::{
     ReliefSpec, ReliefStart,
 };
 use proptest::prelude::*;
+use proptest::test_runner::FileFailurePersistence;
 
 fn gear(teeth: u32, shift: f64) -> GearSpec {
     GearSpec {
@@ -19,7 +20,14 @@ fn gear(teeth: u32, shift: f64) -> GearSpec {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 400, ..ProptestConfig::default() })]
+    // Failures found before are replayed first from tests/geometry_properties.proptest-regressions
+    // (`WithSource`: the default `SourceParallel` finds no lib.rs beside an integration test and
+    // silently skips the file).
+    #![proptest_config(ProptestConfig {
+        cases: 400,
+        failure_persistence: Some(Box::new(FileFailurePersistence::WithSource("proptest-regressions"))),
+        ..ProptestConfig::default()
+    })]
 
     #[test]
     fn random_gears_are_valid_or_rejected_clearly(

@@ -4,69 +4,12 @@
 //! (`geardyn::report::is_timing_key`).
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 mod common;
 
 use assert_cmd::Command;
-use common::coarse_case;
-use geardyn::report::is_timing_key;
-
-/// Every CSV and JSON file under `dir`, by path relative to it.
-fn outputs(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
-    let mut files = BTreeMap::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(folder) = stack.pop() {
-        for entry in std::fs::read_dir(&folder).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                stack.push(path);
-            } else if matches!(
-                path.extension().and_then(|e| e.to_str()),
-                Some("csv" | "json")
-            ) {
-                let bytes = std::fs::read(&path).unwrap();
-                files.insert(path.strip_prefix(dir).unwrap().to_path_buf(), bytes);
-            }
-        }
-    }
-    files
-}
-
-/// A JSON value with every timing key removed, at any depth.
-fn without_timings(value: serde_json::Value) -> serde_json::Value {
-    match value {
-        serde_json::Value::Object(map) => map
-            .into_iter()
-            .filter(|(key, _)| !is_timing_key(key))
-            .map(|(key, v)| (key, without_timings(v)))
-            .collect(),
-        serde_json::Value::Array(items) => items.into_iter().map(without_timings).collect(),
-        other => other,
-    }
-}
-
-/// A CSV's text with every timing column (by header) removed.
-fn csv_without_timings(bytes: &[u8]) -> String {
-    let text = std::str::from_utf8(bytes).unwrap();
-    let mut lines = text.lines();
-    let Some(header) = lines.next() else {
-        return String::new();
-    };
-    let keep: Vec<bool> = header.split(',').map(|h| !is_timing_key(h)).collect();
-    std::iter::once(header)
-        .chain(lines)
-        .map(|line| {
-            line.split(',')
-                .zip(&keep)
-                .filter(|(_, keep)| **keep)
-                .map(|(cell, _)| cell)
-                .collect::<Vec<_>>()
-                .join(",")
-        })
-        .collect::<Vec<_>>()
-        .join("\n")
-}
+use common::{coarse_case, outputs};
 
 /// Runs `args` (with `--out DIR` appended) under 1, 2 and 8 rayon threads and asserts that
 /// every CSV and JSON file is identical once the timings are removed (CSV text byte for byte,
@@ -106,24 +49,11 @@ fn assert_deterministic(name: &str, args: &[&str]) {
             files.keys().collect::<Vec<_>>(),
             "{name}: different files with {first_threads} and {threads} threads"
         );
-        for (path, bytes) in &files {
-            let expected = &first[path];
-            if path.extension().is_some_and(|e| e == "json") {
-                let parse = |b: &[u8]| without_timings(serde_json::from_slice(b).unwrap());
-                assert_eq!(
-                    parse(expected),
-                    parse(bytes),
-                    "{name}: {} differs between {first_threads} and {threads} threads",
-                    path.display()
-                );
-            } else {
-                assert!(
-                    csv_without_timings(expected) == csv_without_timings(bytes),
-                    "{name}: {} differs between {first_threads} and {threads} threads",
-                    path.display()
-                );
-            }
-        }
+        common::assert_same_outputs(
+            first,
+            &files,
+            &format!("{name}: with {first_threads} and {threads} threads"),
+        );
     }
 }
 

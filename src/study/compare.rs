@@ -254,11 +254,11 @@ pub const SPEED_SCENE: &str = "high-unmodified";
 pub const STIFFNESS_SCENE: &str = "stiffness";
 
 /// The speeds of `speeds` [rpm] that no given run covers: the FE runs still to make.
-pub fn speeds_to_run(speeds: &[f64], given: &[FeDte]) -> Vec<f64> {
+pub fn speeds_to_run(speeds: &[f64], given_rpm: &[f64]) -> Vec<f64> {
     speeds
         .iter()
         .copied()
-        .filter(|rpm| !given.iter().any(|r| (r.speed_rpm - rpm).abs() < 1e-6 * rpm))
+        .filter(|rpm| !given_rpm.iter().any(|r| (r - rpm).abs() < 1e-6 * rpm))
         .collect()
 }
 

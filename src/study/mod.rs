@@ -8,6 +8,7 @@
 
 pub mod accuracy;
 pub mod checks;
+pub mod cluster;
 pub mod compare;
 pub mod fe;
 pub mod fe_sweep;

@@ -2,9 +2,13 @@
 // Each test crate includes this module and uses part of it.
 #![allow(dead_code)]
 
+use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
+
+use geardyn::report::is_timing_key;
 
 /// Starts `command`, waits for a line containing `marker` on its stdout or stderr (`stderr`
 /// picks which), waits `delay` more, sends SIGTERM and returns the finished process's status
@@ -109,4 +113,93 @@ pub fn coarse_case(dir: &std::path::Path) -> std::path::PathBuf {
     )
     .unwrap();
     case
+}
+
+/// Every CSV and JSON file under `dir`, by path relative to it.
+pub fn outputs(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
+    let mut files = BTreeMap::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(folder) = stack.pop() {
+        for entry in std::fs::read_dir(&folder).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if matches!(
+                path.extension().and_then(|e| e.to_str()),
+                Some("csv" | "json")
+            ) {
+                let bytes = std::fs::read(&path).unwrap();
+                files.insert(path.strip_prefix(dir).unwrap().to_path_buf(), bytes);
+            }
+        }
+    }
+    files
+}
+
+/// A JSON value with every timing key removed, at any depth.
+pub fn without_timings(value: serde_json::Value) -> serde_json::Value {
+    match value {
+        serde_json::Value::Object(map) => map
+            .into_iter()
+            .filter(|(key, _)| !is_timing_key(key))
+            .map(|(key, v)| (key, without_timings(v)))
+            .collect(),
+        serde_json::Value::Array(items) => items.into_iter().map(without_timings).collect(),
+        other => other,
+    }
+}
+
+/// A CSV's text with every timing column (by header) removed.
+pub fn csv_without_timings(bytes: &[u8]) -> String {
+    let text = std::str::from_utf8(bytes).unwrap();
+    let mut lines = text.lines();
+    let Some(header) = lines.next() else {
+        return String::new();
+    };
+    let keep: Vec<bool> = header.split(',').map(|h| !is_timing_key(h)).collect();
+    std::iter::once(header)
+        .chain(lines)
+        .map(|line| {
+            line.split(',')
+                .zip(&keep)
+                .filter(|(_, keep)| **keep)
+                .map(|(cell, _)| cell)
+                .collect::<Vec<_>>()
+                .join(",")
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// Asserts that two folders' outputs ([`outputs`]) are the same files with the same content once
+/// timings are removed: CSV text byte for byte, JSON value by value (a float must round-trip to
+/// the same bits). `what` names the comparison in a failure.
+pub fn assert_same_outputs(
+    expected: &BTreeMap<PathBuf, Vec<u8>>,
+    actual: &BTreeMap<PathBuf, Vec<u8>>,
+    what: &str,
+) {
+    assert_eq!(
+        expected.keys().collect::<Vec<_>>(),
+        actual.keys().collect::<Vec<_>>(),
+        "{what}: different files"
+    );
+    for (path, bytes) in actual {
+        let want = &expected[path];
+        if path.extension().is_some_and(|e| e == "json") {
+            let parse = |b: &[u8]| without_timings(serde_json::from_slice(b).unwrap());
+            assert_eq!(
+                parse(want),
+                parse(bytes),
+                "{what}: {} differs",
+                path.display()
+            );
+        } else {
+            assert!(
+                csv_without_timings(want) == csv_without_timings(bytes),
+                "{what}: {} differs",
+                path.display()
+            );
+        }
+    }
 }

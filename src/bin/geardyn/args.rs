@@ -119,6 +119,24 @@ pub enum Command {
         /// checkpoint.json; the result is the uninterrupted run's.
         #[arg(long)]
         resume: bool,
+        /// What a batch task that may be requeued runs: take a finished run of the same case in
+        /// --out as it is, go on from the checkpoint of an interrupted one, else start.
+        #[arg(long, conflicts_with = "resume")]
+        reuse: bool,
+    },
+    /// The explicit FE runs a command would make, with their estimated wall time and memory
+    /// (timed on this machine) and the total core-hours, without running them: `geardyn plan
+    /// run --full`, `geardyn plan compare --fe-sweep 4400:6600:8`. The lumped and LTCA stages
+    /// that decide the runs (the relief optimizer's candidates) do run.
+    Plan {
+        /// The command and its arguments, as they would be given.
+        #[arg(
+            trailing_var_arg = true,
+            allow_hyphen_values = true,
+            required = true,
+            value_name = "COMMAND"
+        )]
+        command: Vec<String>,
     },
     /// FE versus lumped: the mesh-mode frequency by every method (lumped sqrt(k/m) with k from
     /// the LTCA and the FE DTE, Floquet, FE modal analysis of the meshed pair) for both boundary
@@ -129,47 +147,8 @@ pub enum Command {
     Compare {
         #[command(flatten)]
         common: CommonArgs,
-        /// Explicit FE runs to make: scene high-unmodified at these driver speeds [rpm], into
-        /// DIR/fe-<rpm> (skipped for speeds given by --fe-run).
-        #[arg(
-            long,
-            value_delimiter = ',',
-            default_value = "1200,3000,4800",
-            value_name = "RPM"
-        )]
-        speed_rpm: Vec<f64>,
-        /// Finished `geardyn fe` output folders to use instead of running their speeds
-        /// (repeatable).
-        #[arg(long = "fe-run", value_name = "DIR")]
-        fe_runs: Vec<PathBuf>,
-        /// k(θ) from the FE DTE (stiffness.csv of `geardyn fe --scene stiffness`); default: run
-        /// that scene into DIR/fe-stiffness.
-        #[arg(long, value_name = "FILE")]
-        fe_stiffness: Option<PathBuf>,
-        /// Mesh positions over one base pitch for the FE modal analysis.
-        #[arg(long, default_value_t = 16, value_name = "N")]
-        positions: usize,
-        /// Also the labelled paper-stiffness study: the lumped model given the seed paper's
-        /// mean stiffness (1.3427e8 N/m, by a compliance in series), never a default.
-        #[arg(long)]
-        paper_stiffness: bool,
-        /// Also the accuracy-versus-cost chart (accuracy_cost.{csv,md,png,svg}): LTCA at three
-        /// mesh levels, ISO, potential energy and explicit FE stiffness runs, against the finest
-        /// unscaled FE run and the primary FE run's DTE (the one nearest 3000 rpm).
-        #[arg(long)]
-        chart: bool,
-        /// Finished stiffness-scene folders for the chart (repeatable); default: run the
-        /// stiffness scene at 1.0 and 0.7 mm flanks, scaled and unscaled, into DIR/chart-fe-*.
-        #[arg(long = "chart-fe-run", value_name = "DIR")]
-        chart_fe_runs: Vec<PathBuf>,
-        /// The explicit FE's speed sweep through the mesh resonance: scene high-unmodified at N
-        /// speeds from FROM to TO [rpm] (e.g. 4400:6600:8 on the paper pair, 0.8–1.2 × the
-        /// driver-held resonance; --fe-run folders at those speeds are reused, and those at
-        /// other speeds inside the range join the sweep), against the
-        /// lumped twin swept four times as densely: resonance speeds, the peak mesh-harmonic
-        /// amplitude and the DTE rms (fe_sweep in summary.json, fe_sweep.csv, fe_sweep.png).
-        #[arg(long, value_name = "FROM:TO:N")]
-        fe_sweep: Option<RpmRange>,
+        #[command(flatten)]
+        options: CompareArgs,
     },
     /// Re-writes the report of a `geardyn run` folder (index.html, report.md, summary.json,
     /// tables/) from what its stages wrote, e.g. after a stage was re-run.
@@ -276,9 +255,55 @@ impl Command {
             | Command::Optimize { common, .. }
             | Command::Validate { common, .. } => Some(common),
             Command::Geometry(common) => Some(common),
-            Command::Report { .. } | Command::Case { .. } => None,
+            Command::Report { .. } | Command::Case { .. } | Command::Plan { .. } => None,
         }
     }
+}
+
+/// What `compare` runs and compares besides its case (`geardyn plan compare` reads the same).
+#[derive(Args, Clone)]
+pub struct CompareArgs {
+    /// Explicit FE runs to make: scene high-unmodified at these driver speeds [rpm], into
+    /// DIR/fe-<rpm> (skipped for speeds given by --fe-run).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "1200,3000,4800",
+        value_name = "RPM"
+    )]
+    pub speed_rpm: Vec<f64>,
+    /// Finished `geardyn fe` output folders to use instead of running their speeds
+    /// (repeatable).
+    #[arg(long = "fe-run", value_name = "DIR")]
+    pub fe_runs: Vec<PathBuf>,
+    /// k(θ) from the FE DTE (stiffness.csv of `geardyn fe --scene stiffness`); default: run
+    /// that scene into DIR/fe-stiffness.
+    #[arg(long, value_name = "FILE")]
+    pub fe_stiffness: Option<PathBuf>,
+    /// Mesh positions over one base pitch for the FE modal analysis.
+    #[arg(long, default_value_t = 16, value_name = "N")]
+    pub positions: usize,
+    /// Also the labelled paper-stiffness study: the lumped model given the seed paper's
+    /// mean stiffness (1.3427e8 N/m, by a compliance in series), never a default.
+    #[arg(long)]
+    pub paper_stiffness: bool,
+    /// Also the accuracy-versus-cost chart (accuracy_cost.{csv,md,png,svg}): LTCA at three
+    /// mesh levels, ISO, potential energy and explicit FE stiffness runs, against the finest
+    /// unscaled FE run and the primary FE run's DTE (the one nearest 3000 rpm).
+    #[arg(long)]
+    pub chart: bool,
+    /// Finished stiffness-scene folders for the chart (repeatable); default: run the
+    /// stiffness scene at 1.0 and 0.7 mm flanks, scaled and unscaled, into DIR/chart-fe-*.
+    #[arg(long = "chart-fe-run", value_name = "DIR")]
+    pub chart_fe_runs: Vec<PathBuf>,
+    /// The explicit FE's speed sweep through the mesh resonance: scene high-unmodified at N
+    /// speeds from FROM to TO [rpm] (e.g. 4400:6600:8 on the paper pair, 0.8–1.2 × the
+    /// driver-held resonance; --fe-run folders at those speeds are reused, and those at
+    /// other speeds inside the range join the sweep), against the
+    /// lumped twin swept four times as densely: resonance speeds, the peak mesh-harmonic
+    /// amplitude and the DTE rms (fe_sweep in summary.json, fe_sweep.csv, fe_sweep.png).
+    #[arg(long, value_name = "FROM:TO:N")]
+    pub fe_sweep: Option<RpmRange>,
 }
 
 #[derive(Args, Clone)]
@@ -301,6 +326,63 @@ pub struct CommonArgs {
     /// mesh.fine_element_mm=0.05, scene[low-unmodified].duration_s=0.02 (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<Override>,
+    #[command(flatten)]
+    pub executor: ExecutorArgs,
+}
+
+/// Where the explicit FE runs of a study run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Default)]
+pub enum Executor {
+    /// On this machine, one after the other.
+    #[default]
+    Local,
+    /// As one Slurm job array (one task per run), waited for; the study then goes on here.
+    Slurm,
+}
+
+/// The executor's flags (every command that runs explicit FE).
+#[derive(Args, Clone, Debug)]
+pub struct ExecutorArgs {
+    /// Run the study's explicit FE runs here (local) or as a Slurm job array (slurm).
+    #[arg(long, value_enum, default_value = "local")]
+    pub executor: Executor,
+    /// With --executor slurm: submit the array and stop; the same command run again later
+    /// (same --out) waits for it and finishes the study.
+    #[arg(long)]
+    pub submit_only: bool,
+    /// Slurm partition of the array.
+    #[arg(long, value_name = "NAME")]
+    pub partition: Option<String>,
+    /// Slurm account of the array.
+    #[arg(long, value_name = "NAME")]
+    pub account: Option<String>,
+    /// An extra #SBATCH option, verbatim, e.g. --sbatch-option=--qos=long (repeatable).
+    #[arg(
+        long = "sbatch-option",
+        value_name = "OPTION",
+        allow_hyphen_values = true
+    )]
+    pub sbatch_options: Vec<String>,
+    /// Cores per task (default 2, the cores the cost model is timed with).
+    #[arg(long, value_name = "N")]
+    pub cpus_per_task: Option<usize>,
+    /// How often the queue is asked while the study waits [s].
+    #[arg(long, value_name = "SECONDS", default_value_t = 20.0, value_parser = positive_seconds)]
+    pub poll_s: f64,
+}
+
+impl Default for ExecutorArgs {
+    fn default() -> Self {
+        ExecutorArgs {
+            executor: Executor::Local,
+            submit_only: false,
+            partition: None,
+            account: None,
+            sbatch_options: Vec::new(),
+            cpus_per_task: None,
+            poll_s: 20.0,
+        }
+    }
 }
 
 /// A scene of the relief cross-check.

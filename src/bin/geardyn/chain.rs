@@ -18,8 +18,8 @@ use geardyn::study::optimize::fe_run_folder;
 use geardyn::study::{self, lumped::LumpedShorthands};
 
 use super::args::{CommonArgs, OptimizeArgs};
-use super::progress::fe_check_run;
 use super::{compare, geometry, load, ltca, mesh, optimize_into, output_dir, stability, sweep};
+use geardyn::report;
 
 /// The stages' own folders (the explicit runs live in fe/ and are kept).
 const STAGE_FOLDERS: [&str; 9] = [
@@ -202,12 +202,12 @@ fn stages(
     let unmodified_case = load(args, study::optimize::unmodified_fe_overrides(case))?;
     let fe_root = dir.join("fe");
     let stiffness_run = dir.join(&manifest.fe_stiffness_run);
-    fe_check_run(
-        &unmodified_case,
-        study::compare::STIFFNESS_SCENE,
-        &stiffness_run,
-    )
-    .map_err(anyhow::Error::msg)?;
+    let request = stiffness_request(unmodified_case, &stiffness_run);
+    for outcome in super::executor::execute(args, &[request], &fe_root.join("slurm"))? {
+        outcome
+            .and_then(|_| report::optimize::read_fe_check_run(&stiffness_run).map(|_| ()))
+            .map_err(anyhow::Error::msg)?;
+    }
     let stiffness_csv = stiffness_run.join("stiffness.csv");
 
     announce()?;
@@ -263,20 +263,43 @@ fn stages(
         .then_some(high_run)
         .into_iter()
         .collect();
-    let fe_sweep = match plan.fe_sweep {
-        true => study::compare::fe_sweep_speeds(case)?,
-        false => Vec::new(),
-    };
     compare(
         &sub("compare"),
-        &plan.compare_speeds_rpm,
-        &runs,
-        (
-            Some(stiffness_csv.as_path()),
-            plan.modal_positions,
-            plan.paper_stiffness,
-        ),
-        None,
-        fe_sweep,
+        &compare_ask(case, plan, &runs, &stiffness_csv)?,
     )
+}
+
+/// The unmodified pair's stiffness scene into `dir`: the chain's FE stiffness stage.
+pub fn stiffness_request(
+    unmodified_case: geardyn::case::Case,
+    dir: &Path,
+) -> super::executor::FeRunRequest {
+    super::executor::FeRunRequest {
+        label: "FE stiffness (unmodified)".to_string(),
+        case: unmodified_case,
+        scene: study::compare::STIFFNESS_SCENE.to_string(),
+        dir: dir.to_path_buf(),
+    }
+}
+
+/// The chain's comparison stage: `plan`'s speeds and sweep, the cross-check's high-speed run
+/// `runs` and the FE stiffness stage's k(θ).
+pub fn compare_ask<'a>(
+    case: &geardyn::case::Case,
+    plan: &'a study::run::RunPlan,
+    runs: &'a [std::path::PathBuf],
+    stiffness_csv: &'a Path,
+) -> Result<super::CompareAsk<'a>> {
+    Ok(super::CompareAsk {
+        speeds: &plan.compare_speeds_rpm,
+        fe_runs: runs,
+        fe_stiffness: Some(stiffness_csv),
+        positions: plan.modal_positions,
+        paper: plan.paper_stiffness,
+        chart: None,
+        fe_sweep: match plan.fe_sweep {
+            true => study::compare::fe_sweep_speeds(case)?,
+            false => Vec::new(),
+        },
+    })
 }

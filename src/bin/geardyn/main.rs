@@ -3,8 +3,10 @@
 
 mod args;
 mod chain;
+mod executor;
 mod lumped;
 mod optimize;
+mod plan;
 mod progress;
 mod validate;
 
@@ -20,10 +22,10 @@ use geardyn::study::{
     self, fe::FeShorthands, lumped::LumpedShorthands, optimize::FeCheckPlan, RpmRange,
 };
 
-use args::{Cli, Command, CommonArgs, OptimizeArgs, ValidationStudy};
+use args::{Cli, Command, CommonArgs, CompareArgs, OptimizeArgs, ValidationStudy};
 use lumped::{lumped_case, stability, sweep};
 use optimize::{optimize, optimize_into};
-use progress::{fe_check_run, fe_run, fe_run_reusing, progress_bar, stage, staged_bar};
+use progress::{fe_run, fe_run_reusing, progress_bar, stage, staged_bar};
 use validate::{
     validate_frequencies, validate_integrators, validate_mass_scaling, validate_pairs,
     validate_properties, validate_quick,
@@ -83,7 +85,9 @@ fn main() -> ExitCode {
             common,
             options,
             resume,
-        } => fe(&common, &options, resume),
+            reuse,
+        } => fe(&common, &options, (resume, reuse)),
+        Command::Plan { command } => plan::plan(command),
         Command::Validate {
             study: ValidationStudy::Quick,
             common,
@@ -123,24 +127,7 @@ fn main() -> ExitCode {
             scene,
             ..
         } => validate_mass_scaling(&common, &scene),
-        Command::Compare {
-            common,
-            speed_rpm,
-            fe_runs,
-            fe_stiffness,
-            positions,
-            paper_stiffness,
-            chart,
-            chart_fe_runs,
-            fe_sweep,
-        } => compare(
-            &common,
-            &speed_rpm,
-            &fe_runs,
-            (fe_stiffness.as_deref(), positions, paper_stiffness),
-            chart.then_some(&chart_fe_runs[..]),
-            fe_sweep.map_or_else(Vec::new, |r| r.0),
-        ),
+        Command::Compare { common, options } => compare(&common, &options.ask()),
         Command::Optimize { common, options } => optimize(&common, &options),
         Command::Report { dir } => geardyn::report::run::write(&dir)
             .map(|_| println!("wrote {}", dir.join("index.html").display()))
@@ -156,6 +143,10 @@ fn main() -> ExitCode {
         Ok(()) => {
             eprintln!("stopped on request after the work was done; every output is complete");
             ExitCode::from(EXIT_INTERRUPTED)
+        }
+        Err(e) if e.downcast_ref::<executor::Submitted>().is_some() => {
+            println!("{e}");
+            ExitCode::SUCCESS
         }
         Err(e) => {
             eprintln!("error: {}", error_text(&e));
@@ -266,70 +257,145 @@ fn ltca(
     Ok(())
 }
 
-fn fe(args: &CommonArgs, options: &FeShorthands, resume: bool) -> Result<()> {
+fn fe(args: &CommonArgs, options: &FeShorthands, (resume, reuse): (bool, bool)) -> Result<()> {
     anyhow::ensure!(
-        !resume || args.out.is_some(),
-        "--resume needs --out DIR, the interrupted run's folder"
+        !(resume || reuse) || args.out.is_some(),
+        "--resume and --reuse need --out DIR, the run's folder"
     );
     let base = load(args, Vec::new())?;
     let (overrides, scene_name) = study::fe::overrides(&base, options)?;
     let case = load(args, overrides)?;
     let scene = study::fe::scene(&case, &scene_name)?;
     let dir = output_dir(args, &format!("fe-{}", scene.name), &case)?;
-    fe_run(&case, scene, &dir, resume)?;
+    if reuse {
+        fe_run_reusing(&case, &scene_name, &dir)?;
+    } else {
+        fe_run(&case, scene, &dir, resume)?;
+    }
     println!("wrote {}", dir.display());
     Ok(())
 }
 
-fn compare(
-    args: &CommonArgs,
-    speeds: &[f64],
-    fe_runs: &[PathBuf],
-    (fe_stiffness, positions, paper): (Option<&Path>, usize, bool),
-    chart: Option<&[PathBuf]>,
-    fe_sweep: Vec<f64>,
-) -> Result<()> {
+impl CompareArgs {
+    pub fn ask(&self) -> CompareAsk<'_> {
+        CompareAsk {
+            speeds: &self.speed_rpm,
+            fe_runs: &self.fe_runs,
+            fe_stiffness: self.fe_stiffness.as_deref(),
+            positions: self.positions,
+            paper: self.paper_stiffness,
+            chart: self.chart.then_some(&self.chart_fe_runs[..]),
+            fe_sweep: self.fe_sweep.clone().map_or_else(Vec::new, |r| r.0),
+        }
+    }
+}
+
+/// What `compare` is asked for besides its case.
+pub struct CompareAsk<'a> {
+    pub speeds: &'a [f64],
+    pub fe_runs: &'a [PathBuf],
+    pub fe_stiffness: Option<&'a Path>,
+    pub positions: usize,
+    pub paper: bool,
+    /// The chart's finished stiffness-scene folders (empty: run them), if the chart is asked for.
+    pub chart: Option<&'a [PathBuf]>,
+    pub fe_sweep: Vec<f64>,
+}
+
+impl CompareAsk<'_> {
+    /// The sweep's speeds, with the given finished runs inside its range joining it (a point
+    /// added near the peak).
+    fn sweep_speeds(&self, given_rpm: &[f64]) -> Vec<f64> {
+        let mut fe_sweep = self.fe_sweep.clone();
+        if let (Some(&from), Some(&to)) = (fe_sweep.first(), fe_sweep.last()) {
+            let inside: Vec<f64> = given_rpm
+                .iter()
+                .copied()
+                .filter(|rpm| (from..=to).contains(rpm))
+                .collect();
+            fe_sweep.extend(inside);
+            fe_sweep.sort_by(f64::total_cmp);
+            fe_sweep.dedup_by(|a, b| (*a - *b).abs() < 1e-6 * b.abs());
+        }
+        fe_sweep
+    }
+
+    /// The explicit runs compare makes into `dir` (the speeds not given as finished runs at
+    /// `given_rpm`, the stiffness scene unless given, the chart's four unless given).
+    fn requests(
+        &self,
+        args: &CommonArgs,
+        case: &Case,
+        dir: &Path,
+        given_rpm: &[f64],
+    ) -> Result<Vec<executor::FeRunRequest>> {
+        use study::compare as cmp;
+        let mut all_speeds: Vec<f64> = self
+            .speeds
+            .iter()
+            .chain(&self.sweep_speeds(given_rpm))
+            .copied()
+            .collect();
+        all_speeds.sort_by(f64::total_cmp);
+        all_speeds.dedup_by(|a, b| (*a - *b).abs() < 1e-6 * b.abs());
+        let mut requests = Vec::new();
+        for rpm in cmp::speeds_to_run(&all_speeds, given_rpm) {
+            requests.push(executor::FeRunRequest {
+                label: format!("compare {rpm:.0} rpm"),
+                case: load(args, cmp::speed_overrides(rpm))?,
+                scene: cmp::SPEED_SCENE.to_string(),
+                dir: dir.join(format!("fe-{rpm:.0}")),
+            });
+        }
+        if self.fe_stiffness.is_none() {
+            requests.push(executor::FeRunRequest {
+                label: "compare stiffness".to_string(),
+                case: case.clone(),
+                scene: cmp::STIFFNESS_SCENE.to_string(),
+                dir: dir.join("fe-stiffness"),
+            });
+        }
+        if self.chart.is_some_and(|folders| folders.is_empty()) {
+            for (mm, scaled) in study::accuracy::CHART_RUNS {
+                let (overrides, name) = study::accuracy::chart_run(mm, scaled);
+                requests.push(executor::FeRunRequest {
+                    label: format!("chart {name}"),
+                    case: load(args, overrides)?,
+                    scene: cmp::STIFFNESS_SCENE.to_string(),
+                    dir: dir.join(name),
+                });
+            }
+        }
+        Ok(requests)
+    }
+}
+
+/// The finished FE runs given to compare, read.
+fn given_fe_runs(fe_runs: &[PathBuf]) -> Result<Vec<study::compare::FeDte>> {
+    fe_runs
+        .iter()
+        .map(|d| report::compare::read_fe_run(d).map_err(anyhow::Error::msg))
+        .collect()
+}
+
+fn compare(args: &CommonArgs, ask: &CompareAsk) -> Result<()> {
     use study::compare::{self as cmp, CompareInput};
     let case = load(args, Vec::new())?;
     let dir = output_dir(args, "compare", &case)?;
-    let read = |d: &Path| report::compare::read_fe_run(d).map_err(anyhow::Error::msg);
-    let mut runs = fe_runs
-        .iter()
-        .map(|d| read(d))
-        .collect::<Result<Vec<_>>>()?;
-    // Finished runs given inside the sweep's range join it (a point added near the peak).
-    let mut fe_sweep = fe_sweep;
-    if let (Some(&from), Some(&to)) = (fe_sweep.first(), fe_sweep.last()) {
-        let inside: Vec<f64> = runs
-            .iter()
-            .map(|r| r.speed_rpm)
-            .filter(|rpm| (from..=to).contains(rpm))
-            .collect();
-        fe_sweep.extend(inside);
-        fe_sweep.sort_by(f64::total_cmp);
-        fe_sweep.dedup_by(|a, b| (*a - *b).abs() < 1e-6 * b.abs());
-    }
-    let mut all_speeds: Vec<f64> = speeds.iter().chain(&fe_sweep).copied().collect();
-    all_speeds.sort_by(f64::total_cmp);
-    all_speeds.dedup_by(|a, b| (*a - *b).abs() < 1e-6 * b.abs());
-    for rpm in cmp::speeds_to_run(&all_speeds, &runs) {
-        let at_speed = load(args, cmp::speed_overrides(rpm))?;
-        let out = dir.join(format!("fe-{rpm:.0}"));
-        fe_run_reusing(&at_speed, cmp::SPEED_SCENE, &out)?;
-        runs.push(read(&out)?);
-    }
-    let stiffness_file = match fe_stiffness {
-        Some(file) => file.to_path_buf(),
-        None => {
-            let out = dir.join("fe-stiffness");
-            fe_run(
-                &case,
-                study::fe::scene(&case, cmp::STIFFNESS_SCENE)?,
-                &out,
-                false,
-            )?;
-            out.join("stiffness.csv")
+    let mut runs = given_fe_runs(ask.fe_runs)?;
+    let given_rpm: Vec<f64> = runs.iter().map(|r| r.speed_rpm).collect();
+    let fe_sweep = ask.sweep_speeds(&given_rpm);
+    let requests = ask.requests(args, &case, &dir, &given_rpm)?;
+    let outcomes = executor::execute(args, &requests, &dir.join("slurm"))?;
+    for (request, outcome) in requests.iter().zip(outcomes) {
+        outcome.map_err(anyhow::Error::msg)?;
+        if request.scene == cmp::SPEED_SCENE {
+            runs.push(report::compare::read_fe_run(&request.dir).map_err(anyhow::Error::msg)?);
         }
+    }
+    let stiffness_file = match ask.fe_stiffness {
+        Some(file) => file.to_path_buf(),
+        None => dir.join("fe-stiffness").join("stiffness.csv"),
     };
     let pitch = case.pair.gears[0].angular_pitch();
     let fe_stiffness = report::stiffness_csv::read_stiffness_csv(&stiffness_file, pitch)
@@ -340,46 +406,37 @@ fn compare(
         fe_stiffness,
     };
     let bar = staged_bar();
-    let summary = cmp::run(&case, &input, positions, paper, &stage(&bar))?;
+    let summary = cmp::run(&case, &input, ask.positions, ask.paper, &stage(&bar))?;
     bar.finish_and_clear();
     println!(
         "{}",
         report::compare::write(OutputDir(&dir), &case, &summary)?
     );
-    if let Some(folders) = chart {
+    if let Some(folders) = ask.chart {
         let primary = cmp::primary_run(&case, &input.fe_runs)
             .context("the chart needs an FE run at speed")?;
         let resonance = cmp::resonance_reference(&case, &summary);
-        accuracy_chart(
-            args,
-            &case,
-            folders,
-            (&input.fe_runs[primary], resonance),
-            &dir,
-        )?;
+        let folders = match folders.is_empty() {
+            true => study::accuracy::CHART_RUNS
+                .iter()
+                .map(|&(mm, scaled)| dir.join(study::accuracy::chart_run(mm, scaled).1))
+                .collect(),
+            false => folders.to_vec(),
+        };
+        accuracy_chart(&case, &folders, (&input.fe_runs[primary], resonance), &dir)?;
     }
     println!("wrote {}", dir.display());
     Ok(())
 }
 
-/// The accuracy-versus-cost chart of `compare --chart`, into `dir`.
+/// The accuracy-versus-cost chart of `compare --chart` from the stiffness-scene `folders`,
+/// into `dir`.
 fn accuracy_chart(
-    args: &CommonArgs,
     case: &Case,
     folders: &[PathBuf],
     (dte_run, resonance): (&study::compare::FeDte, study::accuracy::ResonanceReference),
     dir: &Path,
 ) -> Result<()> {
-    let mut folders = folders.to_vec();
-    if folders.is_empty() {
-        for (mm, scaled) in study::accuracy::CHART_RUNS {
-            let (overrides, name) = study::accuracy::chart_run(mm, scaled);
-            let at_level = load(args, overrides)?;
-            let scene = study::fe::scene(&at_level, study::compare::STIFFNESS_SCENE)?;
-            fe_run(&at_level, scene, &dir.join(&name), false)?;
-            folders.push(dir.join(name));
-        }
-    }
     let pitch = case.pair.gears[0].angular_pitch();
     let runs = folders
         .iter()

@@ -35,44 +35,45 @@ pub fn optimize_into(
     print!("{}", report::optimize::console(&result));
     report::optimize::write(OutputDir(dir), &case, &result)?;
     if let Some((root, plan)) = fe_check {
-        let names: Vec<&str> = result.candidates.iter().map(|c| c.name.as_str()).collect();
-        if let Some(unknown) = plan
-            .only
-            .iter()
-            .flatten()
-            .find(|n| !names.contains(&n.as_str()))
-        {
-            anyhow::bail!(
-                "--fe-check-only {unknown:?} is not a candidate; the candidates are {names:?}"
-            );
-        }
-        let mut runs = Vec::new();
-        for candidate in &result.candidates {
-            if !plan.includes(candidate) {
-                runs.push(None);
-                continue;
-            }
-            let mut overrides: Vec<Override> = torque().collect();
-            overrides.extend(study::optimize::fe_check_overrides(&case, candidate)?);
-            let with_relief = load(args, overrides)?;
-            let mut scene_runs = [None, None];
-            for (s, name) in study::optimize::FE_CHECK_SCENES.iter().enumerate() {
-                if plan.scenes[s] {
-                    let out = root.join(format!("{}-{name}", candidate.name));
-                    scene_runs[s] = Some(fe_check_run(&with_relief, name, &out));
-                    if geardyn::interrupt::stop_requested() {
-                        let message = format!(
-                            "the FE cross-check was interrupted in {}; its finished runs in {} are taken as they are by the next run with the same --out",
-                            out.display(),
-                            root.display()
-                        );
-                        result.summary.interrupted = Some(message.clone());
-                        OutputDir(dir).json("summary.json", &result.summary)?;
-                        anyhow::bail!(message);
-                    }
+        let requests = fe_check_requests(args, options, &case, &result, &root, &plan)?;
+        let outcomes = match super::executor::execute(
+            args,
+            &requests
+                .iter()
+                .map(|(_, _, r)| r.clone())
+                .collect::<Vec<_>>(),
+            &root.join("slurm"),
+        ) {
+            Ok(outcomes) => outcomes,
+            Err(e) => {
+                // --submit-only: the summary says where the cross-check stands.
+                if let Some(submitted) = e.downcast_ref::<super::executor::Submitted>() {
+                    result.summary.interrupted =
+                        Some(format!("the FE cross-check is in the queue: {submitted}"));
+                    OutputDir(dir).json("summary.json", &result.summary)?;
                 }
+                return Err(e);
             }
-            runs.push(Some(scene_runs));
+        };
+        let mut runs: Vec<Option<study::optimize::CandidateRuns>> = result
+            .candidates
+            .iter()
+            .map(|c| plan.includes(c).then_some([None, None]))
+            .collect();
+        for ((candidate, scene, request), outcome) in requests.iter().zip(outcomes) {
+            let read = outcome.and_then(|_| report::optimize::read_fe_check_run(&request.dir));
+            if let Some(scene_runs) = runs[*candidate].as_mut() {
+                scene_runs[*scene] = Some(read);
+            }
+        }
+        if geardyn::interrupt::stop_requested() {
+            let message = format!(
+                "the FE cross-check was interrupted; its finished runs in {} are taken as they are by the next run with the same --out",
+                root.display()
+            );
+            result.summary.interrupted = Some(message.clone());
+            OutputDir(dir).json("summary.json", &result.summary)?;
+            anyhow::bail!(message);
         }
         let rb2 = case.pair.gears[1].base_radius;
         let check = study::optimize::fe_check(&result, &runs, rb2);
@@ -118,4 +119,54 @@ pub fn optimize_into(
         );
     }
     Ok(result)
+}
+
+/// The cross-check's explicit runs of `result`'s candidates that `plan` includes, each with its
+/// candidate's index and its scene's ([`study::optimize::FE_CHECK_SCENES`]), in
+/// FE_ROOT/<candidate>-<scene>.
+pub fn fe_check_requests(
+    args: &CommonArgs,
+    options: &OptimizeArgs,
+    case: &geardyn::case::Case,
+    result: &study::optimize::OptimizeStudy,
+    root: &Path,
+    plan: &FeCheckPlan,
+) -> Result<Vec<(usize, usize, super::executor::FeRunRequest)>> {
+    let names: Vec<&str> = result.candidates.iter().map(|c| c.name.as_str()).collect();
+    if let Some(unknown) = plan
+        .only
+        .iter()
+        .flatten()
+        .find(|n| !names.contains(&n.as_str()))
+    {
+        anyhow::bail!(
+            "--fe-check-only {unknown:?} is not a candidate; the candidates are {names:?}"
+        );
+    }
+    let mut requests = Vec::new();
+    for (index, candidate) in result.candidates.iter().enumerate() {
+        if !plan.includes(candidate) {
+            continue;
+        }
+        let mut overrides: Vec<Override> = study::torque_override(options.torque_nm)
+            .into_iter()
+            .collect();
+        overrides.extend(study::optimize::fe_check_overrides(case, candidate)?);
+        let with_relief = load(args, overrides)?;
+        for (s, name) in study::optimize::FE_CHECK_SCENES.iter().enumerate() {
+            if plan.scenes[s] {
+                requests.push((
+                    index,
+                    s,
+                    super::executor::FeRunRequest {
+                        label: format!("fe-check {}", candidate.name),
+                        case: with_relief.clone(),
+                        scene: name.to_string(),
+                        dir: root.join(format!("{}-{name}", candidate.name)),
+                    },
+                ));
+            }
+        }
+    }
+    Ok(requests)
 }

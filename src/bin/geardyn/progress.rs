@@ -141,16 +141,15 @@ pub fn fe_run(case: &Case, scene: &Scene, dir: &Path, resume: bool) -> Result<st
 /// checkpoint. summary.json is written last, so a run is finished when it is there and has no
 /// checkpoint; it is removed before a new run, so a stale one is never taken for the new case's.
 pub fn fe_run_reusing(case: &Case, scene: &str, dir: &Path) -> Result<()> {
-    let same_case =
-        std::fs::read_to_string(dir.join("case.toml")).is_ok_and(|text| case.is_same_case(&text));
-    let interrupted = dir.join(report::fe::CHECKPOINT).exists();
-    let finished = !interrupted && report::compare::read_fe_run(dir).is_ok();
-    if same_case && finished {
-        eprintln!("reusing the finished run in {}", dir.display());
-        return Ok(());
-    }
-    if same_case && interrupted {
-        return fe_run(case, study::fe::scene(case, scene)?, dir, true).map(|_| ());
+    match run_state(case, dir) {
+        RunState::Finished => {
+            eprintln!("reusing the finished run in {}", dir.display());
+            return Ok(());
+        }
+        RunState::Interrupted => {
+            return fe_run(case, study::fe::scene(case, scene)?, dir, true).map(|_| ());
+        }
+        RunState::Other => {}
     }
     match std::fs::remove_file(dir.join("summary.json")) {
         Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
@@ -161,15 +160,27 @@ pub fn fe_run_reusing(case: &Case, scene: &str, dir: &Path) -> Result<()> {
     fe_run(case, study::fe::scene(case, scene)?, dir, false).map(|_| ())
 }
 
-/// One scene of the relief cross-check into `dir` ([`fe_run_reusing`]), read back.
-pub fn fe_check_run(
-    case: &Case,
-    scene: &str,
-    dir: &Path,
-) -> std::result::Result<study::optimize::FeCheckRun, String> {
-    fe_run_reusing(case, scene, dir)
-        .map_err(|e| super::error_text(&e))
-        .and_then(|_| report::optimize::read_fe_check_run(dir))
+/// What an explicit run's folder holds for `case`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RunState {
+    /// A finished run of this case: its summary, read whole, and no checkpoint.
+    Finished,
+    /// An interrupted run of this case: its checkpoint.
+    Interrupted,
+    /// Nothing of this case: empty, another case's run, or a failed one.
+    Other,
+}
+
+pub fn run_state(case: &Case, dir: &Path) -> RunState {
+    let same_case =
+        std::fs::read_to_string(dir.join("case.toml")).is_ok_and(|text| case.is_same_case(&text));
+    let interrupted = dir.join(report::fe::CHECKPOINT).exists();
+    match (same_case, interrupted) {
+        (false, _) => RunState::Other,
+        (true, true) => RunState::Interrupted,
+        (true, false) if report::compare::read_fe_run(dir).is_ok() => RunState::Finished,
+        (true, false) => RunState::Other,
+    }
 }
 
 /// `--checkpoint-every-s`, as bits of an f64 (600 s until set).

@@ -238,6 +238,7 @@ fn run_chain(
         out: Some(dir.join("run")),
         force: false,
         checkpoint_every_s: 600.0,
+        executor: super::args::ExecutorArgs::default(),
         set: RUN_COARSE_SETTINGS
             .iter()
             .map(|s| s.parse())

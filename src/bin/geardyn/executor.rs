@@ -1,0 +1,382 @@
+//! The executors of a study's explicit FE runs: here, one after the other, or as a Slurm job
+//! array that the study waits for ([`geardyn::study::cluster`] writes the script and reads the
+//! queue). Either way each run ends in its own folder as `geardyn fe` leaves it, and the study
+//! reads the folders the same way.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use anyhow::{Context, Result};
+
+use geardyn::case::Case;
+use geardyn::report::{self, OutputDir};
+use geardyn::study::cluster::{self, ClusterOptions, PlannedRun, TaskCommand};
+
+use super::args::{CommonArgs, Executor};
+use super::progress::{fe_run_reusing, run_state, RunState};
+
+/// One explicit FE run a study asks for.
+#[derive(Clone)]
+pub struct FeRunRequest {
+    /// What it is for, e.g. "compare 4800 rpm" (the plan's and the queue report's name).
+    pub label: String,
+    pub case: Case,
+    pub scene: String,
+    pub dir: PathBuf,
+}
+
+/// A run that did not finish: why, in words (its error, or its task log's last lines).
+pub type RunOutcome = std::result::Result<(), String>;
+
+/// The error of `--submit-only` once the array is in the queue: the command stops there, and
+/// `main` exits with success.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct Submitted(pub String);
+
+/// How many times a run whose task ended unfinished with a checkpoint (time limit, preemption,
+/// a cancelled task) is submitted again before it counts as failed.
+const MAX_SUBMISSIONS: usize = 3;
+
+/// Runs `runs` with the executor `args` asks for; `batch_dir` keeps the Slurm scripts, logs and
+/// the record of submitted arrays. One outcome per run, in order.
+pub fn execute(
+    args: &CommonArgs,
+    runs: &[FeRunRequest],
+    batch_dir: &Path,
+) -> Result<Vec<RunOutcome>> {
+    match args.executor.executor {
+        Executor::Local => {
+            anyhow::ensure!(
+                !args.executor.submit_only,
+                "--submit-only needs --executor slurm"
+            );
+            Ok(runs
+                .iter()
+                .map(|run| {
+                    if geardyn::interrupt::stop_requested() {
+                        return Err("not run: the study was stopped".to_string());
+                    }
+                    fe_run_reusing(&run.case, &run.scene, &run.dir)
+                        .map_err(|e| super::error_text(&e))
+                })
+                .collect())
+        }
+        Executor::Slurm => slurm(args, runs, batch_dir),
+    }
+}
+
+/// The plan of `runs`: each one's cost, timed on its prepared scene, and whether its folder
+/// already holds it finished.
+pub fn plan(runs: &[FeRunRequest]) -> Result<Vec<PlannedRun>> {
+    runs.iter()
+        .map(|run| {
+            let scene = geardyn::study::fe::scene(&run.case, &run.scene)?;
+            let finished = run_state(&run.case, &run.dir) == RunState::Finished;
+            let (wall_s, memory_bytes) = if finished {
+                (0.0, 0.0)
+            } else {
+                eprintln!("timing {} ({})", run.label, run.scene);
+                let prepared = geardyn::study::fe::prepare(&run.case, scene)?;
+                let cost = geardyn::study::fe::CostEstimate::of(&prepared, scene.duration);
+                let memory = geardyn::explicit::scene::run_memory(
+                    &prepared,
+                    scene.duration,
+                    run.case.fe.output_interval,
+                );
+                (cost.wall_s, memory.total() + cluster::PROCESS_BYTES)
+            };
+            Ok(PlannedRun {
+                label: run.label.clone(),
+                scene: run.scene.clone(),
+                dir: run.dir.clone(),
+                wall_s,
+                memory_bytes,
+                finished,
+            })
+        })
+        .collect()
+}
+
+/// The record of the arrays a study submitted (`batch_dir`/submitted.json): a later call with
+/// the same folder waits for a job still in the queue rather than submitting its runs again.
+#[derive(serde::Serialize, serde::Deserialize, Default)]
+struct Submissions {
+    /// Per array: its job id and the run folders of its tasks, in task order.
+    arrays: Vec<(u64, Vec<PathBuf>)>,
+}
+
+const SUBMISSIONS: &str = "submitted.json";
+
+fn slurm(args: &CommonArgs, runs: &[FeRunRequest], batch_dir: &Path) -> Result<Vec<RunOutcome>> {
+    let batch_dir = absolute(batch_dir)?;
+    let log_dir = batch_dir.join("logs");
+    std::fs::create_dir_all(&log_dir)
+        .with_context(|| format!("cannot create {}", log_dir.display()))?;
+    let runs: Vec<FeRunRequest> = runs
+        .iter()
+        .map(|r| {
+            Ok(FeRunRequest {
+                dir: absolute(&r.dir)?,
+                ..r.clone()
+            })
+        })
+        .collect::<Result<_>>()?;
+    let options = ClusterOptions {
+        partition: args.executor.partition.clone(),
+        account: args.executor.account.clone(),
+        sbatch_options: args.executor.sbatch_options.clone(),
+        cpus_per_task: args.executor.cpus_per_task,
+    };
+    let command = TaskCommand {
+        executable: std::env::current_exe().context("cannot find the geardyn executable")?,
+        checkpoint_every_s: args.checkpoint_every_s,
+        force: args.force,
+    };
+    let mut submissions: Submissions = std::fs::read_to_string(batch_dir.join(SUBMISSIONS))
+        .ok()
+        .and_then(|text| serde_json::from_str(&text).ok())
+        .unwrap_or_default();
+    // Where each run's latest task logs: (job, task index).
+    let mut task_of: Vec<Option<(u64, usize)>> =
+        runs.iter()
+            .map(|run| {
+                submissions.arrays.iter().rev().find_map(|(job, dirs)| {
+                    dirs.iter().position(|d| d == &run.dir).map(|i| (*job, i))
+                })
+            })
+            .collect();
+    let mut submitted = vec![0usize; runs.len()];
+    loop {
+        // Runs whose task is still queued are waited for, not submitted again.
+        // A queue that does not answer stops the study: guessing "not queued" would submit
+        // the same runs twice.
+        let mut queued_jobs: Vec<u64> = Vec::new();
+        for job in jobs_of(&task_of) {
+            if queue(job)?.in_queue() > 0 {
+                queued_jobs.push(job);
+            }
+        }
+        let waiting = |i: usize| task_of[i].is_some_and(|(job, _)| queued_jobs.contains(&job));
+        let mut to_submit = Vec::new();
+        for (i, run) in runs.iter().enumerate() {
+            let state = run_state(&run.case, &run.dir);
+            if state == RunState::Finished || waiting(i) {
+                continue;
+            }
+            if submitted[i] >= MAX_SUBMISSIONS {
+                continue;
+            }
+            if state == RunState::Other {
+                clear_other_case(&run.dir)?;
+            }
+            // The task's case: the run writes the same file first, so a folder it was
+            // submitted into is a folder of this case.
+            std::fs::create_dir_all(&run.dir)
+                .with_context(|| format!("cannot create {}", run.dir.display()))?;
+            OutputDir(&run.dir).case(&run.case)?;
+            to_submit.push(i);
+        }
+        if !to_submit.is_empty() {
+            let planned = plan(
+                &to_submit
+                    .iter()
+                    .map(|&i| runs[i].clone())
+                    .collect::<Vec<_>>(),
+            )?;
+            let name = format!(
+                "geardyn-{}",
+                batch_dir
+                    .parent()
+                    .and_then(|p| p.file_name())
+                    .map_or("study".into(), |n| n.to_string_lossy())
+            );
+            let script = cluster::sbatch_script(&name, &planned, &command, &options, &log_dir);
+            let script_path = batch_dir.join(format!("array-{}.sh", submissions.arrays.len() + 1));
+            report::write_atomic(&script_path, script.as_bytes())?;
+            let job = sbatch(&script_path)?;
+            eprintln!(
+                "submitted Slurm job array {job}: {} explicit runs ({}); logs in {}",
+                to_submit.len(),
+                script_path.display(),
+                log_dir.display()
+            );
+            for (task, &i) in to_submit.iter().enumerate() {
+                task_of[i] = Some((job, task));
+                submitted[i] += 1;
+            }
+            submissions.arrays.push((
+                job,
+                to_submit.iter().map(|&i| runs[i].dir.clone()).collect(),
+            ));
+            report::write_atomic(
+                &batch_dir.join(SUBMISSIONS),
+                serde_json::to_string_pretty(&submissions)?.as_bytes(),
+            )?;
+            if args.executor.submit_only {
+                return Err(Submitted(format!(
+                    "submitted job {job} ({} tasks); when it is done, run the same command again \
+                     with the same --out to finish the study (`squeue -j {job}` shows it)",
+                    to_submit.len()
+                ))
+                .into());
+            }
+        }
+        let jobs = jobs_of(&task_of);
+        if jobs.is_empty() {
+            break;
+        }
+        wait(&jobs, &runs, args.executor.poll_s)?;
+        // Ended: a run unfinished with its checkpoint goes round again (up to MAX_SUBMISSIONS).
+        let again = runs.iter().enumerate().any(|(i, run)| {
+            run_state(&run.case, &run.dir) == RunState::Interrupted
+                && submitted[i] < MAX_SUBMISSIONS
+        });
+        if !again {
+            break;
+        }
+        eprintln!("some tasks ended before their runs finished (time limit, preemption or a cancel): submitting them again to go on from their checkpoints");
+    }
+    Ok(runs
+        .iter()
+        .enumerate()
+        .map(|(i, run)| match run_state(&run.case, &run.dir) {
+            RunState::Finished => Ok(()),
+            state => {
+                let log = task_of[i]
+                    .map(|(job, task)| log_dir.join(format!("{job}_{task}.log")))
+                    .and_then(|path| std::fs::read_to_string(path).ok())
+                    .map_or("no task log".to_string(), |t| cluster::last_lines(&t, 6));
+                let what = match state {
+                    RunState::Interrupted => {
+                        "its task ended before the run finished (its checkpoint is kept)"
+                    }
+                    _ => "its task failed",
+                };
+                Err(format!(
+                    "{}: {what}; the task log ends:\n{log}",
+                    run.dir.display()
+                ))
+            }
+        })
+        .collect())
+}
+
+/// The distinct jobs of the runs' latest tasks.
+fn jobs_of(task_of: &[Option<(u64, usize)>]) -> Vec<u64> {
+    let mut jobs: Vec<u64> = task_of.iter().flatten().map(|(job, _)| *job).collect();
+    jobs.sort_unstable();
+    jobs.dedup();
+    jobs
+}
+
+/// Waits until no task of `jobs` is in the queue, with a progress line.
+fn wait(jobs: &[u64], runs: &[FeRunRequest], poll_s: f64) -> Result<()> {
+    let mut failures = 0;
+    let mut last = String::new();
+    loop {
+        let mut counts = cluster::QueueCounts::default();
+        let mut asked = true;
+        for &job in jobs {
+            match queue(job) {
+                Ok(c) => {
+                    counts.pending += c.pending;
+                    counts.running += c.running;
+                    counts.other += c.other;
+                }
+                Err(e) => {
+                    asked = false;
+                    failures += 1;
+                    anyhow::ensure!(
+                        failures < 10,
+                        "the Slurm queue does not answer ({e}); the array goes on in the queue \
+                         (jobs {jobs:?}): run the same command again later to collect it"
+                    );
+                }
+            }
+        }
+        if asked {
+            failures = 0;
+            let done = runs
+                .iter()
+                .filter(|r| run_state(&r.case, &r.dir) == RunState::Finished)
+                .count();
+            let line = format!(
+                "slurm jobs {jobs:?}: {} pending, {} running, {} other; {done} of {} runs finished",
+                counts.pending,
+                counts.running,
+                counts.other,
+                runs.len()
+            );
+            if line != last {
+                eprintln!("{line}");
+                last = line;
+            }
+            if counts.in_queue() == 0 {
+                return Ok(());
+            }
+        }
+        if geardyn::interrupt::stop_requested() {
+            anyhow::bail!(
+                "stopped waiting; the array goes on in the queue (jobs {jobs:?}): run the same \
+                 command again with the same --out to collect it"
+            );
+        }
+        std::thread::sleep(std::time::Duration::from_secs_f64(poll_s));
+    }
+}
+
+/// The job's tasks in the queue.
+fn queue(job: u64) -> Result<cluster::QueueCounts> {
+    let output = Command::new("squeue")
+        .args(["-h", "-r", "-j", &job.to_string(), "-o", "%i %T"])
+        .output()
+        .context("cannot run squeue (is Slurm's client on the PATH?)")?;
+    // A job the controller has forgotten is "Invalid job id": no task of it is queued.
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    if !output.status.success() && !stderr.contains("Invalid job id") {
+        anyhow::bail!(
+            "squeue failed: {} (is SLURM_CONF set for this cluster?)",
+            stderr.trim()
+        );
+    }
+    Ok(cluster::parse_squeue(&String::from_utf8_lossy(
+        &output.stdout,
+    )))
+}
+
+fn sbatch(script: &Path) -> Result<u64> {
+    let output = Command::new("sbatch")
+        .arg("--parsable")
+        .arg(script)
+        .output()
+        .context("cannot run sbatch (is Slurm's client on the PATH?)")?;
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    anyhow::ensure!(
+        output.status.success(),
+        "sbatch refused {} (is SLURM_CONF set for this cluster?): {}{}",
+        script.display(),
+        String::from_utf8_lossy(&output.stderr).trim(),
+        stdout.trim()
+    );
+    cluster::parse_sbatch_job_id(&stdout)
+        .with_context(|| format!("sbatch printed no job id: {stdout:?}"))
+}
+
+/// A folder holding another case's run loses its checkpoint and summary before this case's
+/// run is submitted into it, so the task can neither resume nor reuse the other case's.
+fn clear_other_case(dir: &Path) -> Result<()> {
+    for name in [report::fe::CHECKPOINT, "summary.json"] {
+        match std::fs::remove_file(dir.join(name)) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(e).with_context(|| format!("cannot clear {}", dir.display()))
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+fn absolute(path: &Path) -> Result<PathBuf> {
+    std::path::absolute(path).with_context(|| format!("cannot resolve {}", path.display()))
+}

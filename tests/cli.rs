@@ -940,7 +940,9 @@ fn fe_writes_histories_summary_and_keeps_a_diverged_run() {
 /// 3.628 → 1.801; `--rigid-bodies` still gives 3.628006142606606, the old model to 1e-15); and
 /// when the sweep reached its steady states by shooting (`lumped::settle`): the same 1e-7
 /// tolerance of the period-to-period change, a point nearer the orbit (1.8006224137 →
-/// 1.8006223445, 4e-8). The computation is deterministic (ordered reductions), so 1e-9 relative leaves room only for the
+/// 1.8006223445, 4e-8); and when a root relief stopped growing past its full point (the SAP)
+/// down to the form point (the relief variant's k̄ +1.4e-4, its STE mean −9e-5: the root below
+/// the SAP is no longer thinned, a 157/82 pair had lost 4 mm there). The computation is deterministic (ordered reductions), so 1e-9 relative leaves room only for the
 /// last bits of a reordered sum, not for a changed model: a deliberate change of the numbers
 /// re-records the fixture and says why.
 #[test]

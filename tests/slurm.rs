@@ -145,20 +145,21 @@ fn slurm_runs_equal_local_runs_and_a_cancelled_task_resumes() {
         stderr.contains("submitting them again to go on from their checkpoints"),
         "the cancelled task {cancelled} was not submitted again:\n{stderr}"
     );
-    // The second submission's log of the cancelled run says where it went on from.
-    let logs: String = std::fs::read_dir(&log_dir)
-        .unwrap()
-        .flatten()
-        .map(|e| std::fs::read_to_string(e.path()).unwrap())
+    // The second array holds the cancelled run alone, and its log says where it went on from.
+    let arrays: Vec<&str> = stderr
+        .lines()
+        .filter_map(|l| l.strip_prefix("submitted Slurm job array "))
+        .filter_map(|rest| rest.split(':').next())
         .collect();
-    assert!(logs.contains("resuming at step"), "{logs}");
-    let scripts = std::fs::read_dir(slurm.join("fe-check/slurm"))
-        .unwrap()
-        .flatten()
-        .filter(|e| e.file_name().to_string_lossy().starts_with("array-"))
-        .count();
-    assert_eq!(scripts, 2, "one array, then one for the cancelled run");
-
+    assert_eq!(
+        arrays.len(),
+        2,
+        "one array, then one for the cancelled run:\n{stderr}"
+    );
+    let resumed_log = std::fs::read_to_string(log_dir.join(format!("{}_0.log", arrays[1])))
+        .expect("the second array's task log");
+    assert!(resumed_log.contains("resuming at step"), "{resumed_log}");
+    assert!(stderr.contains("1 ended unfinished"), "{stderr}");
     assert_eq!(
         std::fs::read(local.join("fe_check.csv")).unwrap(),
         std::fs::read(slurm.join("fe_check.csv")).unwrap(),

@@ -12,8 +12,8 @@
 # Everything (config, munge key and socket, state, spool, logs, pid files) lives under
 # ${GEARDYN_SLURM_DIR:-/tmp/geardyn-slurm}; nothing in /etc is touched.
 #
-# Exit codes: 0 done, 2 usage, 3 Slurm is missing and cannot be installed here (no apt-get or
-# not root), 4 a daemon did not come up (its log's tail is printed).
+# Exit codes: 0 done, 2 usage, 3 not root, or Slurm is missing and cannot be installed here
+# (no apt-get, no mirror), 4 a daemon did not come up (its log's tail is printed).
 set -euo pipefail
 
 dir=${GEARDYN_SLURM_DIR:-/tmp/geardyn-slurm}
@@ -26,6 +26,11 @@ usage() {
 }
 
 install_if_missing() {
+    if [ "$(id -u)" != 0 ]; then
+        echo "this script runs its one-node cluster as root (slurmd starts the tasks, munged" >&2
+        echo "and slurmctld run as SlurmUser=root): run it as root, or use your own cluster" >&2
+        exit 3
+    fi
     if command -v slurmctld >/dev/null && command -v slurmd >/dev/null \
         && command -v sbatch >/dev/null && command -v munged >/dev/null; then
         return
@@ -38,7 +43,10 @@ install_if_missing() {
     fi
     echo "installing slurm-wlm and munge with apt-get" >&2
     export DEBIAN_FRONTEND=noninteractive
-    apt-get update -qq >/dev/null
+    if ! apt-get update -qq >/dev/null; then
+        echo "apt-get update failed (no package mirror reachable?)" >&2
+        exit 3
+    fi
     # The packages' own service starts fail without systemd; the daemons are started below.
     apt-get install -y -qq slurm-wlm munge >/dev/null 2>&1 || true
     if ! command -v slurmctld >/dev/null || ! command -v munged >/dev/null; then
@@ -47,9 +55,13 @@ install_if_missing() {
     fi
 }
 
+# The daemon of a pid file is alive: the pid exists and is that daemon (not a process that
+# got the pid of one that died).
 running() {
-    local pidfile=$1
-    [ -f "$pidfile" ] && kill -0 "$(cat "$pidfile")" 2>/dev/null
+    local daemon=$1 pidfile=$dir/run/$1.pid pid
+    [ -f "$pidfile" ] || return 1
+    pid=$(cat "$pidfile")
+    [ "$(cat "/proc/$pid/comm" 2>/dev/null)" = "$daemon" ]
 }
 
 fail_with_log() {
@@ -103,7 +115,7 @@ start() {
     write_conf
     export SLURM_CONF=$conf
 
-    if ! running "$dir/run/munged.pid"; then
+    if ! running munged; then
         if [ ! -f "$dir/munge/munge.key" ]; then
             dd if=/dev/urandom of="$dir/munge/munge.key" bs=1024 count=1 status=none
             chmod 400 "$dir/munge/munge.key"
@@ -113,22 +125,25 @@ start() {
             --seed-file="$dir/munge/munged.seed" \
             || fail_with_log munged "$dir/log/munged.log"
     fi
-    if ! running "$dir/run/slurmctld.pid"; then
-        slurmctld -c || fail_with_log slurmctld "$dir/log/slurmctld.log"
+    if ! running slurmctld; then
+        # Without -c: the state saved under $dir keeps the job ids counting up across
+        # restarts, so a study's record of its jobs never meets a new job of the same id.
+        slurmctld || fail_with_log slurmctld "$dir/log/slurmctld.log"
     fi
-    if ! running "$dir/run/slurmd.pid"; then
+    if ! running slurmd; then
         slurmd || fail_with_log slurmd "$dir/log/slurmd.log"
     fi
     # The node registers within a few seconds; jobs submitted before would only wait.
     for _ in $(seq 60); do
-        state=$(sinfo -h -n "$(hostname -s)" -o %t 2>/dev/null || true)
+        # Exact states: "idle*" (not responding) and "idle~" (powered down) are not up.
+        state=$(sinfo -h -n "$(hostname -s)" -o %T 2>/dev/null || true)
         case $state in
-            idle* | mix* | alloc*) break ;;
+            idle | mixed | allocated) break ;;
         esac
         sleep 0.5
     done
     case ${state:-} in
-        idle* | mix* | alloc*) ;;
+        idle | mixed | allocated) ;;
         *)
             echo "the node did not come up (state '${state:-none}')" >&2
             tail -n 20 "$dir/log/slurmd.log" "$dir/log/slurmctld.log" >&2 || true
@@ -143,9 +158,9 @@ stop() {
     export SLURM_CONF=$conf
     for daemon in slurmd slurmctld munged; do
         pidfile=$dir/run/$daemon.pid
-        if running "$pidfile"; then
+        if running "$daemon"; then
             pid=$(cat "$pidfile")
-            kill "$pid"
+            kill "$pid" 2>/dev/null || true
             for _ in $(seq 50); do
                 kill -0 "$pid" 2>/dev/null || break
                 sleep 0.2

@@ -11,7 +11,7 @@ use crate::study::compare::{CompareSummary, FeDte, Peak};
 
 /// A `geardyn fe` folder's summary.json, and a reader of its numbers by key path whose message
 /// names the folder and the key.
-pub(crate) fn fe_summary(dir: &Path) -> Result<serde_json::Value, String> {
+pub fn fe_summary(dir: &Path) -> Result<serde_json::Value, String> {
     let shown = dir.display();
     let text = std::fs::read_to_string(dir.join("summary.json"))
         .map_err(|e| format!("{shown} is not a geardyn fe output folder (summary.json: {e})"))?;

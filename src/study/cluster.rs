@@ -146,7 +146,8 @@ pub fn sbatch_script(
     let cpus = options.cpus_per_task.unwrap_or(CALIBRATION_CORES).max(1);
     let wall = runs.iter().map(|r| r.wall_s).fold(0.0, f64::max);
     let memory = runs.iter().map(|r| r.memory_bytes).fold(0.0, f64::max);
-    let memory_mb = (memory * MEMORY_FACTOR / 1e6).ceil() as u64;
+    // Slurm's M is MiB.
+    let memory_mb = (memory * MEMORY_FACTOR / 1048576.0).ceil() as u64;
     let mut s = String::new();
     let _ = writeln!(s, "#!/bin/bash");
     let _ = writeln!(
@@ -164,7 +165,9 @@ pub fn sbatch_script(
     let _ = writeln!(s, "#SBATCH --requeue");
     let _ = writeln!(s, "#SBATCH --open-mode=append");
     // SIGTERM this long before the limit: the run writes its checkpoint and partial results.
-    let _ = writeln!(s, "#SBATCH --signal=TERM@120");
+    // B: to the batch shell, which `exec` made the run itself (without B: only job steps
+    // started by srun would get it).
+    let _ = writeln!(s, "#SBATCH --signal=B:TERM@120");
     let _ = writeln!(s, "#SBATCH --output={}/%A_%a.log", log_dir.display());
     if let Some(partition) = &options.partition {
         let _ = writeln!(s, "#SBATCH --partition={partition}");
@@ -229,13 +232,32 @@ pub fn parse_sbatch_job_id(output: &str) -> Option<u64> {
 }
 
 /// An array's tasks as the queue lists them.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
 pub struct QueueCounts {
     pub pending: usize,
     pub running: usize,
     /// Completing, requeued, suspended and the other states in between.
     pub other: usize,
+    /// A task that will not start without someone's action (held, or asking more than its
+    /// partition, account or QOS allows), with the queue's reason: a study waiting for it
+    /// would wait for ever.
+    pub stuck: Option<String>,
 }
+
+/// Pending reasons that no amount of waiting clears.
+const STUCK_REASONS: [&str; 11] = [
+    "JobHeldUser",
+    "JobHeldAdmin",
+    "PartitionTimeLimit",
+    "PartitionNodeLimit",
+    "BadConstraints",
+    "InvalidAccount",
+    "InvalidQOS",
+    "DependencyNeverSatisfied",
+    "QOSMaxWallDurationPerJobLimit",
+    "AssocMaxWallDurationPerJobLimit",
+    "AccountNotAllowed",
+];
 
 impl QueueCounts {
     pub fn in_queue(&self) -> usize {
@@ -243,8 +265,8 @@ impl QueueCounts {
     }
 }
 
-/// Reads `squeue -h -r -j JOB -o "%i %T"` (one task per line, "123_4 RUNNING"; a pending
-/// range not yet split, "123_[5-9%2] PENDING", counts its tasks).
+/// Reads `squeue -h -r -j JOB -o "%i %T %r"` (one task per line, "123_4 RUNNING None"; a
+/// pending range not yet split, "123_[5-9%2] PENDING Priority", counts its tasks).
 pub fn parse_squeue(output: &str) -> QueueCounts {
     let mut counts = QueueCounts::default();
     for line in output.lines() {
@@ -252,11 +274,17 @@ pub fn parse_squeue(output: &str) -> QueueCounts {
         let (Some(id), Some(state)) = (words.next(), words.next()) else {
             continue;
         };
+        let reason = words.next().unwrap_or("");
         let tasks = array_range_len(id).unwrap_or(1);
         match state {
             "PENDING" | "REQUEUED" | "REQUEUE_HOLD" | "REQUEUE_FED" => counts.pending += tasks,
             "RUNNING" => counts.running += tasks,
             _ => counts.other += tasks,
+        }
+        let stuck = state == "REQUEUE_HOLD"
+            || (state == "PENDING" && STUCK_REASONS.iter().any(|r| reason.starts_with(r)));
+        if stuck && counts.stuck.is_none() {
+            counts.stuck = Some(format!("task {id} is {state} ({reason})"));
         }
     }
     counts
@@ -346,7 +374,9 @@ mod tests {
         );
         assert!(script.contains("#SBATCH --array=0-1\n"), "{script}");
         assert!(script.contains(&format!("#SBATCH --time={}\n", slurm_time(8600.0))));
-        assert!(script.contains("#SBATCH --mem=1800M\n"));
+        // 1.2e9 B × 1.5 = 1.8e9 B = 1716.6 MiB.
+        assert!(script.contains("#SBATCH --mem=1717M\n"), "{script}");
+        assert!(script.contains("#SBATCH --signal=B:TERM@120\n"));
         assert!(script.contains("#SBATCH --cpus-per-task=2\n"));
         assert!(script.contains("#SBATCH --partition=long\n#SBATCH --qos=fe\n"));
         assert!(script.contains("  1) scene=high-unmodified dir='/data/out/b b' ;;"));
@@ -374,17 +404,29 @@ mod tests {
             parse_sbatch_job_id("sbatch: error: invalid partition"),
             None
         );
-        let counts = parse_squeue("12_0 RUNNING\n12_[2-4,7%2] PENDING\n12_1 COMPLETING\n\n");
+        let counts = parse_squeue(
+            "12_0 RUNNING None\n12_[2-4,7%2] PENDING Priority\n12_1 COMPLETING None\n\n",
+        );
         assert_eq!(
             counts,
             QueueCounts {
                 pending: 4,
                 running: 1,
-                other: 1
+                other: 1,
+                stuck: None,
             }
         );
         assert_eq!(counts.in_queue(), 6);
         assert_eq!(parse_squeue(""), QueueCounts::default());
+        // Waiting for resources clears itself; a hold or a limit above the partition's does not.
+        assert_eq!(parse_squeue("12_0 PENDING Resources\n").stuck, None);
+        assert_eq!(
+            parse_squeue("12_0 RUNNING None\n12_1 PENDING PartitionTimeLimit\n").stuck,
+            Some("task 12_1 is PENDING (PartitionTimeLimit)".to_string())
+        );
+        assert!(parse_squeue("12_0 REQUEUE_HOLD JobHeldAdmin\n")
+            .stuck
+            .is_some());
     }
 
     #[test]

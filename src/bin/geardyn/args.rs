@@ -348,7 +348,7 @@ pub struct ExecutorArgs {
     pub executor: Executor,
     /// With --executor slurm: submit the array and stop; the same command run again later
     /// (same --out) waits for it and finishes the study.
-    #[arg(long)]
+    #[arg(long, requires = "out")]
     pub submit_only: bool,
     /// Slurm partition of the array.
     #[arg(long, value_name = "NAME")]

@@ -88,13 +88,7 @@ pub fn run(args: &CommonArgs, full: bool, resume: bool) -> Result<()> {
     // Every stage but the explicit runs (which carry and check their own case) starts from an
     // empty folder, so the report never shows a stage an earlier run left.
     for stage in STAGE_FOLDERS {
-        match std::fs::remove_dir_all(dir.join(stage)) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                return Err(e)
-                    .with_context(|| format!("cannot clear {}", dir.join(stage).display()))
-            }
-            _ => {}
-        }
+        clear_stage(&dir.join(stage))?;
     }
     for file in ["summary.json", "report.md", "index.html"] {
         OutputDir(&dir).remove(file)?;
@@ -104,7 +98,15 @@ pub fn run(args: &CommonArgs, full: bool, resume: bool) -> Result<()> {
     let mut reached = 0;
     let result = stages(args, &case, &dir, (&manifest, &plan), started, &mut reached);
     if let Err(e) = &result {
-        if geardyn::interrupt::stop_requested() {
+        if let Some(submitted) = e.downcast_ref::<super::executor::Submitted>() {
+            manifest.interrupted = Some(format!(
+                "stage {reached}/{} waits for its explicit FE runs: {submitted}; `geardyn run \
+                 --resume --out {} --executor slurm` goes on once they are done",
+                study::run::STAGES.len(),
+                dir.display()
+            ));
+            OutputDir(&dir).json("run.json", &manifest)?;
+        } else if geardyn::interrupt::stop_requested() {
             let stages = study::run::STAGES;
             manifest.interrupted = Some(format!(
                 "interrupted in stage {reached}/{} ({}): {}. `geardyn run --resume --out {}` continues it, taking the finished explicit FE runs as they are",
@@ -124,6 +126,32 @@ pub fn run(args: &CommonArgs, full: bool, resume: bool) -> Result<()> {
         dir.display(),
         started.elapsed().as_secs_f64()
     );
+    Ok(())
+}
+
+/// Empties a stage's folder, except the explicit runs the compare stage makes in it (`fe-*`,
+/// `chart-fe-*`, which carry and check their own case) and the Slurm executor's record of them
+/// (`slurm/`): a resumed run takes them as they are, or waits for them while still queued.
+fn clear_stage(stage: &Path) -> Result<()> {
+    let entries = match std::fs::read_dir(stage) {
+        Ok(entries) => entries,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(e) => return Err(e).with_context(|| format!("cannot clear {}", stage.display())),
+    };
+    for entry in entries {
+        let path = entry?.path();
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
+        let kept = path.is_dir()
+            && name.is_some_and(|n| {
+                n.starts_with("fe-") || n.starts_with("chart-fe-") || n == "slurm"
+            });
+        let removed = match (kept, path.is_dir()) {
+            (true, _) => Ok(()),
+            (false, true) => std::fs::remove_dir_all(&path),
+            (false, false) => std::fs::remove_file(&path),
+        };
+        removed.with_context(|| format!("cannot clear {}", path.display()))?;
+    }
     Ok(())
 }
 

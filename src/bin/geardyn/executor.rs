@@ -13,7 +13,7 @@ use geardyn::report::{self, OutputDir};
 use geardyn::study::cluster::{self, ClusterOptions, PlannedRun, TaskCommand};
 
 use super::args::{CommonArgs, Executor};
-use super::progress::{fe_run_reusing, run_state, RunState};
+use super::progress::{fe_run_reusing, folder_verdict, run_state, RunState};
 
 /// One explicit FE run a study asks for.
 #[derive(Clone)]
@@ -45,6 +45,36 @@ pub fn execute(
     runs: &[FeRunRequest],
     batch_dir: &Path,
 ) -> Result<Vec<RunOutcome>> {
+    // One folder is one run: two requests for it must ask the same run, which runs once.
+    let mut unique: Vec<FeRunRequest> = Vec::new();
+    let mut of_request = Vec::with_capacity(runs.len());
+    for run in runs {
+        match unique.iter().position(|u| u.dir == run.dir) {
+            Some(i) => {
+                anyhow::ensure!(
+                    unique[i].scene == run.scene && unique[i].case.is_same_case(&run.case.text),
+                    "{} and {} would both run into {}: give them different folders",
+                    unique[i].label,
+                    run.label,
+                    run.dir.display()
+                );
+                of_request.push(i);
+            }
+            None => {
+                of_request.push(unique.len());
+                unique.push(run.clone());
+            }
+        }
+    }
+    let outcomes = execute_unique(args, &unique, batch_dir)?;
+    Ok(of_request.iter().map(|&i| outcomes[i].clone()).collect())
+}
+
+fn execute_unique(
+    args: &CommonArgs,
+    runs: &[FeRunRequest],
+    batch_dir: &Path,
+) -> Result<Vec<RunOutcome>> {
     match args.executor.executor {
         Executor::Local => {
             anyhow::ensure!(
@@ -57,8 +87,15 @@ pub fn execute(
                     if geardyn::interrupt::stop_requested() {
                         return Err("not run: the study was stopped".to_string());
                     }
-                    fe_run_reusing(&run.case, &run.scene, &run.dir)
-                        .map_err(|e| super::error_text(&e))
+                    let ran = fe_run_reusing(&run.case, &run.scene, &run.dir);
+                    // The folder's verdict where it has one, as the Slurm executor takes it.
+                    folder_verdict(&run.case, &run.dir).unwrap_or_else(|| {
+                        Err(ran
+                            .err()
+                            .map_or("the run left no summary".to_string(), |e| {
+                                super::error_text(&e)
+                            }))
+                    })
                 })
                 .collect())
         }
@@ -69,6 +106,16 @@ pub fn execute(
 /// The plan of `runs`: each one's cost, timed on its prepared scene, and whether its folder
 /// already holds it finished.
 pub fn plan(runs: &[FeRunRequest]) -> Result<Vec<PlannedRun>> {
+    // Timed on as many threads as the estimates assume, whatever this host has (a login
+    // node's 64 cores would promise a task's 2 a time limit it cannot keep).
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(cluster::CALIBRATION_CORES)
+        .build()
+        .context("cannot start the timing's thread pool")?;
+    pool.install(|| planned(runs))
+}
+
+fn planned(runs: &[FeRunRequest]) -> Result<Vec<PlannedRun>> {
     runs.iter()
         .map(|run| {
             let scene = geardyn::study::fe::scene(&run.case, &run.scene)?;
@@ -111,6 +158,13 @@ const SUBMISSIONS: &str = "submitted.json";
 fn slurm(args: &CommonArgs, runs: &[FeRunRequest], batch_dir: &Path) -> Result<Vec<RunOutcome>> {
     let batch_dir = absolute(batch_dir)?;
     let log_dir = batch_dir.join("logs");
+    // `#SBATCH --output=` takes no quotes, and `%` starts one of its patterns.
+    let shown = log_dir.display().to_string();
+    anyhow::ensure!(
+        !shown.contains(|c: char| c.is_whitespace() || c == '%'),
+        "the Slurm logs would go to {shown}, whose path has a space or a %, which an #SBATCH \
+         line cannot carry: give --out a folder without them"
+    );
     std::fs::create_dir_all(&log_dir)
         .with_context(|| format!("cannot create {}", log_dir.display()))?;
     let runs: Vec<FeRunRequest> = runs
@@ -147,6 +201,9 @@ fn slurm(args: &CommonArgs, runs: &[FeRunRequest], batch_dir: &Path) -> Result<V
             })
             .collect();
     let mut submitted = vec![0usize; runs.len()];
+    // The first round submits every run not finished (a failed one runs again, as the local
+    // executor runs it again); later rounds only the runs left with a checkpoint.
+    let mut first_round = true;
     loop {
         // Runs whose task is still queued are waited for, not submitted again.
         // A queue that does not answer stops the study: guessing "not queued" would submit
@@ -164,7 +221,7 @@ fn slurm(args: &CommonArgs, runs: &[FeRunRequest], batch_dir: &Path) -> Result<V
             if state == RunState::Finished || waiting(i) {
                 continue;
             }
-            if submitted[i] >= MAX_SUBMISSIONS {
+            if submitted[i] >= MAX_SUBMISSIONS || (state == RunState::Other && !first_round) {
                 continue;
             }
             if state == RunState::Other {
@@ -222,9 +279,17 @@ fn slurm(args: &CommonArgs, runs: &[FeRunRequest], batch_dir: &Path) -> Result<V
                 .into());
             }
         }
+        first_round = false;
         let jobs = jobs_of(&task_of);
         if jobs.is_empty() {
             break;
+        }
+        if args.executor.submit_only && !queued_jobs.is_empty() {
+            return Err(Submitted(format!(
+                "nothing new to submit; jobs {queued_jobs:?} are still in the queue: run the same \
+                 command again with the same --out once they are done"
+            ))
+            .into());
         }
         wait(&jobs, &runs, args.executor.poll_s)?;
         // Ended: a run unfinished with its checkpoint goes round again (up to MAX_SUBMISSIONS).
@@ -241,7 +306,8 @@ fn slurm(args: &CommonArgs, runs: &[FeRunRequest], batch_dir: &Path) -> Result<V
         .iter()
         .enumerate()
         .map(|(i, run)| match run_state(&run.case, &run.dir) {
-            RunState::Finished => Ok(()),
+            RunState::Finished => folder_verdict(&run.case, &run.dir)
+                .unwrap_or_else(|| Err(format!("{}: no summary", run.dir.display()))),
             state => {
                 let log = task_of[i]
                     .map(|(job, task)| log_dir.join(format!("{job}_{task}.log")))
@@ -280,6 +346,13 @@ fn wait(jobs: &[u64], runs: &[FeRunRequest], poll_s: f64) -> Result<()> {
         for &job in jobs {
             match queue(job) {
                 Ok(c) => {
+                    if let Some(stuck) = c.stuck {
+                        anyhow::bail!(
+                            "Slurm job {job}: {stuck}, which waiting will not change: release \
+                             it (scontrol release), or cancel it (scancel {job}) and run the \
+                             study again with other --partition / --sbatch-option values"
+                        );
+                    }
                     counts.pending += c.pending;
                     counts.running += c.running;
                     counts.other += c.other;
@@ -301,8 +374,11 @@ fn wait(jobs: &[u64], runs: &[FeRunRequest], poll_s: f64) -> Result<()> {
                 .iter()
                 .filter(|r| run_state(&r.case, &r.dir) == RunState::Finished)
                 .count();
+            // Out of the queue and not finished: failed, or left with a checkpoint to go on.
+            let ended = runs.len().saturating_sub(done + counts.in_queue());
             let line = format!(
-                "slurm jobs {jobs:?}: {} pending, {} running, {} other; {done} of {} runs finished",
+                "slurm jobs {jobs:?}: {} pending, {} running, {} other; {done} of {} runs \
+                 finished, {ended} ended unfinished",
                 counts.pending,
                 counts.running,
                 counts.other,
@@ -329,7 +405,7 @@ fn wait(jobs: &[u64], runs: &[FeRunRequest], poll_s: f64) -> Result<()> {
 /// The job's tasks in the queue.
 fn queue(job: u64) -> Result<cluster::QueueCounts> {
     let output = Command::new("squeue")
-        .args(["-h", "-r", "-j", &job.to_string(), "-o", "%i %T"])
+        .args(["-h", "-r", "-j", &job.to_string(), "-o", "%i %T %r"])
         .output()
         .context("cannot run squeue (is Slurm's client on the PATH?)")?;
     // A job the controller has forgotten is "Invalid job id": no task of it is queued.

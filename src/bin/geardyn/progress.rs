@@ -183,6 +183,45 @@ pub fn run_state(case: &Case, dir: &Path) -> RunState {
     }
 }
 
+/// A run folder's verdict as a study takes it, whichever executor ran the run or found it
+/// finished: `Ok` for a finished run of `case` whose checks against the LTCA passed, the reason
+/// for one that failed them, diverged or was interrupted; None where the folder holds no
+/// summary of this case to judge (the run stopped before it wrote one).
+pub fn folder_verdict(case: &Case, dir: &Path) -> Option<std::result::Result<(), String>> {
+    let same_case =
+        std::fs::read_to_string(dir.join("case.toml")).is_ok_and(|text| case.is_same_case(&text));
+    let summary = report::compare::fe_summary(dir)
+        .ok()
+        .filter(|_| same_case)?;
+    let shown = dir.display();
+    for (key, what) in [("diverged", "diverged"), ("interrupted", "was interrupted")] {
+        if let Some(message) = summary.get(key).and_then(|m| m.as_str()) {
+            return Some(Err(format!("{shown}: the run {what}: {message}")));
+        }
+    }
+    if dir.join(report::fe::CHECKPOINT).exists() {
+        return Some(Err(format!(
+            "{shown}: the run was interrupted (its checkpoint is kept)"
+        )));
+    }
+    let failed: Vec<String> = summary
+        .get("self_checks")
+        .and_then(|c| c.as_array())
+        .into_iter()
+        .flatten()
+        .filter(|c| c["passed"] == false && c["warning_only"] == false)
+        .map(|c| c["quantity"].as_str().unwrap_or("?").to_string())
+        .collect();
+    if !failed.is_empty() {
+        return Some(Err(format!(
+            "{shown}: {} of the run's checks against the LTCA on its own mesh failed ({})",
+            failed.len(),
+            failed.join("; ")
+        )));
+    }
+    Some(Ok(()))
+}
+
 /// `--checkpoint-every-s`, as bits of an f64 (600 s until set).
 static CHECKPOINT_EVERY: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 

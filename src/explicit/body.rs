@@ -128,14 +128,19 @@ impl ExplicitBody {
                 }
                 None => xe,
             };
-            // Congruent elements agree to round-off; quantize at 1e-9 of the body size.
+            // Congruent elements agree to round-off (1e-16 of the body size); quantize at 1e-12
+            // of it. A coarser key shared elements that are congruent only to the mesher's
+            // tolerance: a fine sector's base element and a coarse sector's differ by 2e-11 m
+            // where the two tooth layouts meet the base, and a prototype's reference shape off
+            // by that much strains the element by ~1e-7 at rest (forces 1e-3 off under a
+            // 5e-5 strain, tests/explicit.rs `sector_prototypes_give_the_same_forces`).
             let key: Vec<i64> = match symmetry {
                 Some(_) => local
                     .iter()
                     .flat_map(|p| {
                         [
-                            (p.x / scale * 1e9).round() as i64,
-                            (p.y / scale * 1e9).round() as i64,
+                            (p.x / scale * 1e12).round() as i64,
+                            (p.y / scale * 1e12).round() as i64,
                         ]
                     })
                     .collect(),

@@ -1,0 +1,90 @@
+//! The Slurm executor's own path without a cluster: `tests/fake-slurm` stands in for sbatch
+//! (runs every task of the array script at once, with Slurm's variables and log names) and
+//! squeue (nothing queued). The array script must run as written, and the study must read its
+//! runs to the same outputs as the local executor. The real cluster, with a cancelled task, is
+//! tests/slurm.rs.
+
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+
+use common::{assert_no_partial_files, assert_same_outputs, coarse_case, outputs};
+
+fn optimize(case: &Path, out: &Path) -> Command {
+    let mut command = Command::new(assert_cmd::cargo::cargo_bin!("geardyn"));
+    command.arg("optimize").arg(case).args([
+        "--positions",
+        "16",
+        "--rpm",
+        "1000:12000:20",
+        "--fe-check",
+        "--fe-check-only",
+        "none",
+        "--fe-check-scenes",
+        "low",
+        "--set",
+        "scene[stiffness].duration_s=0.004",
+        "--set",
+        "scene[stiffness].ramp_s=0.002",
+        "--out",
+    ]);
+    command.arg(out);
+    command
+}
+
+fn run_ok(command: &mut Command) -> String {
+    let output = command.output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    assert!(output.status.success(), "{stderr}");
+    stderr
+}
+
+#[test]
+fn the_array_script_runs_and_the_study_reads_its_runs_as_the_local_executor_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = coarse_case(dir.path());
+    let local = dir.path().join("local");
+    let slurm = dir.path().join("slurm");
+    run_ok(&mut optimize(&case, &local));
+
+    let fake = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fake-slurm");
+    let path = format!("{fake}:{}", std::env::var("PATH").unwrap_or_default());
+    let state = dir.path().join("fake-slurm-state");
+    std::fs::create_dir_all(&state).unwrap();
+    let stderr = run_ok(
+        optimize(&case, &slurm)
+            .args(["--executor", "slurm", "--poll-s", "0.1"])
+            .env("PATH", path)
+            .env("FAKE_SLURM_DIR", &state),
+    );
+    assert!(
+        stderr.contains("submitted Slurm job array 101: 1 explicit runs"),
+        "{stderr}"
+    );
+    let log = std::fs::read_to_string(slurm.join("fe-check/slurm/logs/101_0.log")).unwrap();
+    assert!(
+        log.contains("task 0 (job 101, restart 0)") && log.contains("wrote "),
+        "{log}"
+    );
+    let mut through_slurm = outputs(&slurm);
+    through_slurm.retain(|path, _| !path.starts_with("fe-check/slurm"));
+    assert_same_outputs(
+        &outputs(&local),
+        &through_slurm,
+        "local against the array script",
+    );
+
+    // The same command again finds the run finished: nothing is submitted.
+    let again = run_ok(
+        optimize(&case, &slurm)
+            .args(["--executor", "slurm"])
+            .env(
+                "PATH",
+                format!("{fake}:{}", std::env::var("PATH").unwrap_or_default()),
+            )
+            .env("FAKE_SLURM_DIR", &state),
+    );
+    assert!(!again.contains("submitted Slurm job array"), "{again}");
+    assert_no_partial_files(&slurm);
+}

@@ -160,6 +160,8 @@ mod tests {
             ..zone
         };
         assert!((parabolic.deviation(0.45) - 5e-6).abs() < 1e-18);
+        // Beyond a tip relief's full point the law goes on: 20 µm · 1.5².
+        assert!((parabolic.deviation(0.55) - 45e-6).abs() < 1e-18);
         // Root relief: the relieved side is below the start.
         let root = ReliefZone {
             amount: 10e-6,

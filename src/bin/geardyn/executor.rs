@@ -49,6 +49,10 @@ pub fn execute(
     let mut unique: Vec<FeRunRequest> = Vec::new();
     let mut of_request = Vec::with_capacity(runs.len());
     for run in runs {
+        let run = &FeRunRequest {
+            dir: absolute(&run.dir)?,
+            ..run.clone()
+        };
         match unique.iter().position(|u| u.dir == run.dir) {
             Some(i) => {
                 anyhow::ensure!(
@@ -88,14 +92,13 @@ fn execute_unique(
                         return Err("not run: the study was stopped".to_string());
                     }
                     let ran = fe_run_reusing(&run.case, &run.scene, &run.dir);
-                    // The folder's verdict where it has one, as the Slurm executor takes it.
-                    folder_verdict(&run.case, &run.dir).unwrap_or_else(|| {
-                        Err(ran
-                            .err()
-                            .map_or("the run left no summary".to_string(), |e| {
-                                super::error_text(&e)
-                            }))
-                    })
+                    // The folder's verdict where it has one, as the Slurm executor takes it; an
+                    // error the folder does not show (a write after the summary) still counts.
+                    match (ran, folder_verdict(&run.case, &run.dir)) {
+                        (Err(e), Some(Ok(())) | None) => Err(super::error_text(&e)),
+                        (_, Some(verdict)) => verdict,
+                        (Ok(()), None) => Err("the run left no summary".to_string()),
+                    }
                 })
                 .collect())
         }
@@ -204,6 +207,9 @@ fn slurm(args: &CommonArgs, runs: &[FeRunRequest], batch_dir: &Path) -> Result<V
     // The first round submits every run not finished (a failed one runs again, as the local
     // executor runs it again); later rounds only the runs left with a checkpoint.
     let mut first_round = true;
+    // Runs found queued in the first round (an earlier call's tasks): one whose task never
+    // ran (cancelled while pending) may go round again like a first-round run.
+    let mut waited_at_start = vec![false; runs.len()];
     loop {
         // Runs whose task is still queued are waited for, not submitted again.
         // A queue that does not answer stops the study: guessing "not queued" would submit
@@ -219,9 +225,11 @@ fn slurm(args: &CommonArgs, runs: &[FeRunRequest], batch_dir: &Path) -> Result<V
         for (i, run) in runs.iter().enumerate() {
             let state = run_state(&run.case, &run.dir);
             if state == RunState::Finished || waiting(i) {
+                waited_at_start[i] |= first_round && waiting(i);
                 continue;
             }
-            if submitted[i] >= MAX_SUBMISSIONS || (state == RunState::Other && !first_round) {
+            let retry_other = first_round || waited_at_start[i];
+            if submitted[i] >= MAX_SUBMISSIONS || (state == RunState::Other && !retry_other) {
                 continue;
             }
             if state == RunState::Other {

@@ -9,35 +9,13 @@ mod common;
 use std::path::Path;
 use std::process::Command;
 
-use common::{assert_no_partial_files, assert_same_outputs, coarse_case, outputs};
+use common::{
+    assert_no_partial_files, assert_same_outputs, coarse_case, outputs, run_ok_stderr,
+    small_fe_check,
+};
 
 fn optimize(case: &Path, out: &Path) -> Command {
-    let mut command = Command::new(assert_cmd::cargo::cargo_bin!("geardyn"));
-    command.arg("optimize").arg(case).args([
-        "--positions",
-        "16",
-        "--rpm",
-        "1000:12000:20",
-        "--fe-check",
-        "--fe-check-only",
-        "none",
-        "--fe-check-scenes",
-        "low",
-        "--set",
-        "scene[stiffness].duration_s=0.004",
-        "--set",
-        "scene[stiffness].ramp_s=0.002",
-        "--out",
-    ]);
-    command.arg(out);
-    command
-}
-
-fn run_ok(command: &mut Command) -> String {
-    let output = command.output().unwrap();
-    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
-    assert!(output.status.success(), "{stderr}");
-    stderr
+    small_fe_check(case, "none", out)
 }
 
 #[test]
@@ -46,18 +24,21 @@ fn the_array_script_runs_and_the_study_reads_its_runs_as_the_local_executor_does
     let case = coarse_case(dir.path());
     let local = dir.path().join("local");
     let slurm = dir.path().join("slurm");
-    run_ok(&mut optimize(&case, &local));
+    run_ok_stderr(&mut optimize(&case, &local));
 
     let fake = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fake-slurm");
     let path = format!("{fake}:{}", std::env::var("PATH").unwrap_or_default());
     let state = dir.path().join("fake-slurm-state");
     std::fs::create_dir_all(&state).unwrap();
-    let stderr = run_ok(
-        optimize(&case, &slurm)
+    let through_fake = || {
+        let mut command = optimize(&case, &slurm);
+        command
             .args(["--executor", "slurm", "--poll-s", "0.1"])
-            .env("PATH", path)
-            .env("FAKE_SLURM_DIR", &state),
-    );
+            .env("PATH", &path)
+            .env("FAKE_SLURM_DIR", &state);
+        command
+    };
+    let stderr = run_ok_stderr(&mut through_fake());
     assert!(
         stderr.contains("submitted Slurm job array 101: 1 explicit runs"),
         "{stderr}"
@@ -76,15 +57,7 @@ fn the_array_script_runs_and_the_study_reads_its_runs_as_the_local_executor_does
     );
 
     // The same command again finds the run finished: nothing is submitted.
-    let again = run_ok(
-        optimize(&case, &slurm)
-            .args(["--executor", "slurm"])
-            .env(
-                "PATH",
-                format!("{fake}:{}", std::env::var("PATH").unwrap_or_default()),
-            )
-            .env("FAKE_SLURM_DIR", &state),
-    );
+    let again = run_ok_stderr(&mut through_fake());
     assert!(!again.contains("submitted Slurm job array"), "{again}");
     assert_no_partial_files(&slurm);
 }

@@ -167,26 +167,48 @@ fn measured_critical_step_separates_stable_from_divergent_runs() {
 /// on the paper's mesh, and on the same mesh with one node of a coarse tooth moved by 2e-11 m
 /// (about the mismatch where a fine and a coarse tooth layout meet the base: an element
 /// congruent to its sector's copies only to that tolerance must get its own prototype, or the
-/// copies' reference shape strains it by ~1e-7 at rest).
+/// copies' reference shape strains it by ~1e-7 at rest); and on both gears of the unequal
+/// 24/40 pair.
 #[test]
 fn sector_prototypes_give_the_same_forces() {
     let mesh = samples::paper36_gear_mesh(0.8e-3, 2.0e-3);
-    assert_sector_prototypes_give_the_same_forces(&mesh);
+    let prototypes = assert_sector_prototypes_give_the_same_forces(&mesh);
+    assert!(
+        prototypes * 10 < mesh.elements.len(),
+        "{prototypes} prototypes"
+    );
     let mut moved = mesh.clone();
     let node = mesh.elements[mesh.elements.len() / 2][4];
     moved.nodes[node].x += 2e-11;
     assert_sector_prototypes_give_the_same_forces(&moved);
+    // An unequal pair's two gears (24 and 40 teeth), with the paper's relief.
+    let case = samples::matrix_pair("24-40").unwrap().case().unwrap();
+    let relief = case.relief_variant("tip20-root10").unwrap();
+    for (gear, modification) in case.pair.gears.iter().zip(&relief.modifications) {
+        let z = gear.teeth() as usize;
+        let spec = geardyn::mesh::MeshSpec {
+            fine_size: 0.8e-3,
+            coarse_size: 2.0e-3,
+            fine_teeth: vec![0, 1, z - 1],
+        };
+        let mesh = geardyn::mesh::mesh_gear(gear, modification, &spec);
+        let prototypes = assert_sector_prototypes_give_the_same_forces(&mesh);
+        // Fewer teeth, fewer copies of each layout: 137 of 1 344 (24), 199 of 3 495 (40).
+        assert!(
+            prototypes * 5 < mesh.elements.len(),
+            "{z} teeth: {prototypes} prototypes"
+        );
+    }
 }
 
-fn assert_sector_prototypes_give_the_same_forces(mesh: &geardyn::mesh::GearMesh) {
+/// Asserts the forces of `mesh`'s body with and without shared sector prototypes agree; returns
+/// the number of prototypes.
+fn assert_sector_prototypes_give_the_same_forces(mesh: &geardyn::mesh::GearMesh) -> usize {
+    let teeth = mesh.flanks.len() / 2;
     let plain = ExplicitBody::new(&mesh.nodes, &mesh.elements, steel(0.0254)).unwrap();
     let shared =
-        ExplicitBody::with_symmetry(&mesh.nodes, &mesh.elements, steel(0.0254), Some(36)).unwrap();
-    assert!(
-        shared.prototypes.len() * 10 < mesh.elements.len(),
-        "{} prototypes",
-        shared.prototypes.len()
-    );
+        ExplicitBody::with_symmetry(&mesh.nodes, &mesh.elements, steel(0.0254), Some(teeth))
+            .unwrap();
     let (s, c) = 0.7_f64.sin_cos();
     let x: Vec<f64> = mesh
         .nodes
@@ -218,6 +240,7 @@ fn assert_sector_prototypes_give_the_same_forces(mesh: &geardyn::mesh::GearMesh)
         (plain.element_eigen_critical_step() / shared.element_eigen_critical_step() - 1.0).abs()
             < 1e-9
     );
+    shared.prototypes.len()
 }
 
 /// A free body spun as a rigid body for a whole revolution (ω = 500 rad/s) carries only the

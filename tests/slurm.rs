@@ -14,38 +14,16 @@ use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-use common::{assert_no_partial_files, assert_same_outputs, coarse_case, outputs};
+use common::{
+    assert_no_partial_files, assert_same_outputs, coarse_case, outputs, run_ok_stderr,
+    small_fe_check,
+};
 
+/// The study, with a checkpoint every second so a cancelled task loses little.
 fn optimize(case: &Path, out: &Path) -> Command {
-    let mut command = Command::new(assert_cmd::cargo::cargo_bin!("geardyn"));
-    command.arg("optimize").arg(case).args([
-        "--positions",
-        "16",
-        "--rpm",
-        "1000:12000:20",
-        "--fe-check",
-        "--fe-check-only",
-        "none,optimum-1",
-        "--fe-check-scenes",
-        "low",
-        // About 15 s of time loop per run on the coarse pair: long enough to cancel one.
-        "--set",
-        "scene[stiffness].duration_s=0.004",
-        "--set",
-        "scene[stiffness].ramp_s=0.002",
-        "--checkpoint-every-s",
-        "1",
-        "--out",
-    ]);
-    command.arg(out);
+    let mut command = small_fe_check(case, "none,optimum-1", out);
+    command.args(["--checkpoint-every-s", "1"]);
     command
-}
-
-fn run_ok(command: &mut Command) -> String {
-    let output = command.output().unwrap();
-    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
-    assert!(output.status.success(), "{stderr}");
-    stderr
 }
 
 /// Cancels the first task of the array in `log_dir` once its log shows the run 20 % through.
@@ -121,14 +99,14 @@ fn slurm_runs_equal_local_runs_and_a_cancelled_task_resumes() {
     let case = coarse_case(dir.path());
     let local = dir.path().join("local");
     let slurm = dir.path().join("slurm");
-    run_ok(&mut optimize(&case, &local));
+    run_ok_stderr(&mut optimize(&case, &local));
 
     let log_dir = slurm.join("fe-check/slurm/logs");
     let canceller = {
         let log_dir = log_dir.clone();
         std::thread::spawn(move || cancel_one_task_mid_run(&log_dir, Duration::from_secs(300)))
     };
-    let stderr = run_ok(optimize(&case, &slurm).args([
+    let stderr = run_ok_stderr(optimize(&case, &slurm).args([
         "--executor",
         "slurm",
         "--poll-s",

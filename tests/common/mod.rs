@@ -203,3 +203,36 @@ pub fn assert_same_outputs(
         }
     }
 }
+
+/// Runs `command` and asserts it succeeded; returns what it printed to stderr.
+pub fn run_ok_stderr(command: &mut Command) -> String {
+    let output = command.output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    assert!(output.status.success(), "{stderr}");
+    stderr
+}
+
+/// A small relief study with its FE cross-check: `optimize --fe-check` of `candidates`
+/// (comma-separated) at low speed only, the stiffness scene cut to 4 ms (about 15 s of time
+/// loop per run on the coarse pair), into `out`. The executors' tests run it both ways.
+pub fn small_fe_check(case: &Path, candidates: &str, out: &Path) -> Command {
+    let mut command = Command::new(assert_cmd::cargo::cargo_bin!("geardyn"));
+    command.arg("optimize").arg(case).args([
+        "--positions",
+        "16",
+        "--rpm",
+        "1000:12000:20",
+        "--fe-check",
+        "--fe-check-only",
+        candidates,
+        "--fe-check-scenes",
+        "low",
+        "--set",
+        "scene[stiffness].duration_s=0.004",
+        "--set",
+        "scene[stiffness].ramp_s=0.002",
+        "--out",
+    ]);
+    command.arg(out);
+    command
+}

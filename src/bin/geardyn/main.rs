@@ -314,8 +314,7 @@ impl CompareAsk<'_> {
                 .filter(|rpm| (from..=to).contains(rpm))
                 .collect();
             fe_sweep.extend(inside);
-            fe_sweep.sort_by(f64::total_cmp);
-            fe_sweep.dedup_by(|a, b| (*a - *b).abs() < 1e-6 * b.abs());
+            fe_sweep = distinct_speeds(fe_sweep);
         }
         fe_sweep
     }
@@ -330,14 +329,13 @@ impl CompareAsk<'_> {
         given_rpm: &[f64],
     ) -> Result<Vec<executor::FeRunRequest>> {
         use study::compare as cmp;
-        let mut all_speeds: Vec<f64> = self
-            .speeds
-            .iter()
-            .chain(&self.sweep_speeds(given_rpm))
-            .copied()
-            .collect();
-        all_speeds.sort_by(f64::total_cmp);
-        all_speeds.dedup_by(|a, b| (*a - *b).abs() < 1e-6 * b.abs());
+        let all_speeds = distinct_speeds(
+            self.speeds
+                .iter()
+                .chain(&self.sweep_speeds(given_rpm))
+                .copied()
+                .collect(),
+        );
         let mut requests = Vec::new();
         for rpm in cmp::speeds_to_run(&all_speeds, given_rpm) {
             requests.push(executor::FeRunRequest {
@@ -368,6 +366,13 @@ impl CompareAsk<'_> {
         }
         Ok(requests)
     }
+}
+
+/// Speeds in ascending order, those within 1e-6 of each other once.
+fn distinct_speeds(mut rpm: Vec<f64>) -> Vec<f64> {
+    rpm.sort_by(f64::total_cmp);
+    rpm.dedup_by(|a, b| (*a - *b).abs() < 1e-6 * b.abs());
+    rpm
 }
 
 /// The finished FE runs given to compare, read.

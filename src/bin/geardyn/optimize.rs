@@ -2,13 +2,19 @@
 
 use super::*;
 
+/// The case the optimization works on: the case file at `--torque-nm`.
+pub fn optimize_case(args: &CommonArgs, options: &OptimizeArgs) -> Result<Case> {
+    load(args, torque_overrides(options))
+}
+
+fn torque_overrides(options: &OptimizeArgs) -> Vec<Override> {
+    study::torque_override(options.torque_nm)
+        .into_iter()
+        .collect()
+}
+
 pub fn optimize(args: &CommonArgs, options: &OptimizeArgs) -> Result<()> {
-    let case = load(
-        args,
-        study::torque_override(options.torque_nm)
-            .into_iter()
-            .collect(),
-    )?;
+    let case = optimize_case(args, options)?;
     let dir = output_dir(args, "optimize", &case)?;
     let fe_check = options
         .fe_check_plan()
@@ -27,8 +33,7 @@ pub fn optimize_into(
     dir: &Path,
     fe_check: Option<(PathBuf, FeCheckPlan)>,
 ) -> Result<study::optimize::OptimizeStudy> {
-    let torque = || study::torque_override(options.torque_nm).into_iter();
-    let case = load(args, torque().collect())?;
+    let case = optimize_case(args, options)?;
     let bar = staged_bar();
     let mut result = study::optimize::run(&case, &options.options(), &stage(&bar))?;
     bar.finish_and_clear();
@@ -148,9 +153,7 @@ pub fn fe_check_requests(
         if !plan.includes(candidate) {
             continue;
         }
-        let mut overrides: Vec<Override> = study::torque_override(options.torque_nm)
-            .into_iter()
-            .collect();
+        let mut overrides = torque_overrides(options);
         overrides.extend(study::optimize::fe_check_overrides(case, candidate)?);
         let with_relief = load(args, overrides)?;
         for (s, name) in study::optimize::FE_CHECK_SCENES.iter().enumerate() {

@@ -75,12 +75,7 @@ fn optimize_requests(
     root: &Path,
     check: &FeCheckPlan,
 ) -> Result<Vec<FeRunRequest>> {
-    let case = load(
-        common,
-        study::torque_override(options.torque_nm)
-            .into_iter()
-            .collect(),
-    )?;
+    let case = optimize::optimize_case(common, options)?;
     eprintln!("the relief optimization, to know its candidates (no explicit FE):");
     let bar = staged_bar();
     let result = study::optimize::run(&case, &options.options(), &stage(&bar))?;

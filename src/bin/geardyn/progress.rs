@@ -18,10 +18,8 @@ use geardyn::study;
 pub fn fe_run(case: &Case, scene: &Scene, dir: &Path, resume: bool) -> Result<study::fe::FeStudy> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let checkpoint = if resume {
-        let same_case = std::fs::read_to_string(dir.join("case.toml"))
-            .is_ok_and(|text| case.is_same_case(&text));
         anyhow::ensure!(
-            same_case,
+            holds_case(case, dir),
             "{} holds no run of this case (its case.toml differs or is missing): resume with \
              the same case file and --set as the interrupted run",
             dir.display()
@@ -171,16 +169,29 @@ pub enum RunState {
     Other,
 }
 
+/// The folder's state from its case.toml, checkpoint and summary alone (summary.json is
+/// written last): cheap enough for every poll of a queue, where reading each run's history
+/// was not.
 pub fn run_state(case: &Case, dir: &Path) -> RunState {
-    let same_case =
-        std::fs::read_to_string(dir.join("case.toml")).is_ok_and(|text| case.is_same_case(&text));
     let interrupted = dir.join(report::fe::CHECKPOINT).exists();
-    match (same_case, interrupted) {
+    let ended_well = |summary: serde_json::Value| {
+        ["diverged", "interrupted"]
+            .iter()
+            .all(|key| summary.get(key).is_none_or(|v| v.is_null()))
+    };
+    match (holds_case(case, dir), interrupted) {
         (false, _) => RunState::Other,
         (true, true) => RunState::Interrupted,
-        (true, false) if report::compare::read_fe_run(dir).is_ok() => RunState::Finished,
+        (true, false) if report::compare::fe_summary(dir).is_ok_and(ended_well) => {
+            RunState::Finished
+        }
         (true, false) => RunState::Other,
     }
+}
+
+/// The folder's case.toml is `case` (as TOML values: comments and `--set` headers aside).
+fn holds_case(case: &Case, dir: &Path) -> bool {
+    std::fs::read_to_string(dir.join("case.toml")).is_ok_and(|text| case.is_same_case(&text))
 }
 
 /// A run folder's verdict as a study takes it, whichever executor ran the run or found it
@@ -188,11 +199,9 @@ pub fn run_state(case: &Case, dir: &Path) -> RunState {
 /// for one that failed them, diverged or was interrupted; None where the folder holds no
 /// summary of this case to judge (the run stopped before it wrote one).
 pub fn folder_verdict(case: &Case, dir: &Path) -> Option<std::result::Result<(), String>> {
-    let same_case =
-        std::fs::read_to_string(dir.join("case.toml")).is_ok_and(|text| case.is_same_case(&text));
     let summary = report::compare::fe_summary(dir)
         .ok()
-        .filter(|_| same_case)?;
+        .filter(|_| holds_case(case, dir))?;
     let shown = dir.display();
     for (key, what) in [("diverged", "diverged"), ("interrupted", "was interrupted")] {
         if let Some(message) = summary.get(key).and_then(|m| m.as_str()) {

@@ -7,8 +7,9 @@
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky};
 use faer::sparse::{SparseColMat, Triplet};
-use faer::{get_global_parallelism, Conj, Mat, MatMut, Side};
+use faer::{get_global_parallelism, Conj, Mat, MatMut, Par, Side};
 use nalgebra::{Matrix3, Point2};
+use rayon::prelude::*;
 use thiserror::Error;
 
 use super::q8;
@@ -256,9 +257,14 @@ impl FactorizedStiffness {
         AssembledStiffness::new(dofs, triplets, fixed)?.factorize()
     }
 
-    /// Solves K X = B in place for the reduced columns of `rhs`.
+    /// Solves K X = B in place for the reduced columns of `rhs`, with faer's global
+    /// parallelism.
     fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
-        let par = get_global_parallelism();
+        self.solve_in_place_with(rhs, get_global_parallelism());
+    }
+
+    /// [`Self::solve_in_place`] with parallelism `par`.
+    fn solve_in_place_with(&self, rhs: MatMut<'_, f64>, par: Par) {
         let mut scratch = MemBuffer::new(
             self.symbolic
                 .solve_in_place_scratch::<f64>(rhs.ncols(), par),
@@ -308,32 +314,41 @@ impl FactorizedStiffness {
         const BLOCK: usize = 64;
         let n = self.free_dofs();
         let m = points.len();
-        let mut g = nalgebra::DMatrix::<f64>::zeros(m, m);
         let reduced = |node: usize, axis: usize| self.free_index[2 * node + axis];
-        for start in (0..m).step_by(BLOCK) {
-            let end = (start + BLOCK).min(m);
-            let mut rhs = Mat::<f64>::zeros(n, end - start);
-            for (j, (node, d)) in points[start..end].iter().enumerate() {
-                for (axis, component) in d.iter().enumerate() {
-                    if let Some(i) = reduced(*node, axis) {
-                        rhs[(i, j)] = *component;
-                    }
-                }
-            }
-            self.solve_in_place(rhs.as_mut());
-            for (k, (node, d)) in points.iter().enumerate() {
-                for j in 0..end - start {
-                    let mut value = 0.0;
+        // The blocks side by side, each solved on one thread: a block's supernodal solve is
+        // too narrow for faer's own threads to pay (they mostly wait), whole blocks are not.
+        let blocks: Vec<Vec<f64>> = (0..m)
+            .step_by(BLOCK)
+            .collect::<Vec<_>>()
+            .into_par_iter()
+            .map(|start| {
+                let end = (start + BLOCK).min(m);
+                let mut rhs = Mat::<f64>::zeros(n, end - start);
+                for (j, (node, d)) in points[start..end].iter().enumerate() {
                     for (axis, component) in d.iter().enumerate() {
                         if let Some(i) = reduced(*node, axis) {
-                            value += component * rhs[(i, j)];
+                            rhs[(i, j)] = *component;
                         }
                     }
-                    g[(k, start + j)] = value;
                 }
-            }
-        }
-        g
+                self.solve_in_place_with(rhs.as_mut(), Par::Seq);
+                // Column-major m × (end − start): G's columns start..end.
+                let mut columns = vec![0.0; m * (end - start)];
+                for j in 0..end - start {
+                    for (k, (node, d)) in points.iter().enumerate() {
+                        let mut value = 0.0;
+                        for (axis, component) in d.iter().enumerate() {
+                            if let Some(i) = reduced(*node, axis) {
+                                value += component * rhs[(i, j)];
+                            }
+                        }
+                        columns[j * m + k] = value;
+                    }
+                }
+                columns
+            })
+            .collect();
+        nalgebra::DMatrix::from_column_slice(m, m, &blocks.concat())
     }
 
     pub fn solve(&self, load: &[f64]) -> Vec<f64> {

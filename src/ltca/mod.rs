@@ -167,20 +167,19 @@ impl LtcaModel {
         flank: Flank,
     ) -> Result<Self, LtcaError> {
         let [spec1, spec2] = mesh_specs;
-        let body1 = LtcaBody::new(
-            &pair.gears[0],
-            &modifications[0],
-            &spec1,
-            material,
-            flank.side(),
-        )?;
-        let body2 = LtcaBody::new(
-            &pair.gears[1],
-            &modifications[1],
-            &spec2,
-            material,
-            flank.side(),
-        )?;
+        // The two bodies side by side: each one's meshing, ordering and triangular solves are
+        // mostly serial, so two cores finish both in about the time of one.
+        let body = |g: usize, spec: &MeshSpec| {
+            LtcaBody::new(
+                &pair.gears[g],
+                &modifications[g],
+                spec,
+                material,
+                flank.side(),
+            )
+        };
+        let (body1, body2) = rayon::join(|| body(0, &spec1), || body(1, &spec2));
+        let (body1, body2) = (body1?, body2?);
         let profile = loaded_profile(pair, &modifications[1], flank);
         // The engaged pairs whose teeth are both meshed fine (a model built on fewer fine teeth,
         // as some tests do, leaves the others out; the periodicity check then says so).

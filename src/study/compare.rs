@@ -36,7 +36,7 @@
 use serde::Serialize;
 
 use crate::case::Case;
-use crate::ltca::modal::{pair_modes, Hubs, PairModes};
+use crate::ltca::modal::{Hubs, PairModes};
 use crate::lumped::{floquet_frequency, steady_state, DampingSite, Drive, MeshModel};
 use crate::signal::{
     amplitude_spectrum, hann_amplitude_spectrum, harmonic_amplitudes, spectrum_peaks,
@@ -370,23 +370,8 @@ pub fn run(
     let model = super::ltca::model_with_sizes(case, &unmodified, fine, coarse)?;
 
     // (c) FE modal analysis, and the LTCA's secant and tangent stiffness at the same positions.
-    let mut modal = Vec::new();
-    let total = 2 * positions;
-    for (b, hubs) in [Hubs::DriverHeld, Hubs::BothFree].into_iter().enumerate() {
-        for j in 0..positions {
-            progress("FE modal", b * positions + j, total);
-            modal.push(pair_modes(
-                &model,
-                (j, positions),
-                torque,
-                case.ltca_material(),
-                case.material.density,
-                hubs,
-                10,
-            )?);
-        }
-    }
-    progress("FE modal", total, total);
+    let modal =
+        super::frequencies::modal_at_positions(case, &model, positions, torque, 10, progress)?;
     let mean = |f: &dyn Fn(&PairModes) -> f64, hubs: Hubs| {
         let values: Vec<f64> = modal.iter().filter(|m| m.hubs == hubs).map(f).collect();
         values.iter().sum::<f64>() / values.len() as f64

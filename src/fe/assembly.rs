@@ -309,22 +309,27 @@ impl FactorizedStiffness {
 
     /// Condensed compliance between point loads: G[k, l] = d_kᵀ u_l at node k, where u_l solves
     /// K u = unit force at node l along d_l. Solved in blocks of columns so memory stays
-    /// O(free DOFs × block).
+    /// O(free DOFs × block × threads).
     pub fn compliance_between(&self, points: &[(usize, [f64; 2])]) -> nalgebra::DMatrix<f64> {
         const BLOCK: usize = 64;
         let n = self.free_dofs();
         let m = points.len();
         let reduced = |node: usize, axis: usize| self.free_index[2 * node + axis];
-        // The blocks side by side, each solved on one thread: a block's supernodal solve is
-        // too narrow for faer's own threads to pay (they mostly wait), whole blocks are not.
-        let blocks: Vec<Vec<f64>> = (0..m)
-            .step_by(BLOCK)
-            .collect::<Vec<_>>()
-            .into_par_iter()
-            .map(|start| {
-                let end = (start + BLOCK).min(m);
-                let mut rhs = Mat::<f64>::zeros(n, end - start);
-                for (j, (node, d)) in points[start..end].iter().enumerate() {
+        let mut g = nalgebra::DMatrix::<f64>::zeros(m, m);
+        if m == 0 {
+            return g;
+        }
+        // The blocks side by side, each solved on one thread and written into its own columns
+        // of G (column-major): a block's supernodal solve is too narrow for faer's own threads
+        // to pay (they mostly wait), whole blocks are not.
+        g.as_mut_slice()
+            .par_chunks_mut(m * BLOCK)
+            .enumerate()
+            .for_each(|(b, columns)| {
+                let start = b * BLOCK;
+                let width = columns.len() / m;
+                let mut rhs = Mat::<f64>::zeros(n, width);
+                for (j, (node, d)) in points[start..start + width].iter().enumerate() {
                     for (axis, component) in d.iter().enumerate() {
                         if let Some(i) = reduced(*node, axis) {
                             rhs[(i, j)] = *component;
@@ -332,9 +337,7 @@ impl FactorizedStiffness {
                     }
                 }
                 self.solve_in_place_with(rhs.as_mut(), Par::Seq);
-                // Column-major m × (end − start): G's columns start..end.
-                let mut columns = vec![0.0; m * (end - start)];
-                for j in 0..end - start {
+                for j in 0..width {
                     for (k, (node, d)) in points.iter().enumerate() {
                         let mut value = 0.0;
                         for (axis, component) in d.iter().enumerate() {
@@ -345,10 +348,8 @@ impl FactorizedStiffness {
                         columns[j * m + k] = value;
                     }
                 }
-                columns
-            })
-            .collect();
-        nalgebra::DMatrix::from_column_slice(m, m, &blocks.concat())
+            });
+        g
     }
 
     pub fn solve(&self, load: &[f64]) -> Vec<f64> {

@@ -116,8 +116,9 @@ pub struct Frequencies {
     pub lumped_ltca_tangent_elastic_hz: f64,
     /// The case's lumped model (what `sweep` and `run` integrate: its stiffness source and force
     /// law on the case's mesh, linearized about the design load, its bodies) on this boundary
-    /// condition (no shafts, no bearings, as the FE): the mesh mode; and the FE modal analysis
-    /// on the case's mesh, mean over [`CASE_MESH_MODAL_POSITIONS`] ([`super::frequencies`]).
+    /// condition (no shafts, no bearings, as the FE): its mesh mode frozen at each of the FE
+    /// modal's positions, their mean; and the FE modal analysis on the case's mesh, mean over
+    /// the same [`CASE_MESH_MODAL_POSITIONS`] ([`super::frequencies`]).
     pub lumped_model_hz: f64,
     pub fe_modal_case_mesh_mean_hz: f64,
     /// Floquet frequency of the undamped lumped model with the FE k(θ) (elastic bodies), per FE
@@ -217,7 +218,8 @@ pub struct CompareSummary {
     pub case: String,
     /// Mesh frequency of the primary FE run ([`primary_run`]) [Hz].
     pub f_mesh_hz: f64,
-    /// Both gears free (m_e): lumped √(k̄_FE/m_e), FE modal mean.
+    /// Both gears free: the case's lumped model frozen at the FE modal's positions, their mean
+    /// ([`Frequencies::lumped_model_hz`]), and the FE modal mean on the case's mesh.
     pub f_natural_lumped_hz: f64,
     pub f_natural_fe_modal_hz: f64,
     /// Driver held (I₂/r_b2²).
@@ -407,8 +409,9 @@ pub fn run(
     let constant = |k: f64| MeshStiffness::constant("mean", input.fe_stiffness.period(), k);
     // The case's lumped model (its stiffness source and force law on the case's mesh, what
     // `sweep` and `run` integrate), linearized about the design load, on the FE's boundary
-    // conditions, against the FE modal analysis on the case's (converged) mesh: the report's
-    // resonance speeds come from this mesh mode.
+    // conditions, frozen at the FE modal's positions, against the FE modal analysis on the
+    // case's (converged) mesh at the same positions. (The report's resonance speeds come from
+    // the mode at the mean stiffness, which the frequencies' summary gives beside it.)
     let converged = super::frequencies::mesh_modes(case, CASE_MESH_MODAL_POSITIONS, progress)?;
     let twist: f64 = body_twist(case).iter().sum();
     let frequencies = |hubs: Hubs, drive: Drive| -> Result<Frequencies, StudyError> {

@@ -38,8 +38,9 @@ pub struct MeshModeComparison {
     pub lumped_rigid_hz: f64,
     /// The case's lumped model at each position (driver rotation [deg], Hz).
     pub lumped_hz_per_position: Vec<(f64, f64)>,
-    /// The case's lumped model at the mean tangent stiffness [Hz]: the mode the sweep's
-    /// primary resonance follows (above the per-position mean, see [`lumped_mesh_modes`]).
+    /// The case's lumped model at the mean linearized stiffness [Hz]: the mode the sweep's
+    /// primary resonance follows (how it differs from the per-position mean:
+    /// [`lumped_mesh_modes`]).
     pub lumped_at_mean_stiffness_hz: f64,
     /// FE modal mesh mode per position (driver rotation [deg], Hz) and its mean [Hz].
     pub fe_modal_hz: Vec<(f64, f64)>,
@@ -68,22 +69,25 @@ pub struct MeshModes {
 }
 
 /// The mesh mode of `model`'s linearized mesh on the FE's boundary conditions under `drive`
-/// with `bodies` [Hz], frozen at each of `positions` driver rotations j/N of a base pitch (the
-/// FE modal's positions; the tables' θ = 0 is the LTCA's first position): the law's tangent
-/// stiffness there, first given back, if hub to hub, the twist `twist` the case's model took out
-/// of it, then the bodies' own taken out. Returns those and the mode at the mean stiffness.
+/// with `bodies` [Hz], frozen at each of the driver rotations `rotations` [rad] from the
+/// pitch-point position (the FE modal's positions, placed in the tables' θ, which counts from
+/// their origin's roll angle): the linearized stiffness there (the force law's tangent at the
+/// quasi-static state, or the secant k(θ)), first given back, if hub to hub, the twist
+/// `twist_in_model` the case's model took out of it, then the bodies' own taken out. Returns
+/// those and the mode at the mean stiffness.
 ///
 /// The FE modal analysis gives one frequency per frozen position, so the compared quantity is
-/// the same mean of the same per-position frequencies. f ∝ √k is concave, so that mean lies
-/// below the frequency at the mean stiffness (the one the sweep's resonance follows) by about
-/// var(k)/(8 k̄²): 0.5 % for a stiffness alternating between 1 and 1.6.
+/// the same mean of the same per-position frequencies. The mode at the mean stiffness (the one
+/// the sweep's primary resonance follows) differs from that mean in two ways: f ∝ √k is
+/// concave, which puts the per-position mean below it by about var(k)/(8 k̄²) (0.7 % for a
+/// stiffness alternating between 1 and 1.6 in equal halves), and a few positions sample the
+/// steps of k(θ) unevenly, either way (+0.2 / +0.4 % at 8 positions on the paper pair).
 fn lumped_mesh_modes(
     case: &Case,
     model: &MeshModel,
-    drive: Drive,
-    bodies: BodyModel,
+    (drive, bodies): (Drive, BodyModel),
     twist_in_model: f64,
-    positions: usize,
+    rotations: &[f64],
 ) -> Result<(Vec<f64>, f64), StudyError> {
     let linear = model.linearized();
     let structure = super::lumped::drivetrain_with(case, drive, bodies, [None; 2], false)?;
@@ -96,13 +100,13 @@ fn lumped_mesh_modes(
         let k = 1.0 / (1.0 / k_mesh + twist_in_model - twist_out);
         structure.mesh_mode(k).frequency / std::f64::consts::TAU
     };
-    let period = linear.mesh.period();
-    let per_position = (0..positions)
-        .map(|j| {
-            hz(linear
-                .mesh
-                .stiffness
-                .at(j as f64 / positions as f64 * period))
+    let pair = &case.pair;
+    let roll_pitch = pair.roll_angle_at(1, pair.contact_points.pitch);
+    let per_position = rotations
+        .iter()
+        .map(|rotation| {
+            let theta = roll_pitch + rotation - linear.mesh.origin;
+            hz(linear.mesh.stiffness.at(theta))
         })
         .collect();
     Ok((per_position, hz(linear.mesh.mean())))
@@ -127,7 +131,8 @@ pub fn modal_at_positions(
         .into_iter()
         .flat_map(|hubs| (0..positions).map(move |j| (hubs, j)))
         .collect();
-    jobs.into_par_iter()
+    let results: Vec<Result<PairModes, StudyError>> = jobs
+        .into_par_iter()
         .map(|(hubs, j)| {
             let modes = pair_modes(
                 ltca,
@@ -142,7 +147,10 @@ pub fn modal_at_positions(
             progress("FE modal", finished + 1, total);
             Ok(modes)
         })
-        .collect()
+        .collect();
+    // Collected whole first, so a failure reports the first failing position whatever the
+    // thread count.
+    results.into_iter().collect()
 }
 
 /// Runs the comparison at `positions` positions over a base pitch.
@@ -184,21 +192,20 @@ pub fn mesh_modes(
         let fe_modal_mean_hz =
             fe_modal_hz.iter().map(|p| p.1).sum::<f64>() / fe_modal_hz.len() as f64;
         let mean = |hz: &[f64]| hz.iter().sum::<f64>() / hz.len() as f64;
+        let rotations: Vec<f64> = fe_modal_hz.iter().map(|p| p.0.to_radians()).collect();
         let (per_position, lumped_at_mean_stiffness_hz) = lumped_mesh_modes(
             case,
             &setup.model,
-            drive,
-            case.lumped.bodies,
+            (drive, case.lumped.bodies),
             twist_in_model,
-            positions,
+            &rotations,
         )?;
         let (rigid_per_position, _) = lumped_mesh_modes(
             case,
             &setup.model,
-            drive,
-            BodyModel::Rigid,
+            (drive, BodyModel::Rigid),
             twist_in_model,
-            positions,
+            &rotations,
         )?;
         let lumped_hz = mean(&per_position);
         let lumped_rigid_hz = mean(&rigid_per_position);
@@ -244,4 +251,83 @@ pub fn mesh_modes(
         model_note: setup.model_note,
         wall_s: started.elapsed().as_secs_f64(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::case::Override;
+    use crate::stiffness::{MeshStiffness, PeriodicTable};
+
+    /// A synthetic two-level k(θ) (1 over 60 % of the period, 1.6 over the rest) on rigid gears
+    /// with the torque drive: each frozen position's mode is √(k_j/m_e)/2π with k_j the level at
+    /// that rotation, also with the table's origin moved off the pitch point (the rotations are
+    /// placed in the table's θ), and the mode at the mean stiffness is √(k̄/m_e)/2π, above the
+    /// positions' mean by what the levels give.
+    #[test]
+    fn frozen_positions_read_the_stiffness_at_their_rotation() {
+        let case = Case::load_with(
+            None,
+            &[
+                Override::set("lumped.stiffness", "pe"),
+                Override::set("lumped.bodies", "rigid"),
+            ],
+        )
+        .unwrap();
+        let mut model = super::super::lumped::setup(&case).unwrap().model;
+        let period = model.mesh.period();
+        let roll_pitch = case.pair.roll_angle_at(1, case.pair.contact_points.pitch);
+        let k1 = 4e8;
+        let level = |theta: f64| match theta.rem_euclid(period) < 0.6 * period {
+            true => k1,
+            false => 1.6 * k1,
+        };
+        let m_e = Drive::Torque.effective_mass(
+            super::super::lumped::gear_inertias(&case),
+            [
+                case.pair.gears[0].base_radius,
+                case.pair.gears[1].base_radius,
+            ],
+        );
+        let hz = |k: f64| (k / m_e).sqrt() / std::f64::consts::TAU;
+        let positions = 16;
+        let rotations: Vec<f64> = (0..positions)
+            .map(|j| j as f64 / positions as f64 * period)
+            .collect();
+        for shift in [0.0, 0.3 * period] {
+            // The table starts `shift` after the pitch point: rotation r reads θ = r − shift.
+            let stiffness = PeriodicTable::from_fn(period, 1000, |theta| level(theta + shift));
+            model.mesh = MeshStiffness {
+                origin: roll_pitch + shift,
+                ..MeshStiffness::from_tables(
+                    "two levels",
+                    None,
+                    stiffness,
+                    PeriodicTable::constant(period, 0.0),
+                )
+            };
+            let (per_position, at_mean) = lumped_mesh_modes(
+                &case,
+                &model,
+                (Drive::Torque, BodyModel::Rigid),
+                0.0,
+                &rotations,
+            )
+            .unwrap();
+            for (r, f) in rotations.iter().zip(&per_position) {
+                // Away from the table's steps (linear between its 1 000 samples).
+                let expected = hz(level(*r));
+                assert!((f / expected - 1.0).abs() < 1e-9, "{r}: {f} vs {expected}");
+            }
+            let k_mean = model.mesh.stiffness.mean();
+            assert!((at_mean / hz(k_mean) - 1.0).abs() < 1e-12);
+            // 10 of the 16 positions at k1, against 60 % of the period: the mean of √k over the
+            // positions, (10 + 6 √1.6)/16, below √k̄ = √1.24 by 1.30 %.
+            let mean = per_position.iter().sum::<f64>() / positions as f64;
+            let gap = at_mean / mean - 1.0;
+            let expected = 1.24f64.sqrt() / ((10.0 + 6.0 * 1.6f64.sqrt()) / 16.0) - 1.0;
+            assert!((gap - expected).abs() < 1e-6, "gap {gap} vs {expected}");
+            assert!((expected - 0.0130).abs() < 5e-4);
+        }
+    }
 }

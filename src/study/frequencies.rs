@@ -163,36 +163,30 @@ pub fn mesh_modes(
     if positions == 0 {
         return Err(StudyError::Input("--positions must be at least 1".into()));
     }
-    let setup = super::lumped::setup(case)?;
+    let variant = super::relief_variant(case, case.lumped.relief.as_deref())?;
+    let ltca = super::ltca::model(case, &variant.modifications)?;
+    // The same bodies for the lumped model's tables and the modal analysis.
+    let setup = super::lumped::setup_on(case, &ltca)?;
     let twist_in_model = match case.lumped.stiffness.holds_body_twist() {
         true => super::lumped::structure_body_twist(case),
         false => 0.0,
     };
-    let variant = super::relief_variant(case, case.lumped.relief.as_deref())?;
-    let ltca = super::ltca::model(case, &variant.modifications)?;
     let torque = setup.torque;
     let modal = modal_at_positions(case, &ltca, positions, torque, 6, progress)?;
-    let modal_hz: Vec<Vec<(f64, f64)>> = [Hubs::DriverHeld, Hubs::BothFree]
-        .iter()
-        .map(|&hubs| {
-            modal
-                .iter()
-                .filter(|m| m.hubs == hubs)
-                .map(|m| {
-                    (
-                        m.driver_rotation.to_degrees(),
-                        m.modes[m.mesh_mode].frequency_hz,
-                    )
-                })
-                .collect()
-        })
-        .collect();
-    let compare = |b: usize, hubs: Hubs, drive: Drive| -> Result<_, StudyError> {
-        let fe_modal_hz = modal_hz[b].clone();
-        let fe_modal_mean_hz =
-            fe_modal_hz.iter().map(|p| p.1).sum::<f64>() / fe_modal_hz.len() as f64;
+    let compare = |hubs: Hubs, drive: Drive| -> Result<_, StudyError> {
+        let at: Vec<&PairModes> = modal.iter().filter(|m| m.hubs == hubs).collect();
+        let rotations: Vec<f64> = at.iter().map(|m| m.driver_rotation).collect();
+        let fe_modal_hz: Vec<(f64, f64)> = at
+            .iter()
+            .map(|m| {
+                (
+                    m.driver_rotation.to_degrees(),
+                    m.modes[m.mesh_mode].frequency_hz,
+                )
+            })
+            .collect();
         let mean = |hz: &[f64]| hz.iter().sum::<f64>() / hz.len() as f64;
-        let rotations: Vec<f64> = fe_modal_hz.iter().map(|p| p.0.to_radians()).collect();
+        let fe_modal_mean_hz = mean(&fe_modal_hz.iter().map(|p| p.1).collect::<Vec<_>>());
         let (per_position, lumped_at_mean_stiffness_hz) = lumped_mesh_modes(
             case,
             &setup.model,
@@ -238,8 +232,8 @@ pub fn mesh_modes(
             pass: lumped_rel.abs() <= MESH_MODE_TOLERANCE,
         })
     };
-    let driver_held = compare(0, Hubs::DriverHeld, Drive::Speed)?;
-    let both_free = compare(1, Hubs::BothFree, Drive::Torque)?;
+    let driver_held = compare(Hubs::DriverHeld, Drive::Speed)?;
+    let both_free = compare(Hubs::BothFree, Drive::Torque)?;
     Ok(MeshModes {
         case: case.name().to_string(),
         torque_nm: torque,

@@ -193,6 +193,16 @@ pub fn back_reflection(pair: &crate::geometry::GearPair, mesh: &MeshStiffness) -
 /// `lumped.force_law = "load-dependent"`) and at [`QUASI_STATIC_LOADS`] (the secant k(θ) at the
 /// design torque, and the reference of the model's quasi-static checks).
 pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
+    setup_with(case, None)
+}
+
+/// [`setup`] on `ltca`, the case's LTCA model of the lumped relief variant
+/// ([`super::ltca::model`]) that the caller has built already: its bodies are not set up twice.
+pub fn setup_on(case: &Case, ltca: &LtcaModel) -> Result<LumpedSetup, StudyError> {
+    setup_with(case, Some(ltca))
+}
+
+fn setup_with(case: &Case, ltca: Option<&LtcaModel>) -> Result<LumpedSetup, StudyError> {
     let settings = &case.lumped;
     let torque = load_torque(case)?;
     let started = std::time::Instant::now();
@@ -201,13 +211,13 @@ pub fn setup(case: &Case) -> Result<LumpedSetup, StudyError> {
             let variant = super::relief_variant(case, settings.relief.as_deref())?;
             let source = format!("ltca (relief {})", variant.name);
             let load_dependent = settings.force_law == ForceLawKind::LoadDependent;
-            let laws = ltca_laws(
-                case,
-                &variant.modifications,
-                torque,
-                &source,
-                load_dependent,
-            )?;
+            let modifications = &variant.modifications;
+            let laws = match ltca {
+                Some(ltca) => {
+                    ltca_laws_on(case, ltca, modifications, torque, &source, load_dependent)?
+                }
+                None => ltca_laws(case, modifications, torque, &source, load_dependent)?,
+            };
             (
                 laws.mesh,
                 load_dependent.then_some(laws.law),
@@ -298,7 +308,19 @@ pub fn ltca_laws(
     back: bool,
 ) -> Result<LtcaLaws, StudyError> {
     let ltca = super::ltca::model(case, modifications)?;
-    let (mesh, law, reference) = ltca_tables(case, &ltca, torque, source)?;
+    ltca_laws_on(case, &ltca, modifications, torque, source, back)
+}
+
+/// [`ltca_laws`] on `ltca`, the case's LTCA model with `modifications`, already built.
+pub fn ltca_laws_on(
+    case: &Case,
+    ltca: &LtcaModel,
+    modifications: &[crate::geometry::FlankModification; 2],
+    torque: f64,
+    source: &str,
+    back: bool,
+) -> Result<LtcaLaws, StudyError> {
+    let (mesh, law, reference) = ltca_tables(case, ltca, torque, source)?;
     let back_law = match back && case.pair.backlash_normal > 0.0 {
         true => {
             let sizes = super::ltca::element_sizes(case);

@@ -175,9 +175,9 @@ pub enum RunState {
 pub fn run_state(case: &Case, dir: &Path) -> RunState {
     let interrupted = dir.join(report::fe::CHECKPOINT).exists();
     let ended_well = |summary: serde_json::Value| {
-        ["diverged", "interrupted"]
+        ENDED_UNFINISHED
             .iter()
-            .all(|key| summary.get(key).is_none_or(|v| v.is_null()))
+            .all(|(key, _)| summary.get(key).is_none_or(|v| v.is_null()))
     };
     match (holds_case(case, dir), interrupted) {
         (false, _) => RunState::Other,
@@ -188,6 +188,11 @@ pub fn run_state(case: &Case, dir: &Path) -> RunState {
         (true, false) => RunState::Other,
     }
 }
+
+/// A run summary's keys that say it did not finish (with how the verdict words it): a message
+/// there, or null.
+const ENDED_UNFINISHED: [(&str, &str); 2] =
+    [("diverged", "diverged"), ("interrupted", "was interrupted")];
 
 /// The folder's case.toml is `case` (as TOML values: comments and `--set` headers aside).
 fn holds_case(case: &Case, dir: &Path) -> bool {
@@ -203,7 +208,7 @@ pub fn folder_verdict(case: &Case, dir: &Path) -> Option<std::result::Result<(),
         .ok()
         .filter(|_| holds_case(case, dir))?;
     let shown = dir.display();
-    for (key, what) in [("diverged", "diverged"), ("interrupted", "was interrupted")] {
+    for (key, what) in ENDED_UNFINISHED {
         if let Some(message) = summary.get(key).and_then(|m| m.as_str()) {
             return Some(Err(format!("{shown}: the run {what}: {message}")));
         }

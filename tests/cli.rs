@@ -319,8 +319,9 @@ fn run_closes_the_chain_and_writes_the_report() {
             .arg(&out);
         command
     };
-    // SIGTERM in the relief stage, after the unmodified pair's FE run has finished: the run
-    // stops, says where, and still writes its report.
+    // SIGTERM in the sweeps' stage, after the explicit runs (the unmodified pair's and the
+    // optimum's, side by side in the relief stage) have finished: the run stops, says where,
+    // and still writes its report.
     let (code, stderr) = common::interrupt(
         &mut run(),
         "== 5/6",

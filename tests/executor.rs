@@ -61,3 +61,32 @@ fn the_array_script_runs_and_the_study_reads_its_runs_as_the_local_executor_does
     assert!(!again.contains("submitted Slurm job array"), "{again}");
     assert_no_partial_files(&slurm);
 }
+
+/// The local executor's runs side by side (by default as many at once as threads, one thread
+/// each) give the same outputs as one after the other on both threads (`--jobs 1`): a run's
+/// results do not depend on its thread count, and each run keeps its own folder.
+#[test]
+fn local_runs_side_by_side_give_what_they_give_one_after_the_other() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = coarse_case(dir.path());
+    let (side_by_side, one_by_one) = (dir.path().join("side"), dir.path().join("serial"));
+    let stderr = run_ok_stderr(
+        small_fe_check(&case, "none,optimum-1", &side_by_side).env("RAYON_NUM_THREADS", "2"),
+    );
+    assert!(
+        stderr.contains("2 explicit FE runs, 2 at once on 1 thread(s) each"),
+        "{stderr}"
+    );
+    let serial = run_ok_stderr(
+        small_fe_check(&case, "none,optimum-1", &one_by_one)
+            .args(["--jobs", "1"])
+            .env("RAYON_NUM_THREADS", "2"),
+    );
+    assert!(!serial.contains("at once"), "{serial}");
+    assert_same_outputs(
+        &outputs(&one_by_one),
+        &outputs(&side_by_side),
+        "side by side against one after the other",
+    );
+    assert_no_partial_files(&side_by_side);
+}

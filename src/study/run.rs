@@ -6,12 +6,14 @@ use super::optimize::FeCheckPlan;
 use super::RpmRange;
 
 /// The stages in order, as the progress lines name them.
+/// The relief stage comes before the FE stiffness stage so that the explicit runs of both (the
+/// unmodified pair's stiffness run is the cross-check's baseline) run side by side.
 pub const STAGES: [&str; 6] = [
     "geometry and meshes",
     "LTCA",
+    "relief optimization and its FE cross-check",
     "FE stiffness from the low-speed DTE",
     "rpm sweeps (LTCA and FE k) and stability",
-    "relief optimization and its FE cross-check",
     "FE against lumped frequencies",
 ];
 

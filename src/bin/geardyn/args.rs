@@ -333,7 +333,7 @@ pub struct CommonArgs {
 /// Where the explicit FE runs of a study run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Default)]
 pub enum Executor {
-    /// On this machine, one after the other.
+    /// On this machine: several at once, each on a share of the cores (--jobs).
     #[default]
     Local,
     /// As one Slurm job array (one task per run), waited for; the study then goes on here.
@@ -369,6 +369,11 @@ pub struct ExecutorArgs {
     /// How often the queue is asked while the study waits [s].
     #[arg(long, value_name = "SECONDS", default_value_t = 20.0, value_parser = positive_seconds)]
     pub poll_s: f64,
+    /// With --executor local: explicit runs at once, the threads shared among them (default:
+    /// one run per thread, RAYON_NUM_THREADS or the cores; 1: one after the other on all).
+    /// The results do not depend on it.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    pub jobs: Option<u64>,
 }
 
 impl Default for ExecutorArgs {
@@ -381,6 +386,7 @@ impl Default for ExecutorArgs {
             sbatch_options: Vec::new(),
             cpus_per_task: None,
             poll_s: 20.0,
+            jobs: None,
         }
     }
 }

@@ -1,7 +1,7 @@
 //! `geardyn run`: the mission's chain on one case, each stage in its own sub-folder of one
-//! output folder — geometry, LTCA, the explicit FE's k(θ) from a low-speed DTE against the
-//! LTCA's, rpm sweeps on both stiffnesses and the stability map, the relief optimization with
-//! its explicit-FE cross-check, FE against lumped frequencies.
+//! output folder — geometry, LTCA, the relief optimization with its explicit-FE cross-check,
+//! the explicit FE's k(θ) from a low-speed DTE against the LTCA's, rpm sweeps on both
+//! stiffnesses and the stability map, FE against lumped frequencies.
 //!
 //! The explicit runs live in DIR/fe/<relief>-<scene>; a finished run of the same effective case
 //! is reused, so the unmodified stiffness run serves the FE stiffness stage, the cross-check's
@@ -18,6 +18,7 @@ use geardyn::study::optimize::fe_run_folder;
 use geardyn::study::{self, lumped::LumpedShorthands};
 
 use super::args::{CommonArgs, OptimizeArgs};
+use super::progress::folder_verdict;
 use super::{compare, geometry, load, ltca, mesh, optimize_into, output_dir, stability, sweep};
 use geardyn::report;
 
@@ -226,16 +227,55 @@ fn stages(
     ltca(&unmodified("ltca"), None, plan.ltca_positions, None)?;
 
     announce()?;
+    // The relief cross-check before the FE stiffness stage: its explicit runs (the unmodified
+    // pair's stiffness run, which that stage takes as it is, and the optimum's) then run side by
+    // side, one thread each (executor::local), instead of one after the other on both.
+    let fe_root = dir.join("fe");
+    let optimize_dir = dir.join("optimize");
+    std::fs::create_dir_all(&optimize_dir)?;
+    let relief = optimize_into(
+        &sub("optimize"),
+        &OptimizeArgs::default_for_run(),
+        &optimize_dir,
+        Some((fe_root.clone(), plan.fe_check.clone())),
+    );
+    // A failed relief stage does not cost the stages after it, which do not need it; a stop
+    // request or a submitted array stops the chain here.
+    let relief_failed = match relief {
+        Ok(_) => None,
+        Err(e)
+            if geardyn::interrupt::stop_requested()
+                || e.downcast_ref::<super::executor::Submitted>().is_some() =>
+        {
+            return Err(e)
+        }
+        Err(e) => {
+            eprintln!(
+                "warning: the relief stage failed ({}); the chain goes on and reports it at the end",
+                super::error_text(&e)
+            );
+            Some(e)
+        }
+    };
+
+    announce()?;
     // The unmodified pair's runs are the cross-check's baseline runs: one effective case.
     let unmodified_case = load(args, study::optimize::unmodified_fe_overrides(case))?;
-    let fe_root = dir.join("fe");
     let stiffness_run = dir.join(&manifest.fe_stiffness_run);
-    let request = stiffness_request(unmodified_case, &stiffness_run);
-    for outcome in super::executor::execute(args, &[request], &fe_root.join("slurm"))? {
-        outcome
-            .and_then(|_| report::optimize::read_fe_check_run(&stiffness_run).map(|_| ()))
-            .map_err(anyhow::Error::msg)?;
-    }
+    // A failed run the cross-check left is its verdict here too, not a reason to run it again.
+    let outcome = match folder_verdict(&unmodified_case, &stiffness_run) {
+        Some(Err(failed)) => Err(failed),
+        _ => {
+            let request = stiffness_request(unmodified_case, &stiffness_run);
+            super::executor::execute(args, &[request], &fe_root.join("slurm"))?
+                .into_iter()
+                .next()
+                .expect("one outcome per run")
+        }
+    };
+    outcome
+        .and_then(|_| report::optimize::read_fe_check_run(&stiffness_run).map(|_| ()))
+        .map_err(anyhow::Error::msg)?;
     let stiffness_csv = stiffness_run.join("stiffness.csv");
 
     announce()?;
@@ -272,16 +312,6 @@ fn stages(
     )?;
 
     announce()?;
-    let optimize_dir = dir.join("optimize");
-    std::fs::create_dir_all(&optimize_dir)?;
-    optimize_into(
-        &sub("optimize"),
-        &OptimizeArgs::default_for_run(),
-        &optimize_dir,
-        Some((fe_root.clone(), plan.fe_check.clone())),
-    )?;
-
-    announce()?;
     let high_run = fe_root.join(fe_run_folder(
         &manifest.unmodified_relief,
         study::compare::SPEED_SCENE,
@@ -294,7 +324,8 @@ fn stages(
     compare(
         &sub("compare"),
         &compare_ask(case, plan, &runs, &stiffness_csv)?,
-    )
+    )?;
+    relief_failed.map_or(Ok(()), Err)
 }
 
 /// The unmodified pair's stiffness scene into `dir`: the chain's FE stiffness stage.

@@ -1,4 +1,4 @@
-//! The executors of a study's explicit FE runs: here, one after the other, or as a Slurm job
+//! The executors of a study's explicit FE runs: here, several at once, or as a Slurm job
 //! array that the study waits for ([`geardyn::study::cluster`] writes the script and reads the
 //! queue). Either way each run ends in its own folder as `geardyn fe` leaves it, and the study
 //! reads the folders the same way.
@@ -13,7 +13,7 @@ use geardyn::report::{self, OutputDir};
 use geardyn::study::cluster::{self, ClusterOptions, PlannedRun, TaskCommand};
 
 use super::args::{CommonArgs, Executor};
-use super::progress::{fe_run_reusing, folder_verdict, run_state, RunState};
+use super::progress::{fe_run_reusing, folder_verdict, run_state, RunState, RunView};
 
 /// One explicit FE run a study asks for.
 #[derive(Clone)]
@@ -85,25 +85,70 @@ fn execute_unique(
                 !args.executor.submit_only,
                 "--submit-only needs --executor slurm"
             );
-            Ok(runs
-                .iter()
-                .map(|run| {
-                    if geardyn::interrupt::stop_requested() {
-                        return Err("not run: the study was stopped".to_string());
-                    }
-                    let ran = fe_run_reusing(&run.case, &run.scene, &run.dir);
-                    // The folder's verdict where it has one, as the Slurm executor takes it; an
-                    // error the folder does not show (a write after the summary) still counts.
-                    match (ran, folder_verdict(&run.case, &run.dir)) {
-                        (Err(e), Some(Ok(())) | None) => Err(super::error_text(&e)),
-                        (_, Some(verdict)) => verdict,
-                        (Ok(()), None) => Err("the run left no summary".to_string()),
-                    }
-                })
-                .collect())
+            Ok(local(args, runs))
         }
         Executor::Slurm => slurm(args, runs, batch_dir),
     }
+}
+
+/// The local executor: the runs taken in order by [`cluster::local_jobs`] workers, each with
+/// its own thread pool of its share of the threads. Alone, a run shows itself as `geardyn fe`
+/// does; side by side, each line and bar carries the run's label.
+fn local(args: &CommonArgs, runs: &[FeRunRequest]) -> Vec<RunOutcome> {
+    let requested = args.executor.jobs.map(|n| n as usize);
+    let (jobs, threads) = cluster::local_jobs(runs.len(), rayon::current_num_threads(), requested);
+    let one = |run: &FeRunRequest, view: &RunView| -> RunOutcome {
+        if geardyn::interrupt::stop_requested() {
+            return Err("not run: the study was stopped".to_string());
+        }
+        let ran = fe_run_reusing(&run.case, &run.scene, &run.dir, view);
+        // The folder's verdict where it has one, as the Slurm executor takes it; an error the
+        // folder does not show (a write after the summary) still counts.
+        match (ran, folder_verdict(&run.case, &run.dir)) {
+            (Err(e), Some(Ok(())) | None) => Err(super::error_text(&e)),
+            (_, Some(verdict)) => verdict,
+            (Ok(()), None) => Err("the run left no summary".to_string()),
+        }
+    };
+    if jobs <= 1 {
+        return runs
+            .iter()
+            .map(|run| one(run, &RunView::default()))
+            .collect();
+    }
+    eprintln!(
+        "{} explicit FE runs, {jobs} at once on {threads} thread(s) each",
+        runs.len()
+    );
+    let bars = indicatif::MultiProgress::new();
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let outcomes = std::sync::Mutex::new(vec![None; runs.len()]);
+    std::thread::scope(|scope| {
+        for _ in 0..jobs {
+            scope.spawn(|| {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build();
+                loop {
+                    let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    let Some(run) = runs.get(i) else { break };
+                    let view = RunView {
+                        label: Some(run.label.clone()),
+                        bars: Some(bars.clone()),
+                    };
+                    let outcome = match &pool {
+                        Ok(pool) => pool.install(|| one(run, &view)),
+                        Err(e) => Err(format!("cannot start the run's thread pool: {e}")),
+                    };
+                    outcomes.lock().expect("no worker panics holding it")[i] = Some(outcome);
+                }
+            });
+        }
+    });
+    outcomes
+        .into_inner()
+        .expect("no worker panicked holding it")
+        .into_iter()
+        .map(|o| o.expect("every run was taken by a worker"))
+        .collect()
 }
 
 /// The plan of `runs`: each one's cost, timed on its prepared scene, and whether its folder

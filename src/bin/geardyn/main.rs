@@ -25,7 +25,7 @@ use geardyn::study::{
 use args::{Cli, Command, CommonArgs, CompareArgs, OptimizeArgs, ValidationStudy};
 use lumped::{lumped_case, stability, sweep};
 use optimize::{optimize, optimize_into};
-use progress::{fe_run, fe_run_reusing, progress_bar, stage, staged_bar};
+use progress::{fe_run, fe_run_reusing, progress_bar, stage, staged_bar, RunView};
 use validate::{
     validate_frequencies, validate_integrators, validate_mass_scaling, validate_pairs,
     validate_properties, validate_quick,
@@ -268,9 +268,9 @@ fn fe(args: &CommonArgs, options: &FeShorthands, (resume, reuse): (bool, bool)) 
     let scene = study::fe::scene(&case, &scene_name)?;
     let dir = output_dir(args, &format!("fe-{}", scene.name), &case)?;
     if reuse {
-        fe_run_reusing(&case, &scene_name, &dir)?;
+        fe_run_reusing(&case, &scene_name, &dir, &RunView::default())?;
     } else {
-        fe_run(&case, scene, &dir, resume)?;
+        fe_run(&case, scene, &dir, resume, &RunView::default())?;
     }
     println!("wrote {}", dir.display());
     Ok(())

@@ -11,11 +11,40 @@ use geardyn::explicit::scene::Scene;
 use geardyn::report::{self, OutputDir};
 use geardyn::study;
 
+/// How a run shows itself on the console: alone (its own bar, its lines as they are), or as one
+/// of several at once (its label before each of its lines, its bar among theirs).
+#[derive(Clone, Default)]
+pub struct RunView {
+    pub label: Option<String>,
+    pub bars: Option<indicatif::MultiProgress>,
+}
+
+impl RunView {
+    /// `text` with the label before each line.
+    fn lines(&self, text: &str) -> String {
+        match &self.label {
+            None => text.to_string(),
+            Some(label) => text.lines().map(|l| format!("[{label}] {l}\n")).collect(),
+        }
+    }
+
+    /// One line on stderr, labelled.
+    fn say(&self, line: &str) {
+        eprint!("{}", self.lines(&format!("{line}\n")));
+    }
+}
+
 /// Prepares and runs an explicit scene with progress (a bar, or a line every 10 % without a
 /// terminal) and writes it to `dir`; a diverged or interrupted run is written too, then reported
 /// as an error. With `resume` it goes on from the checkpoint an interrupted run of the same
 /// case left in `dir`.
-pub fn fe_run(case: &Case, scene: &Scene, dir: &Path, resume: bool) -> Result<study::fe::FeStudy> {
+pub fn fe_run(
+    case: &Case,
+    scene: &Scene,
+    dir: &Path,
+    resume: bool,
+    view: &RunView,
+) -> Result<study::fe::FeStudy> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let checkpoint = if resume {
         anyhow::ensure!(
@@ -30,17 +59,20 @@ pub fn fe_run(case: &Case, scene: &Scene, dir: &Path, resume: bool) -> Result<st
                 dir.display()
             )
         })?;
-        eprintln!(
+        view.say(&format!(
             "resuming at step {} of {} ({:.0} s of wall time before)",
             checkpoint.0.next_step, checkpoint.0.total_steps, checkpoint.0.wall_s
-        );
+        ));
         Some(checkpoint)
     } else {
         None
     };
-    eprintln!("{}", report::fe::scene_line(scene));
+    view.say(&report::fe::scene_line(scene));
     let prepared = study::fe::prepare(case, scene)?;
-    print!("{}", report::fe::prepared_console(case, &prepared, scene));
+    print!(
+        "{}",
+        view.lines(&report::fe::prepared_console(case, &prepared, scene))
+    );
     // A resumed run is estimated on the steps it has left.
     let left = checkpoint.as_ref().map_or(1.0, |(c, _)| {
         1.0 - c.next_step.saturating_sub(1) as f64 / c.total_steps.max(1) as f64
@@ -48,11 +80,11 @@ pub fn fe_run(case: &Case, scene: &Scene, dir: &Path, resume: bool) -> Result<st
     let cost = study::fe::CostEstimate::of(&prepared, scene.duration * left);
     let memory =
         geardyn::explicit::scene::run_memory(&prepared, scene.duration, case.fe.output_interval);
-    eprintln!(
+    view.say(&format!(
         "estimated: {}; the run's history and state {}",
         cost.describe(),
         memory.describe()
-    );
+    ));
     if cost.too_long() && !geardyn::resources::forced() {
         anyhow::bail!(
             "the explicit run would take {}, above the {} limit: coarsen the mesh \
@@ -62,7 +94,11 @@ pub fn fe_run(case: &Case, scene: &Scene, dir: &Path, resume: bool) -> Result<st
             study::fe::duration_words(study::fe::ESTIMATE_LIMIT_S)
         );
     }
-    let bar = progress_bar("explicit FE [{bar:40}] {percent}% elapsed {elapsed}, ETA {eta}");
+    let template = "explicit FE [{bar:40}] {percent}% elapsed {elapsed}, ETA {eta}";
+    let bar = match (&view.bars, &view.label) {
+        (Some(bars), Some(label)) => bars.add(progress_bar(&format!("{label}: {template}"))),
+        _ => progress_bar(template),
+    };
     bar.set_length(1000);
     // Without a terminal (a log file, CI) the bar is hidden: a line every 10 % instead.
     let plain_log = bar.is_hidden();
@@ -97,11 +133,11 @@ pub fn fe_run(case: &Case, scene: &Scene, dir: &Path, resume: bool) -> Result<st
             if plain_log && tenth > logged {
                 logged = tenth;
                 let elapsed = started.elapsed().as_secs_f64();
-                eprintln!(
+                view.say(&format!(
                     "explicit FE {:3.0} % after {elapsed:.0} s, about {:.0} s to go",
                     f * 100.0,
                     elapsed * (1.0 - f) / f.max(1e-9)
-                );
+                ));
             }
         },
     )?;
@@ -117,10 +153,10 @@ pub fn fe_run(case: &Case, scene: &Scene, dir: &Path, resume: bool) -> Result<st
             dir = dir.display()
         );
     }
-    print!("{}", report::fe::console(&result));
+    print!("{}", view.lines(&report::fe::console(&result)));
     let checks = &result.summary.self_checks;
     for check in checks.iter().filter(|c| !c.passed) {
-        eprintln!("{}", check.line());
+        view.say(&check.line());
     }
     let errors = checks.iter().filter(|c| c.is_error()).count();
     if errors > 0 {
@@ -138,14 +174,14 @@ pub fn fe_run(case: &Case, scene: &Scene, dir: &Path, resume: bool) -> Result<st
 /// so an interrupted chain resumes; an interrupted run of the same case goes on from its
 /// checkpoint. summary.json is written last, so a run is finished when it is there and has no
 /// checkpoint; it is removed before a new run, so a stale one is never taken for the new case's.
-pub fn fe_run_reusing(case: &Case, scene: &str, dir: &Path) -> Result<()> {
+pub fn fe_run_reusing(case: &Case, scene: &str, dir: &Path, view: &RunView) -> Result<()> {
     match run_state(case, dir) {
         RunState::Finished => {
-            eprintln!("reusing the finished run in {}", dir.display());
+            view.say(&format!("reusing the finished run in {}", dir.display()));
             return Ok(());
         }
         RunState::Interrupted => {
-            return fe_run(case, study::fe::scene(case, scene)?, dir, true).map(|_| ());
+            return fe_run(case, study::fe::scene(case, scene)?, dir, true, view).map(|_| ());
         }
         RunState::Other => {}
     }
@@ -155,7 +191,7 @@ pub fn fe_run_reusing(case: &Case, scene: &str, dir: &Path) -> Result<()> {
         }
         _ => {}
     }
-    fe_run(case, study::fe::scene(case, scene)?, dir, false).map(|_| ())
+    fe_run(case, study::fe::scene(case, scene)?, dir, false, view).map(|_| ())
 }
 
 /// What an explicit run's folder holds for `case`.

@@ -108,7 +108,13 @@ pub fn validate_mass_scaling(args: &CommonArgs, scene: &str) -> Result<()> {
     let mut runs = Vec::new();
     for (case, name) in [(&scaled, "scaled"), (&unscaled, "unscaled")] {
         let out = dir.join(name);
-        runs.push(fe_run(case, study::fe::scene(case, scene)?, &out, false)?);
+        runs.push(fe_run(
+            case,
+            study::fe::scene(case, scene)?,
+            &out,
+            false,
+            &RunView::default(),
+        )?);
         study::validate::check_scaled(&runs[0])?;
     }
     let result = study::validate::mass_scaling(scaled.name(), &scaled.pair, &runs[0], &runs[1])?;
@@ -171,6 +177,7 @@ pub fn validate_pairs(
                 scene,
                 &dir.join(pair.name).join("fe-stiffness"),
                 false,
+                &RunView::default(),
             );
             study::pairs::add_fe(
                 &mut row,

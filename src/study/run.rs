@@ -43,8 +43,8 @@ pub struct RunPlan {
 }
 
 impl RunPlan {
-    /// The default job (about 5 minutes on 2 cores: the explicit FE of the unmodified pair and
-    /// of the optimum at low speed), or with `full` every cross-check (hours).
+    /// The default job (about 4 minutes on 2 cores: the explicit FE of the unmodified pair and
+    /// of the optimum at low speed, side by side), or with `full` every cross-check (hours).
     pub fn new(full: bool) -> Self {
         let range = |from: f64, to: f64, n: usize| {
             RpmRange(

@@ -126,6 +126,29 @@ pub struct MemoryLimit {
     pub source: String,
 }
 
+impl MemoryLimit {
+    /// Each one's share when `runs` models are built and held side by side (the local
+    /// executor's runs): the limit over `runs`, with its source saying so.
+    pub fn shared(&self, runs: usize) -> MemoryLimit {
+        if runs <= 1 {
+            return self.clone();
+        }
+        MemoryLimit {
+            bytes: self.bytes / runs as f64,
+            source: format!(
+                "{} of {}, {}; shared by {runs} explicit runs side by side: --jobs 1 gives one \
+                 run the whole",
+                match runs {
+                    2 => "a half".to_string(),
+                    n => format!("1/{n}"),
+                },
+                bytes_words(self.bytes),
+                self.source
+            ),
+        }
+    }
+}
+
 /// One level of the process's memory cgroup, as read: its limit, its use and its statistics.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct CgroupLevel {
@@ -311,6 +334,28 @@ mod tests {
 
     const MEMINFO: &str =
         "MemTotal:       24000000 kB\nMemFree:         1000000 kB\nMemAvailable:   20000000 kB\n";
+
+    /// Runs side by side each get their share, and a refusal says how to get the whole.
+    #[test]
+    fn a_shared_limit_is_each_runs_share() {
+        let whole = MemoryLimit {
+            bytes: 8e9,
+            source: "GEARDYN_MEMORY_LIMIT_MB = 8000".into(),
+        };
+        assert_eq!(whole.shared(1), whole);
+        let half = whole.shared(2);
+        assert_eq!(half.bytes, 4e9);
+        assert!(half.source.contains("a half") && half.source.contains("--jobs 1"));
+        assert_eq!(whole.shared(4).bytes, 2e9);
+        let refused = check_memory_against(
+            Some(half),
+            "the run",
+            &MemoryEstimate::part("history", 5e9),
+            "shorten it",
+        )
+        .unwrap_err();
+        assert!(refused.to_string().contains("--jobs 1"), "{refused}");
+    }
 
     fn level(limit: &str, usage: &str, stat: &str) -> CgroupLevel {
         CgroupLevel {

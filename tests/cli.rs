@@ -408,6 +408,49 @@ fn run_closes_the_chain_and_writes_the_report() {
     }
 }
 
+/// A relief stage that fails (at ζ = 0.005 a candidate's lumped sweep diverges, which the
+/// optimizer refuses after its FE cross-check) does not cost the stages after it: they run, the
+/// command exits with an error naming the stage, and run.json, summary.json and the report say
+/// which stage failed and why. Coarse case and short FE scenes, as above.
+#[test]
+fn a_failed_relief_stage_is_reported_and_the_chain_goes_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let mut command = geardyn();
+    command.arg("run");
+    for set in [
+        "mesh.fine_element_mm=0.6",
+        "scene[stiffness].duration_s=0.004",
+        "scene[stiffness].ramp_s=0.002",
+        "lumped.damping_ratio=0.005",
+    ] {
+        command.args(["--set", set]);
+    }
+    let output = command.arg("--out").arg(&out).output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success(), "{stderr}");
+    let named = "stage 3/6 (relief optimization and its FE cross-check) failed";
+    assert!(
+        stderr.contains(named) && stderr.contains("diverged"),
+        "{stderr}"
+    );
+    for file in [
+        "fe/none-stiffness/stiffness.csv",
+        "sweep-ltca/sweep.csv",
+        "stability/stability.csv",
+        "compare/frequencies.csv",
+    ] {
+        assert!(out.join(file).exists(), "{file}");
+    }
+    let manifest: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
+    let failed = manifest["failed"].as_str().unwrap();
+    assert!(failed.starts_with(named), "{failed}");
+    assert_eq!(read_summary(&out)["failed"].as_str(), Some(failed));
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(html.contains("A stage failed"));
+}
+
 /// The whole chain on an unequal pair, 24/40 (the pair whose wrong tooth pairing no test saw):
 /// it completes, no stage's self-check fails (periodicity, balance, the loaded pairs, the FE
 /// against the LTCA on its own mesh within 30 %), the LTCA's CSV carries the two

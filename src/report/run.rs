@@ -22,6 +22,9 @@ pub struct RunManifest {
     /// Where a stop request ended the run, and how to continue it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub interrupted: Option<String>,
+    /// The stage that failed and why (absent when none did).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub failed: Option<String>,
     /// The effective case the run was made with (`--resume` refuses another).
     #[serde(default)]
     pub case_text: Option<String>,
@@ -50,6 +53,9 @@ pub struct RunSummary {
     /// Where a stop request ended the run (absent for a run that finished).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub interrupted: Option<String>,
+    /// The stage that failed and why (absent when none did).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub failed: Option<String>,
     pub case: Option<String>,
     pub torque_nm: Option<f64>,
     pub mesh_stiffness_ltca_n_per_m: Option<f64>,
@@ -242,6 +248,7 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
         self_check_errors: failed(false),
         self_check_warnings: failed(true),
         interrupted: manifest.as_ref().and_then(|m| m.interrupted.clone()),
+        failed: manifest.as_ref().and_then(|m| m.failed.clone()),
         case: field(&ltca, &["case"]).and_then(|c| c.as_str().map(String::from)),
         torque_nm: number(&ltca, &["torque_nm"]),
         mesh_stiffness_ltca_n_per_m: unmodified_number("mesh_stiffness_mean_n_per_m"),
@@ -311,6 +318,19 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
         ],
     );
     sections.insert(1, self_check_section(&checks));
+    if let Some(message) = &summary.failed {
+        sections.insert(
+            0,
+            Section {
+                title: "A stage failed".into(),
+                text: vec![format!(
+                    "{message}. The sections below show what every stage wrote; a number marked – was not reached."
+                )],
+                tables: Vec::new(),
+                plots: Vec::new(),
+            },
+        );
+    }
     if let Some(message) = &summary.interrupted {
         sections.insert(
             0,

@@ -20,11 +20,11 @@ use crate::resources::bytes_words;
 
 /// How the local executor shares `threads` worker threads among `runs` explicit runs: how many
 /// run at once and on how many threads each, `requested` runs at once if given (at least 1,
-/// at most the runs and the threads). By default as many runs at once as there are threads,
-/// one thread each: one run on 2 threads leaves part of both cores idle (the serial contact
-/// phase and the two per-step joins, about a third of its wall time on this host), so two
+/// at most the runs and the threads). By default as many runs at once as there are runs, up
+/// to one per thread: one run on 2 threads leaves part of both cores idle (the serial contact
+/// phase and the two per-step joins, about a quarter of its wall time on this host), so two
 /// runs side by side on one thread each finish together in 70 s where one after the other
-/// take 102 s (the default stiffness scene cut to 0.016 s, 2 cores; validation/performance).
+/// take 98 s (the default stiffness scene cut to 0.016 s, 2 cores; validation/performance).
 /// A run's results do not depend on its thread count (tests/explicit_pair.rs), so neither do
 /// the study's. Threads left over when they do not divide go to none.
 pub fn local_jobs(runs: usize, threads: usize, requested: Option<usize>) -> (usize, usize) {

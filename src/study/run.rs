@@ -7,7 +7,8 @@ use super::RpmRange;
 
 /// The stages in order, as the progress lines name them.
 /// The relief stage comes before the FE stiffness stage so that the explicit runs of both (the
-/// unmodified pair's stiffness run is the cross-check's baseline) run side by side.
+/// unmodified pair's stiffness run is the cross-check's baseline) run side by side; the binary
+/// names it by its number (3).
 pub const STAGES: [&str; 6] = [
     "geometry and meshes",
     "LTCA",

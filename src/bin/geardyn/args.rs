@@ -369,9 +369,10 @@ pub struct ExecutorArgs {
     /// How often the queue is asked while the study waits [s].
     #[arg(long, value_name = "SECONDS", default_value_t = 20.0, value_parser = positive_seconds)]
     pub poll_s: f64,
-    /// With --executor local: explicit runs at once, the threads shared among them (default:
-    /// one run per thread, RAYON_NUM_THREADS or the cores; 1: one after the other on all).
-    /// The results do not depend on it.
+    /// With --executor local: explicit runs at once, the threads and the memory limit shared
+    /// among them (default: as many as there are runs to make, up to one per thread,
+    /// RAYON_NUM_THREADS or the cores; 1: one after the other on all). The results do not
+    /// depend on it.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
     pub jobs: Option<u64>,
 }

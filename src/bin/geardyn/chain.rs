@@ -84,6 +84,7 @@ pub fn run(args: &CommonArgs, full: bool, resume: bool) -> Result<()> {
         ),
         full,
         interrupted: None,
+        failed: None,
         case_text: Some(case.text.clone()),
     };
     // Every stage but the explicit runs (which carry and check their own case) starts from an
@@ -116,6 +117,18 @@ pub fn run(args: &CommonArgs, full: bool, resume: bool) -> Result<()> {
                 super::error_text(e),
                 dir.display()
             ));
+            OutputDir(&dir).json("run.json", &manifest)?;
+        } else {
+            let stages = study::run::STAGES;
+            manifest.failed = Some(match e.downcast_ref::<StageFailed>() {
+                Some(failed) => failed.to_string(),
+                None => format!(
+                    "stage {reached}/{} ({}) failed: {}",
+                    stages.len(),
+                    stages[reached.max(1) - 1],
+                    super::error_text(e)
+                ),
+            });
             OutputDir(&dir).json("run.json", &manifest)?;
         }
     }
@@ -250,11 +263,12 @@ fn stages(
             return Err(e)
         }
         Err(e) => {
-            eprintln!(
-                "warning: the relief stage failed ({}); the chain goes on and reports it at the end",
-                super::error_text(&e)
-            );
-            Some(e)
+            let failed = StageFailed {
+                stage: RELIEF_STAGE,
+                message: super::error_text(&e),
+            };
+            eprintln!("warning: {failed}; the chain goes on and reports it at the end");
+            Some(failed)
         }
     };
 
@@ -325,7 +339,22 @@ fn stages(
         &sub("compare"),
         &compare_ask(case, plan, &runs, &stiffness_csv)?,
     )?;
-    relief_failed.map_or(Ok(()), Err)
+    relief_failed.map_or(Ok(()), |failed| Err(failed.into()))
+}
+
+/// The relief stage's number (1-based) in [`study::run::STAGES`].
+const RELIEF_STAGE: usize = 3;
+
+/// A stage that failed and that the chain went past, the stages after it not needing it.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "stage {stage}/{} ({}) failed: {message}; the stages after it ran",
+    study::run::STAGES.len(),
+    study::run::STAGES[stage - 1]
+)]
+struct StageFailed {
+    stage: usize,
+    message: String,
 }
 
 /// The unmodified pair's stiffness scene into `dir`: the chain's FE stiffness stage.
@@ -361,4 +390,14 @@ pub fn compare_ask<'a>(
             false => Vec::new(),
         },
     })
+}
+
+#[cfg(test)]
+mod tests {
+    /// The number the chain names the relief stage by is that stage's.
+    #[test]
+    fn the_relief_stage_number_is_the_relief_stage() {
+        let name = geardyn::study::run::STAGES[super::RELIEF_STAGE - 1];
+        assert!(name.starts_with("relief optimization"), "{name}");
+    }
 }

@@ -91,12 +91,17 @@ fn execute_unique(
     }
 }
 
-/// The local executor: the runs taken in order by [`cluster::local_jobs`] workers, each with
-/// its own thread pool of its share of the threads. Alone, a run shows itself as `geardyn fe`
-/// does; side by side, each line and bar carries the run's label.
+/// The local executor: the runs taken in order by [`cluster::local_jobs`] workers (as many as
+/// the runs still to make allow), each with its own thread pool of its share of the threads
+/// and of the memory limit. Alone, a run shows itself as `geardyn fe` does; side by side, each
+/// line and bar carries the run's label.
 fn local(args: &CommonArgs, runs: &[FeRunRequest]) -> Vec<RunOutcome> {
     let requested = args.executor.jobs.map(|n| n as usize);
-    let (jobs, threads) = cluster::local_jobs(runs.len(), rayon::current_num_threads(), requested);
+    let to_make = runs
+        .iter()
+        .filter(|run| run_state(&run.case, &run.dir) != RunState::Finished)
+        .count();
+    let (jobs, threads) = cluster::local_jobs(to_make, rayon::current_num_threads(), requested);
     let one = |run: &FeRunRequest, view: &RunView| -> RunOutcome {
         if geardyn::interrupt::stop_requested() {
             return Err("not run: the study was stopped".to_string());
@@ -116,17 +121,22 @@ fn local(args: &CommonArgs, runs: &[FeRunRequest]) -> Vec<RunOutcome> {
             .map(|run| one(run, &RunView::default()))
             .collect();
     }
-    eprintln!(
-        "{} explicit FE runs, {jobs} at once on {threads} thread(s) each",
-        runs.len()
-    );
+    eprintln!("{to_make} explicit FE runs to make, {jobs} at once on {threads} thread(s) each");
+    // Each run checks its models against its share of the limit: they are held side by side.
+    let whole = geardyn::resources::memory_limit();
+    geardyn::resources::set_memory_limit(whole.as_ref().map(|limit| limit.shared(jobs)));
     let bars = indicatif::MultiProgress::new();
     let next = std::sync::atomic::AtomicUsize::new(0);
     let outcomes = std::sync::Mutex::new(vec![None; runs.len()]);
     std::thread::scope(|scope| {
         for _ in 0..jobs {
             scope.spawn(|| {
-                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build();
+                // Without its own pool (the system refused the threads) a worker's runs go on
+                // the global one.
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .ok();
                 loop {
                     let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                     let Some(run) = runs.get(i) else { break };
@@ -135,14 +145,15 @@ fn local(args: &CommonArgs, runs: &[FeRunRequest]) -> Vec<RunOutcome> {
                         bars: Some(bars.clone()),
                     };
                     let outcome = match &pool {
-                        Ok(pool) => pool.install(|| one(run, &view)),
-                        Err(e) => Err(format!("cannot start the run's thread pool: {e}")),
+                        Some(pool) => pool.install(|| one(run, &view)),
+                        None => one(run, &view),
                     };
                     outcomes.lock().expect("no worker panics holding it")[i] = Some(outcome);
                 }
             });
         }
     });
+    geardyn::resources::set_memory_limit(whole);
     outcomes
         .into_inner()
         .expect("no worker panicked holding it")

@@ -28,9 +28,25 @@ impl RunView {
         }
     }
 
+    /// Writes with the bars of the runs side by side taken off the terminal meanwhile (their
+    /// redraw would overwrite what was written under them).
+    fn write(&self, write: impl FnOnce()) {
+        match &self.bars {
+            Some(bars) => bars.suspend(write),
+            None => write(),
+        }
+    }
+
     /// One line on stderr, labelled.
     fn say(&self, line: &str) {
-        eprint!("{}", self.lines(&format!("{line}\n")));
+        let text = self.lines(&format!("{line}\n"));
+        self.write(|| eprint!("{text}"));
+    }
+
+    /// A block on stdout, labelled.
+    fn print(&self, block: &str) {
+        let text = self.lines(block);
+        self.write(|| print!("{text}"));
     }
 }
 
@@ -69,10 +85,7 @@ pub fn fe_run(
     };
     view.say(&report::fe::scene_line(scene));
     let prepared = study::fe::prepare(case, scene)?;
-    print!(
-        "{}",
-        view.lines(&report::fe::prepared_console(case, &prepared, scene))
-    );
+    view.print(&report::fe::prepared_console(case, &prepared, scene));
     // A resumed run is estimated on the steps it has left.
     let left = checkpoint.as_ref().map_or(1.0, |(c, _)| {
         1.0 - c.next_step.saturating_sub(1) as f64 / c.total_steps.max(1) as f64
@@ -96,7 +109,12 @@ pub fn fe_run(
     }
     let template = "explicit FE [{bar:40}] {percent}% elapsed {elapsed}, ETA {eta}";
     let bar = match (&view.bars, &view.label) {
-        (Some(bars), Some(label)) => bars.add(progress_bar(&format!("{label}: {template}"))),
+        // The label as the bar's prefix: a template would read its braces.
+        (Some(bars), Some(label)) => {
+            let bar = bars.add(progress_bar(&format!("{{prefix}}: {template}")));
+            bar.set_prefix(label.clone());
+            bar
+        }
         _ => progress_bar(template),
     };
     bar.set_length(1000);
@@ -111,10 +129,10 @@ pub fn fe_run(
                     history: &geardyn::explicit::scene::History| {
         // A failed write loses only this checkpoint; the run goes on.
         if let Err(e) = report::fe::write_checkpoint(&checkpoint_path, checkpoint, history) {
-            eprintln!(
+            view.say(&format!(
                 "could not keep a checkpoint in {}: {e}",
                 checkpoint_path.display()
-            );
+            ));
         }
     };
     let keeping = geardyn::explicit::scene::Keeping {
@@ -153,7 +171,7 @@ pub fn fe_run(
             dir = dir.display()
         );
     }
-    print!("{}", view.lines(&report::fe::console(&result)));
+    view.print(&report::fe::console(&result));
     let checks = &result.summary.self_checks;
     for check in checks.iter().filter(|c| !c.passed) {
         view.say(&check.line());

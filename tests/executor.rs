@@ -74,7 +74,7 @@ fn local_runs_side_by_side_give_what_they_give_one_after_the_other() {
         small_fe_check(&case, "none,optimum-1", &side_by_side).env("RAYON_NUM_THREADS", "2"),
     );
     assert!(
-        stderr.contains("2 explicit FE runs, 2 at once on 1 thread(s) each"),
+        stderr.contains("2 explicit FE runs to make, 2 at once on 1 thread(s) each"),
         "{stderr}"
     );
     let serial = run_ok_stderr(

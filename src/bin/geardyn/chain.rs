@@ -18,7 +18,7 @@ use geardyn::study::optimize::fe_run_folder;
 use geardyn::study::{self, lumped::LumpedShorthands};
 
 use super::args::{CommonArgs, OptimizeArgs};
-use super::progress::folder_verdict;
+use super::progress::{folder_verdict, run_state, RunState};
 use super::{compare, geometry, load, ltca, mesh, optimize_into, output_dir, stability, sweep};
 use geardyn::report;
 
@@ -276,9 +276,11 @@ fn stages(
     // The unmodified pair's runs are the cross-check's baseline runs: one effective case.
     let unmodified_case = load(args, study::optimize::unmodified_fe_overrides(case))?;
     let stiffness_run = dir.join(&manifest.fe_stiffness_run);
-    // A failed run the cross-check left is its verdict here too, not a reason to run it again.
+    // A failed run the cross-check left is its verdict here too, not a reason to run it again;
+    // an interrupted one (the relief stage failed before its cross-check) goes on.
+    let interrupted = run_state(&unmodified_case, &stiffness_run) == RunState::Interrupted;
     let outcome = match folder_verdict(&unmodified_case, &stiffness_run) {
-        Some(Err(failed)) => Err(failed),
+        Some(Err(failed)) if !interrupted => Err(failed),
         _ => {
             let request = stiffness_request(unmodified_case, &stiffness_run);
             super::executor::execute(args, &[request], &fe_root.join("slurm"))?

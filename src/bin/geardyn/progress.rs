@@ -99,8 +99,15 @@ pub fn fe_run(
         memory.describe()
     ));
     if cost.too_long() && !geardyn::resources::forced() {
+        // Side by side the rate was timed on this run's share of the threads.
+        let share = match view.bars {
+            Some(_) => {
+                " (timed on its share of the threads beside other runs: --jobs 1 gives it all)"
+            }
+            None => "",
+        };
         anyhow::bail!(
-            "the explicit run would take {}, above the {} limit: coarsen the mesh \
+            "the explicit run would take {}{share}, above the {} limit: coarsen the mesh \
              (--fine-element-mm, --coarse-element-mm), shorten the scene (--duration-s), or \
              add --force to run it anyway",
             study::fe::duration_words(cost.wall_s),

@@ -28,6 +28,24 @@ fn read_summary(dir: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap()
 }
 
+/// `geardyn run` into `out` with the short stiffness scene of the chain's tests (4 ms, 2 ms
+/// ramp) and `sets` besides.
+fn short_run(out: &Path, sets: &[&str]) -> Command {
+    let mut command = geardyn();
+    command.arg("run");
+    for set in [
+        "scene[stiffness].duration_s=0.004",
+        "scene[stiffness].ramp_s=0.002",
+    ]
+    .iter()
+    .chain(sets)
+    {
+        command.args(["--set", set]);
+    }
+    command.arg("--out").arg(out);
+    command
+}
+
 fn write_case(dir: &Path, text: &str) -> std::path::PathBuf {
     let path = dir.join("case.toml");
     std::fs::write(&path, text).unwrap();
@@ -416,17 +434,12 @@ fn run_closes_the_chain_and_writes_the_report() {
 fn a_failed_relief_stage_is_reported_and_the_chain_goes_on() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
-    let mut command = geardyn();
-    command.arg("run");
-    for set in [
-        "mesh.fine_element_mm=0.6",
-        "scene[stiffness].duration_s=0.004",
-        "scene[stiffness].ramp_s=0.002",
-        "lumped.damping_ratio=0.005",
-    ] {
-        command.args(["--set", set]);
-    }
-    let output = command.arg("--out").arg(&out).output().unwrap();
+    let output = short_run(
+        &out,
+        &["mesh.fine_element_mm=0.6", "lumped.damping_ratio=0.005"],
+    )
+    .output()
+    .unwrap();
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(!output.status.success(), "{stderr}");
     let named = "stage 3/6 (relief optimization and its FE cross-check) failed";
@@ -462,19 +475,14 @@ fn a_failed_relief_stage_is_reported_and_the_chain_goes_on() {
 fn run_on_an_unequal_pair_closes_the_chain_with_its_self_checks_passing() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
-    let mut command = geardyn();
-    command.arg("run");
-    for set in [
-        "gear1.teeth=24",
-        "gear2.teeth=40",
-        "mesh.fine_element_mm=0.15",
-        "scene[stiffness].duration_s=0.004",
-        "scene[stiffness].ramp_s=0.002",
-    ] {
-        command.args(["--set", set]);
-    }
-    command.arg("--out").arg(&out);
-    run_ok(&mut command);
+    run_ok(&mut short_run(
+        &out,
+        &[
+            "gear1.teeth=24",
+            "gear2.teeth=40",
+            "mesh.fine_element_mm=0.15",
+        ],
+    ));
     let s = read_summary(&out);
     assert_eq!(s["self_check_errors"], 0, "{s}");
     // The LTCA is green; the FE's 4 ms scene (a few bins, soon after its ramp) may warn: its

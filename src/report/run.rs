@@ -318,31 +318,29 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
         ],
     );
     sections.insert(1, self_check_section(&checks));
-    if let Some(message) = &summary.failed {
-        sections.insert(
-            0,
-            Section {
-                title: "A stage failed".into(),
-                text: vec![format!(
-                    "{message}. The sections below show what every stage wrote; a number marked – was not reached."
-                )],
-                tables: Vec::new(),
-                plots: Vec::new(),
-            },
-        );
-    }
-    if let Some(message) = &summary.interrupted {
-        sections.insert(
-            0,
-            Section {
-                title: "The run stopped early".into(),
-                text: vec![format!(
-                    "{message}. The sections below show what the stages before the stop wrote; a number marked – was not reached."
-                )],
-                tables: Vec::new(),
-                plots: Vec::new(),
-            },
-        );
+    // A stop or a failed stage heads the report, the stop above the failure.
+    let notices = [
+        (&summary.failed, "A stage failed", "what every stage wrote"),
+        (
+            &summary.interrupted,
+            "The run stopped early",
+            "what the stages before the stop wrote",
+        ),
+    ];
+    for (message, title, shown) in notices {
+        if let Some(message) = message {
+            sections.insert(
+                0,
+                Section {
+                    title: title.into(),
+                    text: vec![format!(
+                        "{message}. The sections below show {shown}; a number marked – was not reached."
+                    )],
+                    tables: Vec::new(),
+                    plots: Vec::new(),
+                },
+            );
+        }
     }
     let out = OutputDir(dir);
     std::fs::create_dir_all(dir.join("tables")).map_err(|source| ReportError::Io {

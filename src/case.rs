@@ -13,7 +13,7 @@ use thiserror::Error;
 
 use crate::explicit::body::ExplicitMaterial;
 use crate::explicit::pair::{Ramp, Start};
-use crate::explicit::scene::{FeSettings, Scene};
+use crate::explicit::scene::{FeSettings, Scene, TimeStep};
 use crate::fe::{MassLumping, PlaneState};
 use crate::geometry::{
     BasicRack, FlankModification, FlankReliefSpec, GearPair, GearSpec, GeometryError, PairSpec,
@@ -241,6 +241,11 @@ pub struct FeSection {
     /// Explicit time step Δt = step_factor · Δt_cr (the paper's β, eq. 29).
     #[serde(default = "default_step_factor")]
     pub step_factor: f64,
+    /// The stable step `step_factor` multiplies: "coupled" (default: the pair's own, measured
+    /// where the contact is as the run goes, with a fall-back) or "bound" (the worst case of
+    /// every contact state, fixed). See [`crate::explicit::scene`].
+    #[serde(default)]
+    pub time_step: TimeStep,
     /// Contact penalty k_n = penalty_factor · max diag K_e of the master element.
     #[serde(default = "default_penalty_factor")]
     pub penalty_factor: f64,
@@ -283,6 +288,7 @@ impl Default for FeSection {
         Self {
             plane: default_plane(),
             step_factor: default_step_factor(),
+            time_step: TimeStep::default(),
             penalty_factor: default_penalty_factor(),
             mass_lumping: MassLumping::default(),
             high_frequency_damping_ratio: default_high_frequency_damping(),
@@ -1137,6 +1143,7 @@ impl Case {
         let fe_settings = FeSettings {
             mass_scaling_margin: fe.mass_scaling.then_some(fe.mass_scaling_margin),
             step_factor: fe.step_factor,
+            time_step: fe.time_step,
             penalty_factor: fe.penalty_factor,
             mass_lumping: fe.mass_lumping,
             high_frequency_damping_ratio: fe.high_frequency_damping_ratio,

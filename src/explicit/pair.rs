@@ -309,6 +309,22 @@ pub struct ContactOutput {
     pub active: usize,
     /// Deepest penetration [m].
     pub max_penetration: f64,
+    /// An upper bound of the highest frequency of the closed penalty springs on their own
+    /// [rad/s] ([`closed_springs_omega`]): cheap at every step, it tells where the contact has
+    /// stiffened, so that a [`crate::explicit::scene::TimeStep::Coupled`] run measures the
+    /// pair's own stable step there. (As a bound of the pair's ω_max it is no use: Weyl's
+    /// ω² ≤ ω_bodies² + this² lies above the contact springs' worst-case bound on the
+    /// paper's scenes.)
+    #[serde(default)]
+    pub stiffest_spring_omega: f64,
+    /// Whether to collect the closed springs and their bound (a run on the pair's own step).
+    #[serde(default)]
+    pub track_springs: bool,
+    /// The closed springs of this step, and a per-node scratch for their bound.
+    #[serde(skip)]
+    pub springs: Vec<ClosedSpring>,
+    #[serde(skip)]
+    node_sums: [Vec<f64>; 2],
     /// Per flank pair: near enough to be searched at this step (contact forces can be
     /// non-zero only on the flanks of these pairs).
     pub searched: Vec<bool>,
@@ -525,6 +541,7 @@ impl ExplicitPair {
         out.searched.resize(self.flank_pairs.len(), false);
         out.active = 0;
         out.max_penetration = 0.0;
+        out.springs.clear();
         let reject = 0.25 * self.pair.gears[0].module();
         for (index, fp) in self.flank_pairs.iter().enumerate() {
             let node = |f: usize, n: usize| {
@@ -666,12 +683,31 @@ impl ExplicitPair {
                         out.moment_on_driven += arm.x * f_driven.y - arm.y * f_driven.x;
                         out.active += 1;
                         out.max_penetration = out.max_penetration.max(-proj.gap);
+                        if !out.track_springs {
+                            continue;
+                        }
+                        let mut nodes = [(0, 0, 0.0); 6];
+                        for (k, (&n, w)) in slave_edge.iter().zip(shape).enumerate() {
+                            nodes[k] = (sg, n, w.abs());
+                        }
+                        for (k, (&n, w)) in edge.iter().zip(proj.weights).enumerate() {
+                            nodes[3 + k] = (mg, n, w.abs());
+                        }
+                        out.springs.push(ClosedSpring {
+                            root_stiffness: stiffness.sqrt(),
+                            nodes,
+                        });
                     }
                 }
             }
             out.force_on_driven += on_driven;
             out.pair_forces[index] = on_driven.norm();
         }
+        out.stiffest_spring_omega = if out.track_springs {
+            closed_springs_omega(&out.springs, &self.inverse_mass, &mut out.node_sums)
+        } else {
+            0.0
+        };
     }
 
     /// Calls `visit` once for every DOF of gear `g` on the flanks of the flank pairs selected by
@@ -747,6 +783,59 @@ impl ExplicitPair {
         }
         2.0 / omega2.sqrt()
     }
+}
+
+/// A closed penalty spring of one Gauss point: √k and, for the three slave and three master
+/// nodes it acts on, (gear, node, |shape function|).
+#[derive(Debug, Clone, Copy)]
+pub struct ClosedSpring {
+    pub root_stiffness: f64,
+    pub nodes: [(usize, usize, f64); 6],
+}
+
+/// An upper bound of the largest eigenvalue of M^-½ K_c M^-½, K_c = Σ_p k_p g_p g_pᵀ the closed
+/// springs (g_p their shape functions along the normal, masses per node from
+/// `inverse_mass` per DOF), as its square root [rad/s]. The nonzero eigenvalues are those of
+/// the Gram matrix G_pq = √(k_p k_q) g̃_p·g̃_q (g̃ = M^-½ g), and Gershgorin's row sums of G,
+/// with |n_p·n_q| ≤ 1, give
+/// ```text
+/// λ_max ≤ max_p √k_p Σ_n |N_pn| T_n / m_n,   T_n = Σ_q √k_q |N_qn|   (q over the springs on node n)
+/// ```
+/// exact for springs that share no node (k_p Σ N²/m), the sum of their own for springs that
+/// share all. With friction each sticking point also has a tangential spring of the same
+/// stiffness, k(nnᵀ + ttᵀ) = k·I₂ on the shape functions: the scalar problem of the normals
+/// taken all parallel, which the bound (|n_p·n_q| ≤ 1) covers already. `node_sums` is scratch
+/// (per gear, one entry per node), left zero.
+pub fn closed_springs_omega(
+    springs: &[ClosedSpring],
+    inverse_mass: &[Vec<f64>; 2],
+    node_sums: &mut [Vec<f64>; 2],
+) -> f64 {
+    for (sums, w) in node_sums.iter_mut().zip(inverse_mass) {
+        if sums.len() != w.len() / 2 {
+            *sums = vec![0.0; w.len() / 2];
+        }
+    }
+    for s in springs {
+        for &(g, n, w) in &s.nodes {
+            node_sums[g][n] += s.root_stiffness * w;
+        }
+    }
+    let mut lambda: f64 = 0.0;
+    for s in springs {
+        let row: f64 = s
+            .nodes
+            .iter()
+            .map(|&(g, n, w)| w * node_sums[g][n] * inverse_mass[g][2 * n])
+            .sum();
+        lambda = lambda.max(s.root_stiffness * row);
+    }
+    for s in springs {
+        for &(g, n, _) in &s.nodes {
+            node_sums[g][n] = 0.0;
+        }
+    }
+    lambda.sqrt()
 }
 
 /// The contact surface of one flank: edges oriented with the outward normal, penalty per edge.
@@ -1232,9 +1321,13 @@ impl<'a> PairIntegrator<'a> {
         let mut probe = state.clone();
         let forces = |probe: &PairState| -> [Vec<f64>; 2] {
             let mut f = [vec![0.0; probe.x[0].len()], vec![0.0; probe.x[1].len()]];
-            for (g, f) in f.iter_mut().enumerate() {
-                model.bodies[g].internal_forces(&probe.x[g], &probe.v[g], 0.0, f);
-            }
+            // The two bodies side by side, as in a step (each body's sum is the same on any
+            // thread).
+            let [f0, f1] = &mut f;
+            rayon::join(
+                || model.bodies[0].internal_forces(&probe.x[0], &probe.v[0], 0.0, f0),
+                || model.bodies[1].internal_forces(&probe.x[1], &probe.v[1], 0.0, f1),
+            );
             // The friction history as it stands at `state`, for every evaluation.
             let mut history = self.history.clone();
             let mut out = ContactOutput::default();
@@ -1317,5 +1410,126 @@ impl<'a> PairIntegrator<'a> {
             ));
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{DMatrix, SymmetricEigen};
+    use proptest::prelude::*;
+
+    /// λ_max of M^-½ Σ_p k_p g_p g_pᵀ M^-½ by a dense eigen-solve, g_p = (±N n_p) on the nodes of
+    /// `springs` (first three slave +, last three master −), normals `normals`.
+    fn exact_omega(
+        springs: &[ClosedSpring],
+        normals: &[[f64; 2]],
+        inverse_mass: &[Vec<f64>; 2],
+    ) -> f64 {
+        let dofs = inverse_mass[0].len() + inverse_mass[1].len();
+        let index = |g: usize, n: usize, c: usize| g * inverse_mass[0].len() + 2 * n + c;
+        let mut a = DMatrix::<f64>::zeros(dofs, dofs);
+        for (s, n) in springs.iter().zip(normals) {
+            let mut g = vec![0.0; dofs];
+            for (k, &(gear, node, w)) in s.nodes.iter().enumerate() {
+                let sign = if k < 3 { 1.0 } else { -1.0 };
+                for c in 0..2 {
+                    g[index(gear, node, c)] +=
+                        sign * w * n[c] * inverse_mass[gear][2 * node + c].sqrt();
+                }
+            }
+            let k = s.root_stiffness * s.root_stiffness;
+            for i in 0..dofs {
+                for j in 0..dofs {
+                    a[(i, j)] += k * g[i] * g[j];
+                }
+            }
+        }
+        SymmetricEigen::new(a).eigenvalues.max().sqrt()
+    }
+
+    fn masses(nodes: usize, seed: f64) -> [Vec<f64>; 2] {
+        std::array::from_fn(|g| {
+            (0..2 * nodes)
+                .map(|d| 1.0 / (0.5 + ((d / 2 + 3 * g) as f64 * 0.37 + seed).sin().abs()))
+                .collect()
+        })
+    }
+
+    /// One spring alone: the bound is its frequency, k Σ N²/m over its six nodes; two equal
+    /// springs on the same nodes along the same normal: twice that in ω² (rank one, so the
+    /// eigenvalues add) — exact both times.
+    #[test]
+    fn the_springs_bound_is_exact_for_one_spring_and_for_two_alike() {
+        let inverse_mass = masses(8, 0.3);
+        let spring = ClosedSpring {
+            root_stiffness: 3.0e4,
+            nodes: [
+                (0, 1, 0.2),
+                (0, 2, 0.7),
+                (0, 3, 0.1),
+                (1, 4, 0.5),
+                (1, 5, 0.5),
+                (1, 6, 0.05),
+            ],
+        };
+        let own = (spring.nodes.iter())
+            .map(|&(g, n, w)| w * w * inverse_mass[g][2 * n])
+            .sum::<f64>()
+            * 9.0e8;
+        let mut scratch = [Vec::new(), Vec::new()];
+        let one = closed_springs_omega(&[spring], &inverse_mass, &mut scratch);
+        assert!(
+            (one / own.sqrt() - 1.0).abs() < 1e-12,
+            "{one} against {}",
+            own.sqrt()
+        );
+        assert!((one / exact_omega(&[spring], &[[0.6, 0.8]], &inverse_mass) - 1.0).abs() < 1e-9);
+        let two = closed_springs_omega(&[spring, spring], &inverse_mass, &mut scratch);
+        assert!((two / (2.0 * own).sqrt() - 1.0).abs() < 1e-12);
+        assert!(
+            scratch.iter().flatten().all(|s| *s == 0.0),
+            "scratch left zero"
+        );
+    }
+
+    proptest! {
+        /// Springs on overlapping nodes, any normals and masses: the bound is never below the
+        /// exact largest eigenvalue, with the sticking points' tangential springs (k_t = k_n)
+        /// too.
+        #[test]
+        fn the_springs_bound_is_above_the_exact_frequency(
+            seed in 0.0..10.0f64,
+            picks in proptest::collection::vec((0usize..5, 0.0..1.0f64, 0.0..6.3f64, 1.0..100.0f64), 1..6),
+        ) {
+            let inverse_mass = masses(12, seed);
+            let springs: Vec<ClosedSpring> = picks
+                .iter()
+                .map(|&(first, s, _, k)| {
+                    let shape = [s * (s - 1.0) / 2.0, 1.0 - s * s, s * (s + 1.0) / 2.0];
+                    ClosedSpring {
+                        root_stiffness: k.sqrt(),
+                        nodes: [
+                            (0, first, shape[0].abs()),
+                            (0, first + 1, shape[1].abs()),
+                            (0, first + 2, shape[2].abs()),
+                            (1, first + 1, shape[2].abs()),
+                            (1, first + 2, shape[1].abs()),
+                            (1, first + 3, shape[0].abs()),
+                        ],
+                    }
+                })
+                .collect();
+            let normals: Vec<[f64; 2]> = picks.iter().map(|p| [p.2.cos(), p.2.sin()]).collect();
+            let tangents: Vec<[f64; 2]> = normals.iter().map(|n| [-n[1], n[0]]).collect();
+            let mut scratch = [Vec::new(), Vec::new()];
+            let bound = closed_springs_omega(&springs, &inverse_mass, &mut scratch);
+            let exact = exact_omega(&springs, &normals, &inverse_mass);
+            prop_assert!(bound >= exact * (1.0 - 1e-9), "{bound} below {exact}");
+            let both: Vec<ClosedSpring> = springs.iter().chain(&springs).copied().collect();
+            let directions: Vec<[f64; 2]> = normals.iter().chain(&tangents).copied().collect();
+            let exact = exact_omega(&both, &directions, &inverse_mass);
+            prop_assert!(bound >= exact * (1.0 - 1e-9), "{bound} below {exact} with friction");
+        }
     }
 }

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use crate::case::Case;
-use crate::explicit::scene::{History, PreparedScene, RunCheckpoint, Scene};
+use crate::explicit::scene::{History, PreparedScene, RunCheckpoint, Scene, TimeStep};
 use crate::geometry::GearPair;
 use crate::report::plot::{save_chart, LinePlot, PlotError};
 use crate::report::{stiffness_csv, OutputDir, ReportError};
@@ -324,7 +324,7 @@ pub fn read_checkpoint(dir: &Path) -> Result<Option<(RunCheckpoint, History)>, R
 pub fn prepared_console(case: &Case, prepared: &PreparedScene, scene: &Scene) -> String {
     let settings = &case.fe;
     format!(
-        "{} elements ({} tooth pairs, flank elements {:.2} mm, body {:.2} mm); dt_cr = {:.4e} s (bodies {:.4e} / {:.4e}, contact {:.4e}; paper's L/c {:.4e}), dt = {:.4e} s, {} steps\n",
+        "{} elements ({} tooth pairs, flank elements {:.2} mm, body {:.2} mm); dt_cr = {:.4e} s (bodies {:.4e} / {:.4e}, contact {:.4e}; paper's L/c {:.4e}), dt = {:.4e} s, {} steps{}\n",
         prepared.model.elements(),
         prepared.model.tooth_pairs.len(),
         settings.fine_size * 1e3,
@@ -335,7 +335,11 @@ pub fn prepared_console(case: &Case, prepared: &PreparedScene, scene: &Scene) ->
         prepared.dt_contact,
         prepared.dt_paper,
         prepared.dt,
-        (scene.duration / prepared.dt).ceil()
+        (scene.duration / prepared.dt).ceil(),
+        match prepared.time_step {
+            TimeStep::Coupled => " at most (the step then follows the pair's own stable step)",
+            TimeStep::Bound => "",
+        }
     )
 }
 
@@ -498,10 +502,29 @@ pub fn console(study: &FeStudy) -> String {
         }
     }
     if let Some(coupled) = s.dt_critical_coupled_s {
+        let largest = s
+            .dt_changes
+            .iter()
+            .map(|c| c.dt_s)
+            .fold(s.step.dt_s, f64::max);
         text.push_str(&format!(
-            "stable step where the contact was (bodies and penalty springs, power iteration at {} instants): {coupled:.4e} s at the least, {:.2} x the step used\n",
+            "stable step where the contact was (bodies and penalty springs, power iteration at {} instants): {coupled:.4e} s at the least, {:.2} x the largest step used ({largest:.4e} s)\n",
             s.dt_critical_coupled_checks.len(),
-            coupled / s.step.dt_s
+            coupled / largest
+        ));
+    }
+    if let Some(last) = s.dt_changes.last() {
+        text.push_str(&format!(
+            "step: {:.4e} s from the start (the bound of every contact state), {} change(s) as the contact went, {:.4e} s from t = {:.4e} s on\n",
+            s.step.dt_s,
+            s.dt_changes.len(),
+            last.dt_s,
+            last.time_s
+        ));
+    }
+    if let Some(why) = &s.dt_fallback {
+        text.push_str(&format!(
+            "the step went back to the bound's: {why}; the run went on from the sample before the last check that passed and is whole\n"
         ));
     }
     text

@@ -13,7 +13,7 @@ use crate::explicit::pair::PairEnergy;
 use crate::explicit::scene::{
     analyse_dte, bin_difference, binned_stiffness, common_bins, paired_bins, static_te,
     statistics_start, CoupledStep, DteAnalysis, FeSettings, History, LowpassDte, MassScaling,
-    PreparedScene, Scene, StaticTe,
+    PreparedScene, Scene, StaticTe, StepChange, TimeStep,
 };
 use crate::fe::{MassLumping, PlaneState};
 use crate::geometry::GearPair;
@@ -209,7 +209,9 @@ pub struct CostEstimate {
 }
 
 impl CostEstimate {
-    /// Times [`CALIBRATION_STEPS`] steps of `prepared` and scales them to `duration`.
+    /// Times [`CALIBRATION_STEPS`] steps of `prepared` and scales them to `duration` at the
+    /// step the run starts with (the bound of every contact state): a run on the pair's own
+    /// step ([`crate::explicit::scene::TimeStep::Coupled`]) takes fewer.
     pub fn of(prepared: &PreparedScene, duration: f64) -> Self {
         let elements = prepared.model.elements();
         let steps = (duration / prepared.dt).ceil() as usize;
@@ -447,6 +449,12 @@ pub struct FeSummary {
     pub interrupted: Option<String>,
     pub dt_critical_coupled_s: Option<f64>,
     pub dt_critical_coupled_checks: Vec<CoupledStep>,
+    /// Which stable step the run's step followed; `dt_s` is the step it started with.
+    pub time_step: TimeStep,
+    /// Where the step changed (`time_step` "coupled"), and why the run went back to the
+    /// bound's step, if it did.
+    pub dt_changes: Vec<StepChange>,
+    pub dt_fallback: Option<String>,
     pub model: String,
     #[serde(flatten)]
     pub step: StepSummary,
@@ -723,6 +731,9 @@ pub fn run(
             .map(|c| c.dt_critical_s)
             .reduce(f64::min),
         dt_critical_coupled_checks: outcome.coupled_steps,
+        time_step: settings.time_step,
+        dt_changes: outcome.step_changes,
+        dt_fallback: outcome.fallback,
         model: model_description(case, prepared),
         step: StepSummary::new(prepared),
         penalty_factor: settings.penalty_factor,

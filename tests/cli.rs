@@ -995,7 +995,11 @@ fn fe_writes_histories_summary_and_keeps_a_diverged_run() {
 /// tolerance of the period-to-period change, a point nearer the orbit (1.8006224137 →
 /// 1.8006223445, 4e-8); and when a root relief stopped growing past its full point (the SAP)
 /// down to the form point (the relief variant's k̄ +1.4e-4, its STE mean −9e-5: the root below
-/// the SAP is no longer thinned, a 157/82 pair had lost 4 mm there). The computation is deterministic (ordered reductions), so 1e-9 relative leaves room only for the
+/// the SAP is no longer thinned, a 157/82 pair had lost 4 mm there); `fe` again at issue 31, when
+/// the explicit runs stepped at the pair's own measured step (`fe.time_step = "coupled"`): this
+/// scene's step rises at its first sample, one step before its end, so its last step is 2.14e-8
+/// s instead of 1.66e-8 s and the end-of-run values (DTE max, forces, energies) move by up to
+/// 1e-3 with the end time. The computation is deterministic (ordered reductions), so 1e-9 relative leaves room only for the
 /// last bits of a reordered sum, not for a changed model: a deliberate change of the numbers
 /// re-records the fixture and says why.
 #[test]

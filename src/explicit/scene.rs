@@ -20,8 +20,8 @@
 //!
 //! The bound is the worst case of every spring on the lightest nodes; the pair's own
 //! 2/ω_max with bodies and the springs actually closed ([`PairIntegrator::coupled_critical_step`],
-//! power iteration) lies 10–45 % above it (3000 rpm scene: 2.21e-8 s at the stiffest contact
-//! met, against 1.94e-8 s). `fe.time_step = "coupled"` (the default) steps at `step_factor` ×
+//! power iteration) lies 10–45 % above it (3000 rpm scene: 2.35e-8 s undamped at the stiffest
+//! contact met, against 1.94e-8 s). `fe.time_step = "coupled"` (the default) steps at `step_factor` ×
 //! that measured step, reduced for the stiffness damping as above, where the contact is:
 //! * it is measured at once wherever the closed springs get stiffer than at any check so far
 //!   — their own frequency bound ([`crate::explicit::pair::closed_springs_omega`], Gershgorin
@@ -33,12 +33,13 @@
 //!   so the samples keep their spacing; the state at every sample is kept, and a check that
 //!   finds the step above what the state allows sends the run back to that sample, on from
 //!   there at the lower step;
-//! * a run that diverges at a raised step goes back to the last sample and ends on the
+//! * a run that diverges at a raised step goes back to the sample before its last check that
+//!   passed (the last sample may already carry the instability's growth) and ends on the
 //!   bound's step (`dt_fallback` in summary.json says why).
 //!
 //! Without any damping the measured step at factor 0.9 is marginal where points close and open:
 //! the undamped entering-tooth test (tests/explicit_pair.rs) books 7.4e-5 J jumps in its balance
-//! there against 2.6e-6 J on the bound's step, so it runs on the bound. With the scenes' element
+//! there against 2.6e-6 J on the bound's step, so undamped runs take the bound. With the scenes' element
 //! damping (ζ = 0.05 at ω_max) the stiffness scene's k(θ) moves by 2.4e-6 per bin and its
 //! energy error from 5.9e-5 to 1.1e-4 of the work (validation/performance).
 //!
@@ -793,9 +794,12 @@ pub struct RunCheckpoint {
     /// None in a checkpoint of an older geardyn.
     #[serde(default)]
     control: Option<StepControl>,
-    /// The state at the last sample of a [`TimeStep::Coupled`] run.
+    /// The state at the last sample of a [`TimeStep::Coupled`] run, and at the sample before
+    /// its last check that passed.
     #[serde(default)]
     snapshot: Option<Snapshot>,
+    #[serde(default)]
+    trusted: Option<Snapshot>,
 }
 
 /// Where a running scene keeps checkpoints as it goes: every `every_s` seconds of wall time
@@ -1017,6 +1021,7 @@ pub fn run(
                     checkpoint.coupled_steps,
                     control,
                     checkpoint.snapshot,
+                    checkpoint.trusted,
                 )),
             )
         }
@@ -1065,7 +1070,7 @@ pub fn run(
         history.active_contacts.push(integrator.last_contact.active);
         history.max_penetration.push(sums.max_penetration);
     };
-    let (mut sums, mut coupled_steps, mut control, mut snapshot) = match resumed {
+    let (mut sums, mut coupled_steps, mut control, mut snapshot, mut trusted) = match resumed {
         Some(open) => open,
         None => {
             let mut sums = IntervalSums::default();
@@ -1079,6 +1084,7 @@ pub fn run(
                 IntervalSums::default(),
                 Vec::new(),
                 StepControl::new(prepared.dt, total_steps, every),
+                None,
                 None,
             )
         }
@@ -1094,7 +1100,6 @@ pub fn run(
     let adaptive = prepared.time_step == TimeStep::Coupled;
     // `snapshot`: the state at the last sample, where a check that fails sends the run back;
     // `trusted`: the sample before the last check that passed, where a divergence does.
-    let mut trusted: Option<Snapshot> = None;
     let mut stopped_before = None;
     let fingerprint = scene_fingerprint(prepared, duration, output_interval);
     // The one constructor of a checkpoint: the kept ones and the stop request's.
@@ -1105,7 +1110,8 @@ pub fn run(
                          sums: &IntervalSums,
                          coupled_steps: &[CoupledStep],
                          control: &StepControl,
-                         snapshot: &Option<Snapshot>| RunCheckpoint {
+                         snapshot: &Option<Snapshot>,
+                         trusted: &Option<Snapshot>| RunCheckpoint {
         fingerprint,
         total_steps: control.total_steps,
         next_step,
@@ -1116,6 +1122,7 @@ pub fn run(
         coupled_steps: coupled_steps.to_vec(),
         control: Some(control.clone()),
         snapshot: snapshot.clone(),
+        trusted: trusted.clone(),
     };
     let mut last_kept = Instant::now();
     let mut step = first_step;
@@ -1140,10 +1147,11 @@ pub fn run(
             }
         });
         if let Err(cause) = result {
-            if let Some(back) = trusted.take().filter(|_| control.dt > prepared.dt) {
+            let back = trusted.take().or_else(|| snapshot.take());
+            if let Some(back) = back.filter(|_| control.dt > prepared.dt) {
                 // A state the raised step does not hold: from the sample before the last check
-                // that passed (the last sample may already carry the instability's growth), on
-                // the bound's step.
+                // that passed (the last sample may already carry the instability's growth; the
+                // last sample if no check passed yet), on the bound's step.
                 snapshot = None;
                 (step, control) = back.restore(
                     &mut integrator,
@@ -1314,6 +1322,7 @@ pub fn run(
                     &coupled_steps,
                     &control,
                     &snapshot,
+                    &trusted,
                 );
                 (keeping.keep)(&checkpoint, &history);
                 last_kept = Instant::now();
@@ -1332,6 +1341,7 @@ pub fn run(
             &coupled_steps,
             &control,
             &snapshot,
+            &trusted,
         ))
     });
     Ok(RunOutcome {

@@ -478,9 +478,9 @@ pub struct History {
 }
 
 impl History {
-    /// The first `samples` samples only (a run going back to an earlier state).
-    fn truncate(&mut self, samples: usize) {
-        for series in [
+    /// Every f64 series (the flank pairs' forces included), for what is done to all alike.
+    fn float_series(&mut self) -> impl Iterator<Item = &mut Vec<f64>> {
+        [
             &mut self.time,
             &mut self.driver_rotation,
             &mut self.dte,
@@ -494,9 +494,11 @@ impl History {
         ]
         .into_iter()
         .chain(self.pair_forces.iter_mut())
-        {
-            series.truncate(samples);
-        }
+    }
+
+    /// The first `samples` samples only (a run going back to an earlier state).
+    fn truncate(&mut self, samples: usize) {
+        self.float_series().for_each(|s| s.truncate(samples));
         self.energy.truncate(samples);
         self.active_contacts.truncate(samples);
     }
@@ -524,23 +526,7 @@ impl History {
     /// Room for `samples` samples in all (a resumed history read back at its length).
     fn reserve_to(&mut self, samples: usize) {
         let more = samples.saturating_sub(self.time.len());
-        for series in [
-            &mut self.time,
-            &mut self.driver_rotation,
-            &mut self.dte,
-            &mut self.driven_speed,
-            &mut self.theoretical_speed,
-            &mut self.force_radial,
-            &mut self.force_circumferential,
-            &mut self.force_total,
-            &mut self.mesh_force,
-            &mut self.max_penetration,
-        ]
-        .into_iter()
-        .chain(self.pair_forces.iter_mut())
-        {
-            series.reserve_exact(more);
-        }
+        self.float_series().for_each(|s| s.reserve_exact(more));
         self.energy.reserve_exact(more);
         self.active_contacts.reserve_exact(more);
     }

@@ -210,25 +210,37 @@ impl ExplicitBody {
     /// A rigorous bound: the global ω_max never exceeds the largest element ω_max of
     /// M_e⁻¹K_e (Irons' element eigenvalue inequality), so Δt = 2/max_e ω_e,max is stable.
     pub fn element_eigen_critical_step(&self) -> f64 {
-        let mut omega2_max: f64 = 0.0;
-        for (index, e) in self.elements.iter().enumerate() {
-            let xe = e.map(|i| self.reference[i]);
-            let m = q8::lumped_mass(
-                &xe,
-                self.material.density,
-                self.material.thickness,
-                self.material.lumping,
-            );
-            let k = self.element_stiffness(index);
-            let scaled = ElementMatrix::from_fn(|i, j| k[(i, j)] / (m[i / 2] * m[j / 2]).sqrt());
-            let max = scaled
-                .symmetric_eigenvalues()
-                .iter()
-                .copied()
-                .fold(0.0, f64::max);
-            omega2_max = omega2_max.max(max);
-        }
-        2.0 / omega2_max.sqrt()
+        self.element_critical_steps()
+            .into_iter()
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Each element's own stable step 2/ω_e,max, ω_e,max² the largest eigenvalue of M_e⁻¹K_e
+    /// with the element's own lumped masses at the material's density (what a group of
+    /// elements stepped on its own would allow: validation/performance, subcycling).
+    pub fn element_critical_steps(&self) -> Vec<f64> {
+        self.elements
+            .iter()
+            .enumerate()
+            .map(|(index, e)| {
+                let xe = e.map(|i| self.reference[i]);
+                let m = q8::lumped_mass(
+                    &xe,
+                    self.material.density,
+                    self.material.thickness,
+                    self.material.lumping,
+                );
+                let k = self.element_stiffness(index);
+                let scaled =
+                    ElementMatrix::from_fn(|i, j| k[(i, j)] / (m[i / 2] * m[j / 2]).sqrt());
+                let omega2 = scaled
+                    .symmetric_eigenvalues()
+                    .iter()
+                    .copied()
+                    .fold(0.0, f64::max);
+                2.0 / omega2.sqrt()
+            })
+            .collect()
     }
 
     /// Internal (and damping) forces at positions `x` and velocities `v` (2 per node), added into

@@ -35,5 +35,6 @@ pub mod resources;
 pub mod samples;
 pub mod signal;
 pub mod stiffness;
+pub mod strength;
 pub mod study;
 pub mod sweep;

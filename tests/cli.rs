@@ -298,8 +298,27 @@ fn ltca_writes_csv_plots_and_summary() {
         "stiffness.png",
         "load_sharing_none.png",
         "ste.svg",
+        "contact_pressure.png",
+        "contact_pressure.svg",
     ] {
         assert!(out.join(plot).exists(), "{plot}");
+    }
+    // Strength: the Hertz pressure along the path (one row per loaded pair and position, the
+    // summary's peak among them) and ISO 6336 beside it.
+    let pressure: Vec<f64> = csv::Reader::from_path(out.join("contact_pressure_none.csv"))
+        .unwrap()
+        .deserialize::<std::collections::HashMap<String, String>>()
+        .map(|row| row.unwrap()["hertz_pressure_mpa"].parse().unwrap())
+        .collect();
+    assert!(pressure.len() >= 8, "every position has a loaded pair");
+    let peak = summary["contact_pressure_max_mpa"].as_f64().unwrap();
+    assert!(pressure.iter().any(|p| (p - peak).abs() < 0.01), "{peak}");
+    let iso = &summary["iso_6336"];
+    for g in 0..2 {
+        let root = iso["root_stress_iso_mpa"][g].as_f64().unwrap();
+        let contact = iso["contact_pressure_iso_mpa"][g].as_f64().unwrap();
+        assert!(root > 10.0 && root < 500.0, "{root}");
+        assert!(contact > 100.0 && contact < 2000.0, "{contact}");
     }
     let bad = geardyn()
         .args(["ltca", "--torque-nm", "-5", "--out"])

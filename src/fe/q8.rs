@@ -106,7 +106,7 @@ pub fn shape_derivatives(xi: f64, eta: f64) -> [(f64, f64); 8] {
 }
 
 /// Strain-displacement matrix B (3 × 16) and det J at (ξ, η).
-fn strain_matrix(nodes: &[Point2<f64>; 8], xi: f64, eta: f64) -> (SMatrix<f64, 3, 16>, f64) {
+pub fn strain_matrix(nodes: &[Point2<f64>; 8], xi: f64, eta: f64) -> (SMatrix<f64, 3, 16>, f64) {
     let d = shape_derivatives(xi, eta);
     let (mut j11, mut j12, mut j21, mut j22) = (0.0, 0.0, 0.0, 0.0);
     for (k, (dxi, deta)) in d.iter().enumerate() {

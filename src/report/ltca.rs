@@ -16,7 +16,53 @@ pub fn write(out: OutputDir, case: &Case, study: &LtcaStudy) -> Result<(), Repor
     let deg = |r: &PositionResult| r.roll_angle.to_degrees();
     let mut ste_series = Vec::new();
     let mut k_series = Vec::new();
+    let mut pressure_series = Vec::new();
     for cycle in &study.cycles {
+        out.csv(
+            &format!("contact_pressure_{}.csv", cycle.name),
+            &[
+                "position",
+                "roll_angle_deg",
+                "gear1_tooth",
+                "gear2_tooth",
+                "path_from_t1_mm",
+                "normal_force_n",
+                "curvature_radius_gear1_mm",
+                "curvature_radius_gear2_mm",
+                "hertz_pressure_mpa",
+                "half_width_um",
+                "at_tip",
+            ],
+            cycle.pressure.iter().map(|p| {
+                let (t1, t2) = cycle.tooth_pairs[p.pair];
+                vec![
+                    p.position.to_string(),
+                    format!("{:.6}", cycle.results[p.position].roll_angle.to_degrees()),
+                    t1.to_string(),
+                    t2.to_string(),
+                    format!("{:.6}", p.path_m * 1e3),
+                    format!("{:.6e}", p.force_n),
+                    format!("{:.6}", p.curvature_radii_m[0] * 1e3),
+                    format!("{:.6}", p.curvature_radii_m[1] * 1e3),
+                    format!("{:.4}", p.pressure_pa * 1e-6),
+                    format!("{:.4}", p.half_width_m * 1e6),
+                    p.at_tip.to_string(),
+                ]
+            }),
+        )?;
+        // Each pair's pressure along the path, so the plot shows it entering and leaving.
+        for (k, &(t1, t2)) in cycle.tooth_pairs.iter().enumerate() {
+            let mut curve: Vec<(f64, f64)> = cycle
+                .pressure
+                .iter()
+                .filter(|p| p.pair == k)
+                .map(|p| (p.path_m * 1e3, p.pressure_pa * 1e-6))
+                .collect();
+            if curve.len() > 1 {
+                curve.sort_by(|a, b| a.0.total_cmp(&b.0));
+                pressure_series.push((format!("{} pair {t1}/{t2}", cycle.name), curve));
+            }
+        }
         let loaded = loaded_pairs(&cycle.results);
         let header = position_header(&cycle.tooth_pairs, &loaded);
         out.csv(
@@ -70,6 +116,29 @@ pub fn write(out: OutputDir, case: &Case, study: &LtcaStudy) -> Result<(), Repor
             },
         )?;
     }
+    let iso = &study.summary.iso_6336;
+    let points = case.pair.contact_points;
+    let (first, last) = (points.icp * 1e3, points.fcp * 1e3);
+    for (g, p) in iso.contact_pressure_iso_mpa.iter().enumerate() {
+        pressure_series.push((
+            format!("ISO 6336-2 sigma_H gear {}", g + 1),
+            vec![(first, *p), (last, *p)],
+        ));
+    }
+    out.chart(
+        "contact_pressure",
+        &LinePlot {
+            y_range: None,
+            markers: Vec::new(),
+            title: format!(
+                "{}: Hertz pressure along the path of contact, T = {torque} N·m",
+                case.name()
+            ),
+            x_label: "path of contact from T1 [mm]".into(),
+            y_label: "contact pressure [MPa]".into(),
+            series: pressure_series,
+        },
+    )?;
     out.chart(
         "ste",
         &LinePlot {
@@ -143,6 +212,45 @@ pub fn console(study: &LtcaStudy) -> String {
         "ISO 6336-1 method B: c_gamma_alpha*b = {:.4e} N/m, c'*b = {:.4e} N/m\n",
         study.iso.mean_n_per_m, study.iso.single_pair_n_per_m
     ));
+    for s in study.cycles.iter().map(|c| &c.summary) {
+        if let Some(at) = &s.contact_pressure_max_at {
+            text.push_str(&format!(
+                "{:<16} Hertz pressure max {:.0} MPa at {:.3} mm from T1 (pair {}/{}, {:.0} N){}\n",
+                s.relief_variant,
+                s.contact_pressure_max_mpa,
+                at.path_mm,
+                at.teeth.0,
+                at.teeth.1,
+                at.force_n,
+                s.contact_pressure_at_tip_max_mpa
+                    .map(|p| format!(
+                        "; {p:.0} MPa at a tip corner (involute Hertz does not hold there)"
+                    ))
+                    .unwrap_or_default()
+            ));
+        }
+    }
+    let iso = &study.summary.iso_6336;
+    text.push_str(&format!(
+        "ISO 6336 (load factors 1): root sigma_F0 {:.1} / {:.1} MPa (method B, Y_F {:.3} / {:.3}, Y_S {:.3} / {:.3}); contact sigma_H0 {:.0} MPa, sigma_H {:.0} / {:.0} MPa (Z_H {:.3}, Z_E {:.1} sqrt(MPa), Z_eps {:.3})\n",
+        iso.root_stress_iso_mpa[0],
+        iso.root_stress_iso_mpa[1],
+        iso.factors.root[0].method_b.form_factor,
+        iso.factors.root[1].method_b.form_factor,
+        iso.factors.root[0].method_b.stress_correction,
+        iso.factors.root[1].method_b.stress_correction,
+        iso.contact_pressure_iso_pitch_point_mpa,
+        iso.contact_pressure_iso_mpa[0],
+        iso.contact_pressure_iso_mpa[1],
+        iso.factors.contact.zone_factor,
+        iso.factors.contact.elasticity_factor_sqrt_pa * 1e-3,
+        iso.factors.contact.contact_ratio_factor,
+    ));
+    for (g, root) in iso.factors.root.iter().enumerate() {
+        for note in &root.notes {
+            text.push_str(&format!("  ISO 6336-3, gear {}: {note}\n", g + 1));
+        }
+    }
     let checks = &study.summary.self_checks;
     let failed: Vec<&crate::study::checks::Check> = checks.iter().filter(|c| !c.passed).collect();
     text.push_str(&format!(

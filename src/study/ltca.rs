@@ -11,6 +11,8 @@ use crate::ltca::{
     engaging_teeth_on, Flank, LtcaModel, Periodicity, PositionResult, PERIODICITY_TOLERANCE,
 };
 use crate::stiffness::{self, potential_energy, IsoStiffness, MeshStiffness};
+use crate::strength::hertz::{self, PressurePoint};
+use crate::strength::iso6336::{self, Elastic};
 
 use super::checks::{Check, CheckKind};
 use super::{load_torque, Progress, StudyError};
@@ -128,6 +130,8 @@ pub struct VariantCycle {
     pub summary: VariantSummary,
     /// The run's checks of its own answer ([`self_checks`]).
     pub checks: Vec<Check>,
+    /// Hertz pressure of every loaded pair at every position ([`crate::strength::hertz`]).
+    pub pressure: Vec<PressurePoint>,
 }
 
 /// Headline numbers of one relief variant.
@@ -148,6 +152,40 @@ pub struct VariantSummary {
     pub factorization_wall_s: f64,
     pub condensation_wall_s: f64,
     pub cycle_wall_s: f64,
+    /// The largest Hertz pressure over the cycle away from the tips, and where
+    /// ([`crate::strength::hertz`]).
+    pub contact_pressure_max_mpa: f64,
+    pub contact_pressure_max_at: Option<PressureAt>,
+    /// The largest at a tip corner, where the involute's Hertz does not hold (null: no tip
+    /// carried load).
+    pub contact_pressure_at_tip_max_mpa: Option<f64>,
+}
+
+/// Where a pressure peak sits.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct PressureAt {
+    /// Driver roll angle of tooth 0's contact at the position [deg].
+    pub roll_angle_deg: f64,
+    /// Along the line of action from T₁ [mm], and the pair's normal force there [N].
+    pub path_mm: f64,
+    pub force_n: f64,
+    /// The gear-1 / gear-2 teeth of the pair.
+    pub teeth: (usize, usize),
+}
+
+/// ISO 6336's nominal stresses at the design torque, in MPa, with every factor
+/// ([`crate::strength::iso6336`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct IsoStrength {
+    /// σ_F0 by method B, gear 1 and gear 2.
+    pub root_stress_iso_mpa: [f64; 2],
+    /// Radius of the 30° tangent point on each gear's fillet, where ISO puts the root stress [mm].
+    pub root_stress_iso_radius_mm: [f64; 2],
+    /// σ_H (Z_B or Z_D × σ_H0) of gear 1 and gear 2, and σ_H0 at the pitch point.
+    pub contact_pressure_iso_mpa: [f64; 2],
+    pub contact_pressure_iso_pitch_point_mpa: f64,
+    /// The factors and the intermediate geometry (SI).
+    pub factors: crate::strength::iso6336::Iso6336,
 }
 
 /// The study's headline numbers (`summary.json`): the first variant's, every variant's, and the
@@ -171,6 +209,11 @@ pub struct LtcaSummary {
     pub potential_energy_mean_n_per_m: f64,
     pub potential_energy_min_n_per_m: f64,
     pub potential_energy_max_n_per_m: f64,
+    /// The first variant's largest Hertz pressure away from the tips, and where.
+    pub contact_pressure_max_mpa: f64,
+    pub contact_pressure_max_at: Option<PressureAt>,
+    /// ISO 6336-2/-3 at the design torque (load factors 1).
+    pub iso_6336: IsoStrength,
     pub elements: usize,
     pub wall_s: f64,
     pub variants: Vec<VariantSummary>,
@@ -225,9 +268,11 @@ pub fn run(
             torque,
         )?;
         let [b1, b2] = &*model.bodies;
+        let pressure = hertz::along_path(&case.pair, elastic(case), &results);
         let summary = variant_summary(
             &variant.name,
             &results,
+            (&pressure, &model.tooth_pairs),
             rb2,
             [b1.mesh.elements.len(), b2.mesh.elements.len()],
             [b1.free_dofs, b2.free_dofs],
@@ -237,6 +282,7 @@ pub fn run(
                 cycle_s,
             ),
         );
+
         let mesh_stiffness = stiffness::from_ltca(
             &case.pair,
             &results,
@@ -252,6 +298,7 @@ pub fn run(
             mesh_stiffness,
             summary,
             checks,
+            pressure,
         });
     }
     let pe = potential_energy::potential_energy_table(
@@ -263,6 +310,7 @@ pub fn run(
     );
     let iso = stiffness::iso_6336_method_b(&case.pair, torque, case.material.youngs_modulus);
     let first = &cycles[0].summary;
+    let iso_6336 = iso_strength(case, torque);
     let self_checks: Vec<Check> = cycles
         .iter()
         .flat_map(|c| {
@@ -291,6 +339,9 @@ pub fn run(
         potential_energy_mean_n_per_m: pe.mean(),
         potential_energy_min_n_per_m: pe.min(),
         potential_energy_max_n_per_m: pe.max(),
+        contact_pressure_max_mpa: first.contact_pressure_max_mpa,
+        contact_pressure_max_at: first.contact_pressure_max_at,
+        iso_6336,
         elements: first.elements[0] + first.elements[1],
         wall_s: started.elapsed().as_secs_f64(),
         variants: cycles.iter().map(|c| c.summary.clone()).collect(),
@@ -311,15 +362,44 @@ pub fn run(
     })
 }
 
-/// Headline numbers of a variant's cycle.
+/// Both gears' elastic constants (one material for the pair).
+pub fn elastic(case: &Case) -> [Elastic; 2] {
+    [Elastic {
+        youngs_modulus: case.material.youngs_modulus,
+        poisson_ratio: case.material.poisson_ratio,
+    }; 2]
+}
+
+/// ISO 6336's stresses of the case's pair under `driven_torque` [N·m].
+pub fn iso_strength(case: &Case, driven_torque: f64) -> IsoStrength {
+    let factors = iso6336::iso6336(&case.pair, elastic(case), driven_torque);
+    IsoStrength {
+        root_stress_iso_mpa: [0, 1].map(|g| factors.root[g].sigma_f0_pa * 1e-6),
+        root_stress_iso_radius_mm: [0, 1]
+            .map(|g| factors.root[g].method_b.tangent_point_radius_m * 1e3),
+        contact_pressure_iso_mpa: factors.contact.sigma_h_pa.map(|p| p * 1e-6),
+        contact_pressure_iso_pitch_point_mpa: factors.contact.sigma_h0_pa * 1e-6,
+        factors,
+    }
+}
+
+/// Headline numbers of a variant's cycle: its results, and the Hertz pressure along the path
+/// with the tooth pairs it indexes.
 pub fn variant_summary(
     name: &str,
     results: &[PositionResult],
+    (pressure, tooth_pairs): (&[PressurePoint], &[(usize, usize)]),
     base_radius_driven: f64,
     elements: [usize; 2],
     free_dofs: [usize; 2],
     times: (f64, f64, f64),
 ) -> VariantSummary {
+    let peak = |at_tip: bool| {
+        pressure
+            .iter()
+            .filter(|p| p.at_tip == at_tip)
+            .max_by(|a, b| a.pressure_pa.total_cmp(&b.pressure_pa))
+    };
     let k: Vec<f64> = results.iter().map(|r| r.mesh_stiffness).collect();
     let ste: Vec<f64> = results
         .iter()
@@ -343,6 +423,14 @@ pub fn variant_summary(
         factorization_wall_s: times.0,
         condensation_wall_s: times.1,
         cycle_wall_s: times.2,
+        contact_pressure_max_mpa: peak(false).map_or(0.0, |p| p.pressure_pa * 1e-6),
+        contact_pressure_max_at: peak(false).map(|p| PressureAt {
+            roll_angle_deg: results[p.position].roll_angle.to_degrees(),
+            path_mm: p.path_m * 1e3,
+            force_n: p.force_n,
+            teeth: tooth_pairs[p.pair],
+        }),
+        contact_pressure_at_tip_max_mpa: peak(true).map(|p| p.pressure_pa * 1e-6),
     }
 }
 

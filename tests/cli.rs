@@ -300,6 +300,8 @@ fn ltca_writes_csv_plots_and_summary() {
         "ste.svg",
         "contact_pressure.png",
         "contact_pressure.svg",
+        "root_stress.png",
+        "root_stress.svg",
     ] {
         assert!(out.join(plot).exists(), "{plot}");
     }
@@ -314,11 +316,37 @@ fn ltca_writes_csv_plots_and_summary() {
     let peak = summary["contact_pressure_max_mpa"].as_f64().unwrap();
     assert!(pressure.iter().any(|p| (p - peak).abs() < 0.01), "{peak}");
     let iso = &summary["iso_6336"];
+    let tension: Vec<(usize, f64)> = csv::Reader::from_path(out.join("root_stress_none.csv"))
+        .unwrap()
+        .deserialize::<std::collections::HashMap<String, String>>()
+        .map(|row| {
+            let row = row.unwrap();
+            (
+                row["gear"].parse().unwrap(),
+                row["tension_max_principal_mpa"].parse().unwrap(),
+            )
+        })
+        .collect();
     for g in 0..2 {
         let root = iso["root_stress_iso_mpa"][g].as_f64().unwrap();
         let contact = iso["contact_pressure_iso_mpa"][g].as_f64().unwrap();
         assert!(root > 10.0 && root < 500.0, "{root}");
         assert!(contact > 100.0 && contact < 2000.0, "{contact}");
+        // The FE's peak is the largest row of its gear, and lies near ISO's.
+        let fe = summary["root_stress_max_mpa"][g].as_f64().unwrap();
+        let largest = tension
+            .iter()
+            .filter(|(gear, _)| *gear == g + 1)
+            .map(|(_, t)| *t)
+            .fold(f64::NEG_INFINITY, f64::max);
+        assert!((largest - fe).abs() < 0.01, "{largest} against {fe}");
+        assert!((fe / root - 1.0).abs() < 0.3, "{fe} against ISO {root}");
+        assert!(
+            summary["root_stress_max_at"][g]["radius_mm"]
+                .as_f64()
+                .unwrap()
+                > 0.0
+        );
     }
     let bad = geardyn()
         .args(["ltca", "--torque-nm", "-5", "--out"])

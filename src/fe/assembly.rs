@@ -311,21 +311,52 @@ impl FactorizedStiffness {
     /// K u = unit force at node l along d_l. Solved in blocks of columns so memory stays
     /// O(free DOFs × block × threads).
     pub fn compliance_between(&self, points: &[(usize, [f64; 2])]) -> nalgebra::DMatrix<f64> {
+        self.compliance_and_influence(points, &[]).0
+    }
+
+    /// [`Self::compliance_between`], and the influence of the same unit loads on linear
+    /// functionals of the displacements: S[r, l] = Σ_(dof, c) ∈ sensors[r] c · u_l[dof] (e.g. a
+    /// recovered stress component, [`crate::fe::recovery`]), from the same solves.
+    pub fn compliance_and_influence(
+        &self,
+        points: &[(usize, [f64; 2])],
+        sensors: &[Vec<(usize, f64)>],
+    ) -> (nalgebra::DMatrix<f64>, nalgebra::DMatrix<f64>) {
         const BLOCK: usize = 64;
         let n = self.free_dofs();
         let m = points.len();
         let reduced = |node: usize, axis: usize| self.free_index[2 * node + axis];
         let mut g = nalgebra::DMatrix::<f64>::zeros(m, m);
+        let rows = sensors.len();
+        let mut influence = nalgebra::DMatrix::<f64>::zeros(rows, m);
         if m == 0 {
-            return g;
+            return (g, influence);
         }
+        // The sensors on the reduced unknowns (a fixed DOF is zero).
+        let sensors: Vec<Vec<(usize, f64)>> = sensors
+            .iter()
+            .map(|row| {
+                row.iter()
+                    .filter_map(|(dof, c)| self.free_index[*dof].map(|i| (i, *c)))
+                    .collect()
+            })
+            .collect();
         // The blocks side by side, each solved on one thread and written into its own columns
-        // of G (column-major): a block's supernodal solve is too narrow for faer's own threads
-        // to pay (they mostly wait), whole blocks are not.
+        // of G and S (column-major): a block's supernodal solve is too narrow for faer's own
+        // threads to pay (they mostly wait), whole blocks are not.
+        let influence_blocks: Vec<&mut [f64]> = if rows > 0 {
+            influence.as_mut_slice().chunks_mut(rows * BLOCK).collect()
+        } else {
+            Vec::new()
+        };
+        let mut influence_blocks: Vec<Option<&mut [f64]>> =
+            influence_blocks.into_iter().map(Some).collect();
+        influence_blocks.resize_with(m.div_ceil(BLOCK), || None);
         g.as_mut_slice()
             .par_chunks_mut(m * BLOCK)
+            .zip(influence_blocks.into_par_iter())
             .enumerate()
-            .for_each(|(b, columns)| {
+            .for_each(|(b, (columns, sensed))| {
                 let start = b * BLOCK;
                 let width = columns.len() / m;
                 let mut rhs = Mat::<f64>::zeros(n, width);
@@ -348,8 +379,15 @@ impl FactorizedStiffness {
                         columns[j * m + k] = value;
                     }
                 }
+                if let Some(sensed) = sensed {
+                    for j in 0..width {
+                        for (r, row) in sensors.iter().enumerate() {
+                            sensed[j * rows + r] = row.iter().map(|(i, c)| c * rhs[(*i, j)]).sum();
+                        }
+                    }
+                }
             });
-        g
+        (g, influence)
     }
 
     pub fn solve(&self, load: &[f64]) -> Vec<f64> {

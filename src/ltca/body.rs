@@ -12,6 +12,7 @@
 use nalgebra::{DMatrix, Point2, Rotation2, Vector2};
 
 use crate::fe::assembly::{check_elements, stiffness_triplets, FactorizedStiffness, FeError};
+use crate::fe::recovery::NodalStress;
 use crate::fe::{elasticity_matrix, PlaneState};
 use crate::geometry::{FlankModification, Gear, Side};
 use crate::mesh::{mesh_gear, GearMesh, MeshSpec};
@@ -29,6 +30,88 @@ pub struct FlankCandidate {
     pub inward: Vector2<f64>,
 }
 
+/// A node on the fillet of a fine tooth, where the root stress is recovered.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FilletNode {
+    pub tooth: usize,
+    pub node: usize,
+    /// On the loaded flank's side of the tooth (the side in tension under the load) or not.
+    pub loaded_side: bool,
+    /// Distance from the gear centre [m].
+    pub radius: f64,
+}
+
+/// The fillets' stress per unit force at each candidate flank node.
+#[derive(Debug, Clone, Default)]
+pub struct FilletStress {
+    pub nodes: Vec<FilletNode>,
+    /// Rows 3i, 3i + 1, 3i + 2: (σ_xx, σ_yy, τ_xy) at `nodes[i]` (gear frame) per unit inward
+    /// force at each candidate [Pa/N], recovered as [`crate::fe::recovery`] does.
+    pub influence: DMatrix<f64>,
+}
+
+impl FilletStress {
+    /// (σ_xx, σ_yy, τ_xy) at every fillet node under the candidate forces `forces` [N].
+    pub fn stresses(&self, forces: &[f64]) -> Vec<[f64; 3]> {
+        let f = nalgebra::DVector::from_column_slice(forces);
+        let s = &self.influence * f;
+        (0..self.nodes.len())
+            .map(|i| [s[3 * i], s[3 * i + 1], s[3 * i + 2]])
+            .collect()
+    }
+}
+
+/// The boundary nodes of `gear`'s mesh on the fillets of its fine teeth: on an element edge no
+/// other element shares, between the root circle and the form circle (where the fillet meets
+/// the involute), each given to the nearest tooth, and its side told by the loaded flank's
+/// (`loaded_side_sign`: the sign of the loaded flank's angle from its tooth's centre line).
+fn fillet_nodes(gear: &Gear, mesh: &GearMesh, loaded_side_sign: f64) -> Vec<FilletNode> {
+    let mut edges: std::collections::HashMap<(usize, usize), (usize, usize)> =
+        std::collections::HashMap::new();
+    for e in &mesh.elements {
+        for (a, mid, b) in [(0, 4, 1), (1, 5, 2), (2, 6, 3), (3, 7, 0)] {
+            let key = (e[a].min(e[b]), e[a].max(e[b]));
+            edges.entry(key).or_insert((e[mid], 0)).1 += 1;
+        }
+    }
+    let mut on_boundary = vec![false; mesh.nodes.len()];
+    for ((a, b), (mid, count)) in &edges {
+        if *count == 1 {
+            for n in [*a, *b, *mid] {
+                on_boundary[n] = true;
+            }
+        }
+    }
+    let pitch = gear.angular_pitch();
+    let z = gear.teeth() as f64;
+    // A hair beyond both circles: nodes sit on them to round-off.
+    let (low, high) = (
+        gear.root_radius * (1.0 - 1e-9),
+        gear.form_radius * (1.0 + 1e-9),
+    );
+    let mut nodes = Vec::new();
+    for (n, p) in mesh.nodes.iter().enumerate() {
+        let radius = p.coords.norm();
+        if !on_boundary[n] || radius < low || radius > high {
+            continue;
+        }
+        let angle = (-p.x).atan2(p.y);
+        let k = (angle / pitch).round();
+        let tooth = (k.rem_euclid(z)) as usize;
+        if !mesh.fine_teeth.contains(&tooth) {
+            continue;
+        }
+        let offset = angle - k * pitch;
+        nodes.push(FilletNode {
+            tooth,
+            node: n,
+            loaded_side: offset * loaded_side_sign > 0.0,
+            radius,
+        });
+    }
+    nodes
+}
+
 /// A meshed, factorized gear with its condensed flank compliance.
 pub struct LtcaBody {
     pub mesh: GearMesh,
@@ -36,6 +119,8 @@ pub struct LtcaBody {
     pub candidates: Vec<FlankCandidate>,
     /// G[k, l]: inward displacement of candidate k per unit inward force at candidate l [m/N].
     pub compliance: DMatrix<f64>,
+    /// The root stress per unit candidate force.
+    pub fillet: FilletStress,
     pub free_dofs: usize,
     /// Wall time of assembly + factorization, and of the compliance solves [s].
     pub factorization_s: f64,
@@ -102,7 +187,16 @@ impl LtcaBody {
             .iter()
             .map(|c| (c.node, [c.inward.x, c.inward.y]))
             .collect();
-        let compliance = stiffness.compliance_between(&points);
+        // The loaded flank's side of its tooth's centre line, from its first candidate.
+        let loaded_side_sign = candidates.first().map_or(1.0, |c| {
+            let angle = (-c.position.x).atan2(c.position.y);
+            (angle - c.tooth as f64 * gear.angular_pitch()).signum()
+        });
+        let fillet_nodes = fillet_nodes(gear, &mesh, loaded_side_sign);
+        let targets: Vec<usize> = fillet_nodes.iter().map(|f| f.node).collect();
+        let recovered = NodalStress::new(&mesh.nodes, &mesh.elements, &d, &targets);
+        let sensors: Vec<Vec<(usize, f64)>> = recovered.rows.into_iter().flatten().collect();
+        let (compliance, influence) = stiffness.compliance_and_influence(&points, &sensors);
         // Maxwell–Betti: G is symmetric; average away the round-off.
         let compliance = (&compliance + compliance.transpose()) * 0.5;
         Ok(LtcaBody {
@@ -110,6 +204,10 @@ impl LtcaBody {
             mesh,
             candidates,
             compliance,
+            fillet: FilletStress {
+                nodes: fillet_nodes,
+                influence,
+            },
             factorization_s,
             condensation_s: started.elapsed().as_secs_f64(),
         })

@@ -498,6 +498,30 @@ impl LtcaModel {
         Ok(self.run_checked(positions, torque, progress)?.0)
     }
 
+    /// The fillet stress of both gears in a loaded state: each active contact's force spread on
+    /// its flank nodes by its weights, through [`body::FilletStress`]. Per gear, (σ_xx, σ_yy,
+    /// τ_xy) at each of `bodies[g].fillet.nodes` [Pa].
+    pub fn fillet_stresses(&self, contacts: &LoadedContacts) -> [Vec<[f64; 3]>; 2] {
+        std::array::from_fn(|g| {
+            let body = &self.bodies[g];
+            let candidate_of: std::collections::HashMap<usize, usize> = body
+                .candidates
+                .iter()
+                .enumerate()
+                .map(|(i, c)| (c.node, i))
+                .collect();
+            let mut forces = vec![0.0; body.candidates.len()];
+            for contact in &contacts.active {
+                for (node, weight, _) in contact.nodes[g] {
+                    if weight != 0.0 {
+                        forces[candidate_of[&node]] += contact.force * weight;
+                    }
+                }
+            }
+            body.fillet.stresses(&forces)
+        })
+    }
+
     /// [`LtcaModel::run`] with its periodicity check's numbers (a failed check is an error).
     pub fn run_checked(
         &self,

@@ -17,6 +17,7 @@ pub fn write(out: OutputDir, case: &Case, study: &LtcaStudy) -> Result<(), Repor
     let mut ste_series = Vec::new();
     let mut k_series = Vec::new();
     let mut pressure_series = Vec::new();
+    let mut root_series = Vec::new();
     for cycle in &study.cycles {
         out.csv(
             &format!("contact_pressure_{}.csv", cycle.name),
@@ -50,6 +51,47 @@ pub fn write(out: OutputDir, case: &Case, study: &LtcaStudy) -> Result<(), Repor
                 ]
             }),
         )?;
+        out.csv(
+            &format!("root_stress_{}.csv", cycle.name),
+            &[
+                "position",
+                "roll_angle_deg",
+                "gear",
+                "tooth",
+                "path_from_t1_mm",
+                "tension_max_principal_mpa",
+                "tension_radius_mm",
+                "compression_min_principal_mpa",
+                "compression_radius_mm",
+            ],
+            cycle.root_stress.iter().map(|r| {
+                vec![
+                    r.position.to_string(),
+                    format!("{:.6}", r.roll_angle_deg),
+                    r.gear.to_string(),
+                    r.tooth.to_string(),
+                    r.path_mm.map_or(String::new(), |s| format!("{s:.6}")),
+                    format!("{:.4}", r.tension_mpa),
+                    format!("{:.4}", r.tension_radius_mm),
+                    format!("{:.4}", r.compression_mpa),
+                    format!("{:.4}", r.compression_radius_mm),
+                ]
+            }),
+        )?;
+        // A loaded tooth's fillet tension against where its pair touches: every tooth of a gear
+        // on one curve over its whole engagement.
+        for gear in [1, 2] {
+            let mut curve: Vec<(f64, f64)> = cycle
+                .root_stress
+                .iter()
+                .filter(|r| r.gear == gear)
+                .filter_map(|r| Some((r.path_mm?, r.tension_mpa)))
+                .collect();
+            curve.sort_by(|a, b| a.0.total_cmp(&b.0));
+            if !curve.is_empty() {
+                root_series.push((format!("{} gear {gear}", cycle.name), curve));
+            }
+        }
         // Each pair's pressure along the path, so the plot shows it entering and leaving.
         for (k, &(t1, t2)) in cycle.tooth_pairs.iter().enumerate() {
             let mut curve: Vec<(f64, f64)> = cycle
@@ -125,6 +167,26 @@ pub fn write(out: OutputDir, case: &Case, study: &LtcaStudy) -> Result<(), Repor
             vec![(first, *p), (last, *p)],
         ));
     }
+    for (g, s) in iso.root_stress_iso_mpa.iter().enumerate() {
+        root_series.push((
+            format!("ISO 6336-3 sigma_F0 gear {} (method B)", g + 1),
+            vec![(first, *s), (last, *s)],
+        ));
+    }
+    out.chart(
+        "root_stress",
+        &LinePlot {
+            y_range: None,
+            markers: Vec::new(),
+            title: format!(
+                "{}: largest fillet tension of a loaded tooth, T = {torque} N·m",
+                case.name()
+            ),
+            x_label: "its contact along the path of contact from T1 [mm]".into(),
+            y_label: "max principal stress on the fillet [MPa]".into(),
+            series: root_series,
+        },
+    )?;
     out.chart(
         "contact_pressure",
         &LinePlot {
@@ -228,6 +290,23 @@ pub fn console(study: &LtcaStudy) -> String {
                     ))
                     .unwrap_or_default()
             ));
+        }
+    }
+    for s in study.cycles.iter().map(|c| &c.summary) {
+        for (g, peak) in s.root_stress.iter().enumerate() {
+            if let Some(p) = peak {
+                text.push_str(&format!(
+                    "{:<16} gear {} fillet tension max {:.1} MPa (tooth {}, roll angle {:.2} deg, radius {:.3} mm; ISO's 30 deg tangent at {:.3} mm), compression min {:.1} MPa\n",
+                    s.relief_variant,
+                    g + 1,
+                    p.tension_mpa,
+                    p.tooth,
+                    p.roll_angle_deg,
+                    p.radius_mm,
+                    p.iso_30_degree_tangent_radius_mm,
+                    p.compression_mpa
+                ));
+            }
         }
     }
     let iso = &study.summary.iso_6336;

@@ -132,6 +132,8 @@ pub struct VariantCycle {
     pub checks: Vec<Check>,
     /// Hertz pressure of every loaded pair at every position ([`crate::strength::hertz`]).
     pub pressure: Vec<PressurePoint>,
+    /// The fillet stress of every tooth of a pair at every position ([`root_stress_cycle`]).
+    pub root_stress: Vec<RootStressRow>,
 }
 
 /// Headline numbers of one relief variant.
@@ -159,6 +161,9 @@ pub struct VariantSummary {
     /// The largest at a tip corner, where the involute's Hertz does not hold (null: no tip
     /// carried load).
     pub contact_pressure_at_tip_max_mpa: Option<f64>,
+    /// Per gear, the largest fillet tension over the cycle, where, and the largest compression
+    /// (FE, [`root_stress_cycle`]).
+    pub root_stress: [Option<RootStressPeak>; 2],
 }
 
 /// Where a pressure peak sits.
@@ -171,6 +176,130 @@ pub struct PressureAt {
     pub force_n: f64,
     /// The gear-1 / gear-2 teeth of the pair.
     pub teeth: (usize, usize),
+}
+
+/// The tooth-root stress of one tooth at one position: the largest principal stress on the
+/// fillet of its loaded flank's side (tension) and the smallest on the other side (compression),
+/// each with the radius of its fillet node.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct RootStressRow {
+    pub position: usize,
+    pub roll_angle_deg: f64,
+    /// 1 or 2.
+    pub gear: usize,
+    pub tooth: usize,
+    /// Where this tooth's pair touches, along the line of action from T₁ [mm] (None: the tooth
+    /// carries no load here; its fillet feels its loaded neighbours).
+    pub path_mm: Option<f64>,
+    pub tension_mpa: f64,
+    pub tension_radius_mm: f64,
+    pub compression_mpa: f64,
+    pub compression_radius_mm: f64,
+}
+
+/// The fillet stress of every tooth of a tooth pair at every position of the cycle: the LTCA's
+/// contact forces at each position through the bodies' fillet influence
+/// ([`crate::ltca::LtcaModel::fillet_stresses`]).
+pub fn root_stress_cycle(
+    model: &LtcaModel,
+    positions: usize,
+    torque: f64,
+) -> Result<Vec<RootStressRow>, StudyError> {
+    use crate::fe::recovery::{max_principal, min_principal};
+    use rayon::prelude::*;
+    let per_position: Vec<Vec<RootStressRow>> = (0..positions)
+        .into_par_iter()
+        .map(|j| -> Result<Vec<RootStressRow>, StudyError> {
+            let contacts = model.loaded_contacts(j, positions, torque)?;
+            let stresses = model.fillet_stresses(&contacts);
+            let mut rows = Vec::new();
+            for (g, gear_stresses) in stresses.iter().enumerate() {
+                let fillet = &model.bodies[g].fillet;
+                let mut teeth: Vec<usize> = model
+                    .tooth_pairs
+                    .iter()
+                    .map(|p| if g == 0 { p.0 } else { p.1 })
+                    .collect();
+                teeth.sort_unstable();
+                teeth.dedup();
+                for tooth in teeth {
+                    let result = &contacts.result;
+                    let path_mm = model.tooth_pairs.iter().enumerate().find_map(|(k, p)| {
+                        let own = if g == 0 { p.0 } else { p.1 };
+                        (own == tooth && result.pair_forces[k] > 0.0)
+                            .then_some(result.pair_positions[k])
+                            .flatten()
+                            .map(|s| s * 1e3)
+                    });
+                    let mut row = RootStressRow {
+                        position: j,
+                        roll_angle_deg: result.roll_angle.to_degrees(),
+                        gear: g + 1,
+                        tooth,
+                        path_mm,
+                        tension_mpa: f64::NEG_INFINITY,
+                        tension_radius_mm: f64::NAN,
+                        compression_mpa: f64::INFINITY,
+                        compression_radius_mm: f64::NAN,
+                    };
+                    for (node, s) in fillet.nodes.iter().zip(gear_stresses) {
+                        if node.tooth != tooth {
+                            continue;
+                        }
+                        if node.loaded_side {
+                            let t = max_principal(*s) * 1e-6;
+                            if t > row.tension_mpa {
+                                (row.tension_mpa, row.tension_radius_mm) = (t, node.radius * 1e3);
+                            }
+                        } else {
+                            let c = min_principal(*s) * 1e-6;
+                            if c < row.compression_mpa {
+                                (row.compression_mpa, row.compression_radius_mm) =
+                                    (c, node.radius * 1e3);
+                            }
+                        }
+                    }
+                    if row.tension_mpa.is_finite() && row.compression_mpa.is_finite() {
+                        rows.push(row);
+                    }
+                }
+            }
+            Ok(rows)
+        })
+        .collect::<Result<_, _>>()?;
+    Ok(per_position.into_iter().flatten().collect())
+}
+
+/// The largest fillet tension of one gear over a cycle, and where.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct RootStressPeak {
+    pub tension_mpa: f64,
+    pub roll_angle_deg: f64,
+    pub tooth: usize,
+    /// Radius of the fillet node, and of ISO 6336-3's 30° tangent point on the same fillet [mm].
+    pub radius_mm: f64,
+    pub iso_30_degree_tangent_radius_mm: f64,
+    /// The smallest principal stress on the other fillet over the cycle (compression) [MPa].
+    pub compression_mpa: f64,
+}
+
+/// Each gear's [`RootStressPeak`] over `rows`.
+pub fn root_stress_peaks(rows: &[RootStressRow], case: &Case) -> [Option<RootStressPeak>; 2] {
+    let iso = iso_strength(case, 1.0);
+    std::array::from_fn(|g| {
+        let of_gear = || rows.iter().filter(move |r| r.gear == g + 1);
+        let peak = of_gear().max_by(|a, b| a.tension_mpa.total_cmp(&b.tension_mpa))?;
+        Some(RootStressPeak {
+            tension_mpa: peak.tension_mpa,
+            roll_angle_deg: peak.roll_angle_deg,
+            tooth: peak.tooth,
+            radius_mm: peak.tension_radius_mm,
+            iso_30_degree_tangent_radius_mm: iso.root_stress_iso_radius_mm[g],
+            compression_mpa: of_gear()
+                .map(|r| r.compression_mpa)
+                .fold(f64::INFINITY, f64::min),
+        })
+    })
 }
 
 /// ISO 6336's nominal stresses at the design torque, in MPa, with every factor
@@ -212,6 +341,9 @@ pub struct LtcaSummary {
     /// The first variant's largest Hertz pressure away from the tips, and where.
     pub contact_pressure_max_mpa: f64,
     pub contact_pressure_max_at: Option<PressureAt>,
+    /// The first variant's largest fillet tension per gear over the cycle (FE), and where.
+    pub root_stress_max_mpa: [Option<f64>; 2],
+    pub root_stress_max_at: [Option<RootStressPeak>; 2],
     /// ISO 6336-2/-3 at the design torque (load factors 1).
     pub iso_6336: IsoStrength,
     pub elements: usize,
@@ -269,7 +401,8 @@ pub fn run(
         )?;
         let [b1, b2] = &*model.bodies;
         let pressure = hertz::along_path(&case.pair, elastic(case), &results);
-        let summary = variant_summary(
+        let root_stress = root_stress_cycle(&model, positions, torque)?;
+        let mut summary = variant_summary(
             &variant.name,
             &results,
             (&pressure, &model.tooth_pairs),
@@ -282,7 +415,7 @@ pub fn run(
                 cycle_s,
             ),
         );
-
+        summary.root_stress = root_stress_peaks(&root_stress, case);
         let mesh_stiffness = stiffness::from_ltca(
             &case.pair,
             &results,
@@ -299,6 +432,7 @@ pub fn run(
             summary,
             checks,
             pressure,
+            root_stress,
         });
     }
     let pe = potential_energy::potential_energy_table(
@@ -341,6 +475,8 @@ pub fn run(
         potential_energy_max_n_per_m: pe.max(),
         contact_pressure_max_mpa: first.contact_pressure_max_mpa,
         contact_pressure_max_at: first.contact_pressure_max_at,
+        root_stress_max_mpa: first.root_stress.map(|p| p.map(|p| p.tension_mpa)),
+        root_stress_max_at: first.root_stress,
         iso_6336,
         elements: first.elements[0] + first.elements[1],
         wall_s: started.elapsed().as_secs_f64(),
@@ -431,6 +567,8 @@ pub fn variant_summary(
             teeth: tooth_pairs[p.pair],
         }),
         contact_pressure_at_tip_max_mpa: peak(true).map(|p| p.pressure_pa * 1e-6),
+        // The caller that computed the fillet stress sets it.
+        root_stress: [None, None],
     }
 }
 

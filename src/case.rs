@@ -403,6 +403,15 @@ pub struct MaterialSection {
     pub poisson_ratio: f64,
     #[serde(default = "default_density")]
     pub density_kg_per_m3: f64,
+    /// Nominal bending stress number σ_Flim of ISO 6336-5 (the test gear's endurance limit over
+    /// its stress correction Y_ST = 2). Default 500 MPa: case-hardened wrought steel, quality MQ
+    /// (an assumption, stated in every output that uses it).
+    #[serde(default = "default_root_stress_limit")]
+    pub root_stress_limit_mpa: f64,
+    /// Allowable contact stress number σ_Hlim of ISO 6336-5. Default 1 500 MPa: case-hardened
+    /// wrought steel, quality MQ (an assumption).
+    #[serde(default = "default_contact_stress_limit")]
+    pub contact_stress_limit_mpa: f64,
 }
 
 impl Default for MaterialSection {
@@ -411,8 +420,17 @@ impl Default for MaterialSection {
             youngs_modulus_gpa: default_youngs(),
             poisson_ratio: default_poisson(),
             density_kg_per_m3: default_density(),
+            root_stress_limit_mpa: default_root_stress_limit(),
+            contact_stress_limit_mpa: default_contact_stress_limit(),
         }
     }
+}
+
+fn default_root_stress_limit() -> f64 {
+    500.0
+}
+fn default_contact_stress_limit() -> f64 {
+    1500.0
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -527,6 +545,9 @@ pub struct Material {
     pub poisson_ratio: f64,
     /// Density ρ [kg/m³].
     pub density: f64,
+    /// ISO 6336-5's σ_Flim and σ_Hlim [Pa] (`strength::safety`).
+    pub root_stress_limit: f64,
+    pub contact_stress_limit: f64,
 }
 
 /// An operating point, SI.
@@ -773,10 +794,27 @@ impl Case {
                 "must be a finite number > 0",
             ));
         }
+        for (key, value) in [
+            ("material.root_stress_limit_mpa", mat.root_stress_limit_mpa),
+            (
+                "material.contact_stress_limit_mpa",
+                mat.contact_stress_limit_mpa,
+            ),
+        ] {
+            if !(value > 0.0 && value.is_finite()) {
+                return Err(invalid(
+                    key,
+                    value.to_string(),
+                    "must be a finite number > 0 [MPa] (ISO 6336-5's σ_Flim / σ_Hlim)",
+                ));
+            }
+        }
         let material = Material {
             youngs_modulus: mat.youngs_modulus_gpa * 1e9,
             poisson_ratio: mat.poisson_ratio,
             density: mat.density_kg_per_m3,
+            root_stress_limit: mat.root_stress_limit_mpa * 1e6,
+            contact_stress_limit: mat.contact_stress_limit_mpa * 1e6,
         };
 
         let mut operating_points = Vec::new();
@@ -1226,30 +1264,32 @@ impl Case {
     /// by one tooth pair across the face [Pa]: p = √(F E* / (π b ρ)), E* = E / (2(1 − ν²)),
     /// 1/ρ = 1/ρ₁ + 1/ρ₂ with ρᵢ = r_wi sin α_w (Johnson, *Contact Mechanics*, §4.2).
     pub fn hertz_pressure_at(&self, force: f64) -> f64 {
+        self.hertz_at_pitch(force).0
+    }
+
+    /// The Hertzian half-width of the contact at the pitch point under a normal mesh force
+    /// `force` [N] carried by one tooth pair across the face [m]: a = √(4 w R / (π E*))
+    /// (Johnson, *Contact Mechanics*, eq. 4.43–4.45).
+    pub fn hertz_half_width_at(&self, force: f64) -> f64 {
+        self.hertz_at_pitch(force).1
+    }
+
+    /// (p₀, a) at the pitch point ([`crate::strength::hertz::line_contact`]).
+    fn hertz_at_pitch(&self, force: f64) -> (f64, f64) {
+        use crate::strength::hertz::{contact_modulus, line_contact};
         let pair = &self.pair;
         let width = pair.gears[0]
             .spec
             .face_width
             .min(pair.gears[1].spec.face_width);
-        let [rho1, rho2] = pair
+        let radii = pair
             .working_pitch_radii
             .map(|r| r * pair.operating_pressure_angle.sin());
-        let radius = rho1 * rho2 / (rho1 + rho2);
-        let nu = self.material.poisson_ratio;
-        let e_star = self.material.youngs_modulus / (2.0 * (1.0 - nu * nu));
-        (force.abs() * e_star / (std::f64::consts::PI * width * radius)).sqrt()
-    }
-
-    /// The Hertzian half-width of the contact at the pitch point under a normal mesh force
-    /// `force` [N] carried by one tooth pair across the face [m]: a = 2F / (π b p₀), with p₀ from
-    /// [`Self::hertz_pressure_at`] (Johnson, *Contact Mechanics*, eq. 4.43–4.45; the same
-    /// a = √(4 F R / (π b E*))).
-    pub fn hertz_half_width_at(&self, force: f64) -> f64 {
-        let width = self.pair.gears[0]
-            .spec
-            .face_width
-            .min(self.pair.gears[1].spec.face_width);
-        2.0 * force.abs() / (std::f64::consts::PI * width * self.hertz_pressure_at(force))
+        let material = crate::strength::iso6336::Elastic {
+            youngs_modulus: self.material.youngs_modulus,
+            poisson_ratio: self.material.poisson_ratio,
+        };
+        line_contact(force.abs(), width, radii, contact_modulus([material; 2]))
     }
 
     /// What the case asks that the models cannot answer faithfully, though it is valid input.

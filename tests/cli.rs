@@ -340,6 +340,8 @@ fn ltca_writes_csv_plots_and_summary() {
             .map(|(_, t)| *t)
             .fold(f64::NEG_INFINITY, f64::max);
         assert!((largest - fe).abs() < 0.01, "{largest} against {fe}");
+        // 8 positions sample the jump at the end of single contact coarsely (the peak can fall
+        // between them): a wider band than tests/strength.rs's 15 % at 32 positions.
         assert!((fe / root - 1.0).abs() < 0.3, "{fe} against ISO {root}");
         assert!(
             summary["root_stress_max_at"][g]["radius_mm"]
@@ -462,6 +464,26 @@ fn run_closes_the_chain_and_writes_the_report() {
         none["mesh_stiffness_mean_n_per_m"]
     );
     assert_eq!(s["ste_pp_unmodified_um"], none["ste_peak_to_peak_um"]);
+    // Strength: the safety over the sweep's speeds is the static one over the dynamic factor,
+    // so at most the static one, and its CSV and plot are there.
+    assert!(html.contains("Strength"));
+    let (root_min, at_rpm) = (
+        s["min_root_safety"][0].as_f64().unwrap(),
+        s["min_root_safety"][1].as_f64().unwrap(),
+    );
+    let root_static = ltca["safety_factors"]["root_fe"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|v| v.as_f64())
+        .fold(f64::INFINITY, f64::min);
+    assert!(
+        root_min > 0.0 && root_min <= root_static * (1.0 + 1e-9),
+        "{root_min} {root_static}"
+    );
+    assert!(at_rpm > 0.0);
+    assert!(out.join("strength_over_speed.csv").exists());
+    assert!(out.join("strength_over_speed.png").exists());
     // `geardyn report DIR` re-writes the same report from the stages' files.
     let before = std::fs::read(out.join("summary.json")).unwrap();
     run_ok(geardyn().arg("report").arg(&out));

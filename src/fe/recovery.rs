@@ -140,7 +140,9 @@ mod tests {
     use crate::fe::{elasticity_matrix, PlaneState};
 
     /// A linear displacement field gives its constant stress at every node of a distorted
-    /// element (extrapolation reproduces what the element represents exactly).
+    /// element: the assembly of the rows (DOFs, components, averaging) is right. (Any weights
+    /// that sum to one pass this; the beam test in tests/fe_elements.rs holds the
+    /// extrapolation's own.)
     #[test]
     fn a_linear_field_recovers_its_stress_exactly() {
         let (nodes, elements) = crate::samples::rectangle_mesh(2.0, 1.0, 3, 3, 0.2);

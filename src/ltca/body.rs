@@ -24,9 +24,9 @@ pub struct FlankCandidate {
     pub node: usize,
     /// Roll angle of the node on the modified flank [rad].
     pub roll_angle: f64,
-    /// Position in the gear's tooth-local frame [m].
+    /// Position in the gear's frame (mesh coordinates) [m].
     pub position: Point2<f64>,
-    /// Unit inward normal in the tooth-local frame.
+    /// Unit inward normal in the gear's frame.
     pub inward: Vector2<f64>,
 }
 
@@ -189,8 +189,11 @@ impl LtcaBody {
             .collect();
         // The loaded flank's side of its tooth's centre line, from its first candidate.
         let loaded_side_sign = candidates.first().map_or(1.0, |c| {
+            let pitch = gear.angular_pitch();
             let angle = (-c.position.x).atan2(c.position.y);
-            (angle - c.tooth as f64 * gear.angular_pitch()).signum()
+            // From the nearest tooth's centre line, as `fillet_nodes` measures it (an angle past
+            // π would flip the sign).
+            (angle - (angle / pitch).round() * pitch).signum()
         });
         let fillet_nodes = fillet_nodes(gear, &mesh, loaded_side_sign);
         let targets: Vec<usize> = fillet_nodes.iter().map(|f| f.node).collect();

@@ -325,6 +325,20 @@ pub fn console(study: &LtcaStudy) -> String {
         iso.factors.contact.elasticity_factor_sqrt_pa * 1e-3,
         iso.factors.contact.contact_ratio_factor,
     ));
+    let sf = &study.summary.safety_factors;
+    let show = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.2}"));
+    text.push_str(&format!(
+        "safety at the design torque (sigma_Flim {:.0} MPa, sigma_Hlim {:.0} MPa): S_F FE {} / {}, ISO {:.2} / {:.2}; S_H FE {}, ISO {:.2} / {:.2}\n",
+        sf.root_stress_limit_mpa,
+        sf.contact_stress_limit_mpa,
+        show(sf.root_fe[0]),
+        show(sf.root_fe[1]),
+        sf.root_iso[0],
+        sf.root_iso[1],
+        show(sf.contact_fe),
+        sf.contact_iso[0],
+        sf.contact_iso[1],
+    ));
     for (g, root) in iso.factors.root.iter().enumerate() {
         for note in &root.notes {
             text.push_str(&format!("  ISO 6336-3, gear {}: {note}\n", g + 1));

@@ -100,6 +100,11 @@ pub struct RunSummary {
     /// (the answer is wrong) and warnings (suspicious); the report's "Self-checks" lists them.
     pub self_check_errors: usize,
     pub self_check_warnings: usize,
+    /// The smallest root and flank safety over the sweep's speeds, from the FE's static
+    /// stresses scaled by the sweep's dynamic factor, and where: (S, driver rpm)
+    /// (`strength_over_speed.csv`).
+    pub min_root_safety: Option<(f64, f64)>,
+    pub min_contact_safety: Option<(f64, f64)>,
 }
 
 fn read(dir: &Path, stage: &str) -> Option<Value> {
@@ -244,7 +249,17 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
             .filter(|c| c.passed == Some(false) && c.warning_only == warning)
             .count()
     };
+    let over_speed = safety_over_speed(&ltca, &dynamic_factors(dir));
+    let lowest = |column: usize| {
+        over_speed
+            .iter()
+            .filter(|r| r[column].is_finite())
+            .min_by(|a, b| a[column].total_cmp(&b[column]))
+            .map(|r| (r[column], r[0]))
+    };
     let summary = RunSummary {
+        min_root_safety: lowest(1),
+        min_contact_safety: lowest(3),
         self_check_errors: failed(false),
         self_check_warnings: failed(true),
         interrupted: manifest.as_ref().and_then(|m| m.interrupted.clone()),
@@ -343,6 +358,46 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
         }
     }
     let out = OutputDir(dir);
+    if !over_speed.is_empty() {
+        out.csv(
+            "strength_over_speed.csv",
+            &[
+                "driver_rpm",
+                "root_safety_fe",
+                "root_safety_iso",
+                "contact_safety_fe",
+                "contact_safety_iso",
+            ],
+            over_speed
+                .iter()
+                .map(|r| r.iter().map(|v| format!("{v:.6}")).collect()),
+        )?;
+        let curve = |column: usize| -> Vec<(f64, f64)> {
+            over_speed
+                .iter()
+                .filter(|r| r[column].is_finite())
+                .map(|r| (r[0], r[column]))
+                .collect()
+        };
+        let (first, last) = (over_speed[0][0], over_speed[over_speed.len() - 1][0]);
+        out.chart(
+            "strength_over_speed",
+            &super::plot::LinePlot {
+                y_range: None,
+                markers: Vec::new(),
+                title: "Safety under the dynamic mesh force (sweep on the LTCA's force law)".into(),
+                x_label: "driver speed [rpm]".into(),
+                y_label: "safety factor".into(),
+                series: vec![
+                    ("S_F, FE root stress".into(), curve(1)),
+                    ("S_F, ISO 6336-3 sigma_F0".into(), curve(2)),
+                    ("S_H, LTCA Hertz pressure".into(), curve(3)),
+                    ("S_H, ISO 6336-2 sigma_H".into(), curve(4)),
+                    ("1".into(), vec![(first, 1.0), (last, 1.0)]),
+                ],
+            },
+        )?;
+    }
     std::fs::create_dir_all(dir.join("tables")).map_err(|source| ReportError::Io {
         path: dir.join("tables").display().to_string(),
         source,
@@ -712,6 +767,76 @@ fn sections(
             ),
         ],
     });
+    let sf = |key: &str, g: Option<usize>| {
+        let v = field(ltca, &["safety_factors", key]);
+        match g {
+            Some(g) => v.and_then(|v| v.get(g).and_then(|x| x.as_f64())),
+            None => v.and_then(|v| v.as_f64()),
+        }
+    };
+    let per_gear =
+        |path: &[&str], g: usize| field(ltca, path).and_then(|v| v.get(g).and_then(|x| x.as_f64()));
+    let fe_pressure = number(ltca, &["contact_pressure_max_mpa"]);
+    let strength_rows = vec![
+        row(&[
+            "root stress, largest fillet tension [MPa]".into(),
+            show(per_gear(&["root_stress_max_mpa"], 0), 1),
+            show(per_gear(&["root_stress_max_mpa"], 1), 1),
+            show(per_gear(&["iso_6336", "root_stress_iso_mpa"], 0), 1),
+            show(per_gear(&["iso_6336", "root_stress_iso_mpa"], 1), 1),
+        ]),
+        row(&[
+            "contact pressure [MPa]".into(),
+            show(fe_pressure, 0),
+            show(fe_pressure, 0),
+            show(per_gear(&["iso_6336", "contact_pressure_iso_mpa"], 0), 0),
+            show(per_gear(&["iso_6336", "contact_pressure_iso_mpa"], 1), 0),
+        ]),
+        row(&[
+            "S_F at the design torque".into(),
+            show(sf("root_fe", Some(0)), 2),
+            show(sf("root_fe", Some(1)), 2),
+            show(sf("root_iso", Some(0)), 2),
+            show(sf("root_iso", Some(1)), 2),
+        ]),
+        row(&[
+            "S_H at the design torque".into(),
+            show(sf("contact_fe", None), 2),
+            show(sf("contact_fe", None), 2),
+            show(sf("contact_iso", Some(0)), 2),
+            show(sf("contact_iso", Some(1)), 2),
+        ]),
+    ];
+    out.push(Section {
+        title: "Strength".into(),
+        text: vec![
+            format!(
+                "At {torque} N·m, unmodified pair: the FE's largest fillet tension over the cycle (LTCA contact forces through the bodies' fillet stress, recovered at the surface) and the LTCA's largest Hertz pressure, beside ISO 6336-3 method B and ISO 6336-2 (load factors 1). Limits σ_Flim {} MPa, σ_Hlim {} MPa (`[material]`; the defaults are a case-hardened steel, an assumption); {}.",
+                show(sf("root_stress_limit_mpa", None), 0),
+                show(sf("contact_stress_limit_mpa", None), 0),
+                field(ltca, &["safety_factors", "basis"]).and_then(|b| b.as_str().map(String::from)).unwrap_or_default(),
+            ),
+            match (s.min_root_safety, s.min_contact_safety) {
+                (Some((sf, sf_rpm)), Some((sh, sh_rpm))) => format!(
+                    "Under the dynamic mesh force of the sweep (root stress × K, Hertz pressure × √K): the smallest S_F is {sf:.2} at {sf_rpm:.0} rpm, the smallest S_H {sh:.2} at {sh_rpm:.0} rpm (strength_over_speed.csv)."
+                ),
+                _ => "No sweep to scale them by.".to_string(),
+            },
+        ],
+        tables: vec![Table {
+            name: "strength",
+            caption: "FE and ISO 6336, gear 1 and gear 2".into(),
+            header: ["quantity", "FE gear 1", "FE gear 2", "ISO gear 1", "ISO gear 2"]
+                .map(String::from)
+                .to_vec(),
+            rows: strength_rows,
+        }],
+        plots: vec![
+            ("Fillet tension of a loaded tooth along the path of contact".into(), "ltca/root_stress.png".into()),
+            ("Hertz pressure along the path of contact".into(), "ltca/contact_pressure.png".into()),
+            ("Safety over speed".into(), "strength_over_speed.png".into()),
+        ],
+    });
     out.push(Section {
         title: "Explicit FE: k(θ) from the low-speed DTE".into(),
         text: vec![format!(
@@ -956,6 +1081,61 @@ fn harris_span(dir: &Path, unmodified: &str) -> Option<((f64, f64), bool)> {
     let last = below.iter().rposition(|b| b.1)?;
     let throughout = below[first..=last].iter().all(|b| b.1);
     Some(((below[first].0, below[last].0), throughout))
+}
+
+/// The sweep's dynamic factor per speed, the larger of the up- and down-sweep's:
+/// (driver rpm, K) from `sweep-ltca/sweep.csv`.
+fn dynamic_factors(dir: &Path) -> Vec<(f64, f64)> {
+    let Ok(mut reader) = csv::Reader::from_path(dir.join("sweep-ltca/sweep.csv")) else {
+        return Vec::new();
+    };
+    let Ok(headers) = reader.headers().cloned() else {
+        return Vec::new();
+    };
+    let column = |name: &str| headers.iter().position(|h| h == name);
+    let (Some(rpm), Some(up), Some(down)) = (
+        column("driver_rpm"),
+        column("dynamic_factor_up"),
+        column("dynamic_factor_down"),
+    ) else {
+        return Vec::new();
+    };
+    reader
+        .records()
+        .filter_map(|r| {
+            let r = r.ok()?;
+            let value = |i: usize| r.get(i)?.parse::<f64>().ok().filter(|v| v.is_finite());
+            let k = match (value(up), value(down)) {
+                (Some(a), Some(b)) => a.max(b),
+                (a, b) => a.or(b)?,
+            };
+            Some((value(rpm)?, k))
+        })
+        .collect()
+}
+
+/// The safety factors over the sweep's speeds from their static values (the smaller of the two
+/// gears'): (rpm, S_F FE, S_F ISO, S_H FE, S_H ISO), NaN where a static value is missing.
+fn safety_over_speed(ltca: &Option<Value>, factors: &[(f64, f64)]) -> Vec<[f64; 5]> {
+    let smaller = |key: &str| {
+        field(ltca, &["safety_factors", key]).and_then(|v| match v {
+            Value::Array(a) => a.iter().filter_map(|x| x.as_f64()).reduce(f64::min),
+            other => other.as_f64(),
+        })
+    };
+    let [root_fe, root_iso, contact_fe, contact_iso] =
+        ["root_fe", "root_iso", "contact_fe", "contact_iso"]
+            .map(|k| smaller(k).unwrap_or(f64::NAN));
+    factors
+        .iter()
+        .map(|&(rpm, k)| {
+            let (sf_fe, sh_fe) =
+                crate::strength::safety::under_dynamic_load(root_fe, contact_fe, k);
+            let (sf_iso, sh_iso) =
+                crate::strength::safety::under_dynamic_load(root_iso, contact_iso, k);
+            [rpm, sf_fe, sf_iso, sh_fe, sh_iso]
+        })
+        .collect()
 }
 
 /// The FE-against-lumped spectra `compare` drew (one per FE speed), if any.

@@ -13,6 +13,7 @@ use crate::ltca::{
 use crate::stiffness::{self, potential_energy, IsoStiffness, MeshStiffness};
 use crate::strength::hertz::{self, PressurePoint};
 use crate::strength::iso6336::{self, Elastic};
+use crate::strength::safety;
 
 use super::checks::{Check, CheckKind};
 use super::{load_torque, Progress, StudyError};
@@ -259,9 +260,19 @@ pub fn root_stress_cycle(
                             }
                         }
                     }
-                    if row.tension_mpa.is_finite() && row.compression_mpa.is_finite() {
-                        rows.push(row);
+                    if !(row.tension_mpa.is_finite() && row.compression_mpa.is_finite()) {
+                        return Err(StudyError::Input(format!(
+                            "gear {} tooth {tooth}: no fillet surface node found on {} side \
+                             (the mesh's fillet between the root and the form circle)",
+                            g + 1,
+                            if row.tension_mpa.is_finite() {
+                                "the unloaded"
+                            } else {
+                                "the loaded"
+                            }
+                        )));
                     }
+                    rows.push(row);
                 }
             }
             Ok(rows)
@@ -300,6 +311,48 @@ pub fn root_stress_peaks(rows: &[RootStressRow], case: &Case) -> [Option<RootStr
                 .fold(f64::INFINITY, f64::min),
         })
     })
+}
+
+/// Static safety factors at the design torque ([`crate::strength::safety`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct SafetyFactors {
+    /// σ_Flim and σ_Hlim used (`material.root_stress_limit_mpa`, `contact_stress_limit_mpa`).
+    pub root_stress_limit_mpa: f64,
+    pub contact_stress_limit_mpa: f64,
+    /// S_F per gear from the FE's fillet maximum and from ISO's σ_F0.
+    pub root_fe: [Option<f64>; 2],
+    pub root_iso: [f64; 2],
+    /// S_H from the LTCA's largest Hertz pressure away from the tips (both gears share it) and
+    /// from ISO's σ_H per gear.
+    pub contact_fe: Option<f64>,
+    pub contact_iso: [f64; 2],
+    pub basis: &'static str,
+}
+
+/// The static safety factors of the first variant's stresses.
+pub fn safety_factors(
+    case: &Case,
+    root_fe_mpa: [Option<f64>; 2],
+    contact_fe_mpa: Option<f64>,
+    iso: &IsoStrength,
+) -> SafetyFactors {
+    let (root_limit, contact_limit) = (
+        case.material.root_stress_limit * 1e-6,
+        case.material.contact_stress_limit * 1e-6,
+    );
+    SafetyFactors {
+        root_stress_limit_mpa: root_limit,
+        contact_stress_limit_mpa: contact_limit,
+        root_fe: root_fe_mpa.map(|s| s.map(|s| safety::root_safety(s, root_limit))),
+        root_iso: iso
+            .root_stress_iso_mpa
+            .map(|s| safety::root_safety(s, root_limit)),
+        contact_fe: contact_fe_mpa.map(|p| safety::contact_safety(p, contact_limit)),
+        contact_iso: iso
+            .contact_pressure_iso_mpa
+            .map(|p| safety::contact_safety(p, contact_limit)),
+        basis: "S_F = σ_Flim·Y_ST/σ_F (Y_ST = 2), S_H = σ_Hlim/σ_H; load, life, size, surface and lubrication factors 1",
+    }
 }
 
 /// ISO 6336's nominal stresses at the design torque, in MPa, with every factor
@@ -346,6 +399,8 @@ pub struct LtcaSummary {
     pub root_stress_max_at: [Option<RootStressPeak>; 2],
     /// ISO 6336-2/-3 at the design torque (load factors 1).
     pub iso_6336: IsoStrength,
+    /// S_F and S_H at the design torque, the first variant's FE stresses and ISO's.
+    pub safety_factors: SafetyFactors,
     pub elements: usize,
     pub wall_s: f64,
     pub variants: Vec<VariantSummary>,
@@ -477,6 +532,12 @@ pub fn run(
         contact_pressure_max_at: first.contact_pressure_max_at,
         root_stress_max_mpa: first.root_stress.map(|p| p.map(|p| p.tension_mpa)),
         root_stress_max_at: first.root_stress,
+        safety_factors: safety_factors(
+            case,
+            first.root_stress.map(|p| p.map(|p| p.tension_mpa)),
+            (first.contact_pressure_max_mpa > 0.0).then_some(first.contact_pressure_max_mpa),
+            &iso_6336,
+        ),
         iso_6336,
         elements: first.elements[0] + first.elements[1],
         wall_s: started.elapsed().as_secs_f64(),

@@ -13,11 +13,16 @@ const POSITIONS: usize = 32;
 /// The case with `overrides`; its unmodified pair's fillet peaks (tension per gear) at the
 /// case's torque on 0.4 mm flanks, and the torque on the driven gear.
 fn peaks(overrides: &[Override]) -> (Case, [RootStressPeak; 2]) {
+    peaks_at(overrides, 0.4e-3)
+}
+
+/// [`peaks`] with fillet and flank elements of `fine` [m].
+fn peaks_at(overrides: &[Override], fine: f64) -> (Case, [RootStressPeak; 2]) {
     let sets = overrides.to_vec();
     let case = Case::load_with(None, &sets).unwrap();
     let mods = case.relief_variant("none").unwrap().modifications;
     let coarse = case.file.mesh.coarse_element_mm * 1e-3;
-    let model = model_with_sizes(&case, &mods, 0.4e-3, coarse).unwrap();
+    let model = model_with_sizes(&case, &mods, fine, coarse).unwrap();
     let torque = case.operating_points[0].torque;
     let rows = root_stress_cycle(&model, POSITIONS, torque).unwrap();
     assert!(
@@ -103,4 +108,16 @@ fn a_symmetric_pair_stresses_both_gears_alike() {
     );
     assert!((g1.tension_mpa / g2.tension_mpa - 1.0).abs() < 0.01);
     assert!((g1.compression_mpa / g2.compression_mpa - 1.0).abs() < 0.01);
+}
+
+/// The paper pair's largest fillet tension as the flank and fillet elements halve, 0.4 → 0.2 →
+/// 0.1 mm: the change shrinks (76.1 → 76.9 → 77.0 MPa at 64 positions, validation/strength),
+/// and the two finer meshes agree within 0.5 %.
+#[test]
+fn the_fillet_stress_converges_under_refinement() {
+    let peak = |fine: f64| peaks_at(&[], fine).1[0].tension_mpa;
+    let (coarse, middle, fine) = (peak(0.4e-3), peak(0.2e-3), peak(0.1e-3));
+    eprintln!("0.4 mm {coarse:.3}, 0.2 mm {middle:.3}, 0.1 mm {fine:.3} MPa");
+    assert!((fine - middle).abs() < (middle - coarse).abs());
+    assert!((fine / middle - 1.0).abs() < 5e-3);
 }

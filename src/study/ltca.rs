@@ -367,6 +367,7 @@ pub struct IsoStrength {
     pub contact_pressure_iso_mpa: [f64; 2],
     pub contact_pressure_iso_pitch_point_mpa: f64,
     /// The factors and the intermediate geometry (SI).
+    #[serde(rename = "iso_6336")]
     pub factors: crate::strength::iso6336::Iso6336,
 }
 
@@ -397,7 +398,9 @@ pub struct LtcaSummary {
     /// The first variant's largest fillet tension per gear over the cycle (FE), and where.
     pub root_stress_max_mpa: [Option<f64>; 2],
     pub root_stress_max_at: [Option<RootStressPeak>; 2],
-    /// ISO 6336-2/-3 at the design torque (load factors 1).
+    /// ISO 6336-2/-3 at the design torque (load factors 1): its stresses as flat keys beside
+    /// the FE's, the factors under `iso_6336`.
+    #[serde(flatten)]
     pub iso_6336: IsoStrength,
     /// S_F and S_H at the design torque, the first variant's FE stresses and ISO's.
     pub safety_factors: SafetyFactors,

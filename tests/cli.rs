@@ -270,7 +270,8 @@ fn ltca_writes_csv_plots_and_summary() {
         geardyn()
             .args(["ltca"])
             .arg(&case)
-            .args(["--positions", "8", "--relief", "none", "--out"])
+            .args(["--positions", "8", "--relief", "none"])
+            .args(["--set", "material.root_stress_limit_mpa=400", "--out"])
             .arg(&out),
     );
     let summary = read_summary(&out);
@@ -348,6 +349,19 @@ fn ltca_writes_csv_plots_and_summary() {
                 .unwrap()
                 > 0.0
         );
+        assert!(
+            summary["iso_6336"]["root"][g]["method_b"]["form_factor"]
+                .as_f64()
+                .unwrap()
+                > 0.0
+        );
+        // S_F = σ_Flim·2/σ_F at the overridden σ_Flim; S_H = σ_Hlim/p at the default 1 500.
+        let safety = &summary["safety_factors"];
+        let s_f = safety["root_fe"][g].as_f64().unwrap();
+        assert!((s_f - 800.0 / fe).abs() < 1e-9 * s_f, "{s_f}");
+        let s_h = safety["contact_fe"].as_f64().unwrap();
+        let p = summary["contact_pressure_max_mpa"].as_f64().unwrap();
+        assert!((s_h - 1500.0 / p).abs() < 1e-9 * s_h, "{s_h}");
     }
     let bad = geardyn()
         .args(["ltca", "--torque-nm", "-5", "--out"])
@@ -356,6 +370,18 @@ fn ltca_writes_csv_plots_and_summary() {
         .unwrap();
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("torque"));
+    let bad = geardyn()
+        .args([
+            "ltca",
+            "--set",
+            "material.contact_stress_limit_mpa=0",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("contact_stress_limit_mpa"));
 }
 
 /// `geardyn run` on a coarse case (0.6 mm LTCA flanks, the FE stiffness scene cut to 4 ms):
@@ -463,24 +489,47 @@ fn run_closes_the_chain_and_writes_the_report() {
         none["mesh_stiffness_mean_n_per_m"]
     );
     assert_eq!(s["ste_pp_unmodified_um"], none["ste_peak_to_peak_um"]);
-    // Strength: the safety over the sweep's speeds is the static one over the dynamic factor,
-    // so at most the static one, and its CSV and plot are there.
+    // Strength: the safety over the sweep's speeds is the unmodified pair's static one under the
+    // sweep's largest dynamic factor K (root stress × K, Hertz pressure × √K), at one speed.
     assert!(html.contains("Strength"));
-    let (root_min, at_rpm) = (
+    let smallest = |key: &str| {
+        none["safety_factors"][key].as_array().map_or_else(
+            || none["safety_factors"][key].as_f64().unwrap(),
+            |a| {
+                a.iter()
+                    .filter_map(|v| v.as_f64())
+                    .fold(f64::INFINITY, f64::min)
+            },
+        )
+    };
+    let (root_min, root_rpm) = (
         s["min_root_safety"][0].as_f64().unwrap(),
         s["min_root_safety"][1].as_f64().unwrap(),
     );
-    let root_static = ltca["safety_factors"]["root_fe"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter_map(|v| v.as_f64())
-        .fold(f64::INFINITY, f64::min);
-    assert!(
-        root_min > 0.0 && root_min <= root_static * (1.0 + 1e-9),
-        "{root_min} {root_static}"
+    let (contact_min, contact_rpm) = (
+        s["min_contact_safety"][0].as_f64().unwrap(),
+        s["min_contact_safety"][1].as_f64().unwrap(),
     );
-    assert!(at_rpm > 0.0);
+    let k_root = smallest("root_fe") / root_min;
+    let k_contact = (smallest("contact_fe") / contact_min).powi(2);
+    let k_sweep: f64 = csv::Reader::from_path(out.join("sweep-ltca/sweep.csv"))
+        .unwrap()
+        .deserialize::<std::collections::HashMap<String, String>>()
+        .map(|row| {
+            let row = row.unwrap();
+            let k = |c: &str| row[c].parse::<f64>().unwrap_or(f64::NAN);
+            k("dynamic_factor_up").max(k("dynamic_factor_down"))
+        })
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert_eq!(root_rpm, contact_rpm);
+    assert!(
+        (k_root / k_sweep - 1.0).abs() < 1e-6,
+        "{k_root} against {k_sweep}"
+    );
+    assert!(
+        (k_contact / k_sweep - 1.0).abs() < 1e-6,
+        "{k_contact} against {k_sweep}"
+    );
     assert!(out.join("strength_over_speed.csv").exists());
     assert!(out.join("strength_over_speed.png").exists());
     // `geardyn report DIR` re-writes the same report from the stages' files.

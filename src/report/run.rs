@@ -249,7 +249,7 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
             .filter(|c| c.passed == Some(false) && c.warning_only == warning)
             .count()
     };
-    let over_speed = safety_over_speed(&ltca, &dynamic_factors(dir));
+    let over_speed = safety_over_speed(&unmodified_variant, &dynamic_factors(dir));
     let lowest = |column: usize| {
         over_speed
             .iter()
@@ -325,6 +325,7 @@ pub fn write(dir: &Path) -> Result<RunSummary, ReportError> {
         [
             &geometry,
             &ltca,
+            &unmodified_variant,
             &fe,
             &sweep_ltca,
             &stability,
@@ -527,11 +528,13 @@ fn row(cells: &[String]) -> Vec<String> {
     cells.to_vec()
 }
 
+/// The report's sections from the stages' summaries (and `unmodified`, ltca's summary of the
+/// unmodified variant, the one the sweeps and the FE stiffness run are of).
 fn sections(
     dir: &Path,
     s: &RunSummary,
     fe_run: &str,
-    [geometry, ltca, fe, sweep_ltca, stability, optimize, compare]: [&Option<Value>; 7],
+    [geometry, ltca, unmodified, fe, sweep_ltca, stability, optimize, compare]: [&Option<Value>; 8],
 ) -> Vec<Section> {
     let torque = show(s.torque_nm, 1);
     let unstable = field(stability, &["unstable_rpm_ranges"])
@@ -767,30 +770,40 @@ fn sections(
             ),
         ],
     });
+    // The unmodified pair's FE stresses and safety (the sweep scales them); ISO's alike for
+    // every variant.
     let sf = |key: &str, g: Option<usize>| {
-        let v = field(ltca, &["safety_factors", key]);
+        let v = field(unmodified, &["safety_factors", key]);
         match g {
             Some(g) => v.and_then(|v| v.get(g).and_then(|x| x.as_f64())),
             None => v.and_then(|v| v.as_f64()),
         }
     };
-    let per_gear =
-        |path: &[&str], g: usize| field(ltca, path).and_then(|v| v.get(g).and_then(|x| x.as_f64()));
-    let fe_pressure = number(ltca, &["contact_pressure_max_mpa"]);
+    let per_gear = |summary: &Option<Value>, path: &[&str], g: usize| {
+        field(summary, path).and_then(|v| v.get(g).and_then(|x| x.as_f64()))
+    };
+    let fe_root = |g: usize| {
+        field(unmodified, &["root_stress"]).and_then(|v| {
+            v.get(g)
+                .and_then(|p| p.get("tension_mpa"))
+                .and_then(|x| x.as_f64())
+        })
+    };
+    let fe_pressure = number(unmodified, &["contact_pressure_max_mpa"]);
     let strength_rows = vec![
         row(&[
             "root stress, largest fillet tension [MPa]".into(),
-            show(per_gear(&["root_stress_max_mpa"], 0), 1),
-            show(per_gear(&["root_stress_max_mpa"], 1), 1),
-            show(per_gear(&["root_stress_iso_mpa"], 0), 1),
-            show(per_gear(&["root_stress_iso_mpa"], 1), 1),
+            show(fe_root(0), 1),
+            show(fe_root(1), 1),
+            show(per_gear(ltca, &["root_stress_iso_mpa"], 0), 1),
+            show(per_gear(ltca, &["root_stress_iso_mpa"], 1), 1),
         ]),
         row(&[
             "contact pressure [MPa]".into(),
             show(fe_pressure, 0),
             show(fe_pressure, 0),
-            show(per_gear(&["contact_pressure_iso_mpa"], 0), 0),
-            show(per_gear(&["contact_pressure_iso_mpa"], 1), 0),
+            show(per_gear(ltca, &["contact_pressure_iso_mpa"], 0), 0),
+            show(per_gear(ltca, &["contact_pressure_iso_mpa"], 1), 0),
         ]),
         row(&[
             "S_F at the design torque".into(),
@@ -814,15 +827,36 @@ fn sections(
                 "At {torque} N·m, unmodified pair: the FE's largest fillet tension over the cycle (LTCA contact forces through the bodies' fillet stress, recovered at the surface) and the LTCA's largest Hertz pressure, beside ISO 6336-3 method B and ISO 6336-2 (load factors 1). Limits σ_Flim {} MPa, σ_Hlim {} MPa (`[material]`; the defaults are a case-hardened steel, an assumption); {}.",
                 show(sf("root_stress_limit_mpa", None), 0),
                 show(sf("contact_stress_limit_mpa", None), 0),
-                field(ltca, &["safety_factors", "basis"]).and_then(|b| b.as_str().map(String::from)).unwrap_or_default(),
+                field(unmodified, &["safety_factors", "basis"]).and_then(|b| b.as_str().map(String::from)).unwrap_or_default(),
             ),
             match (s.min_root_safety, s.min_contact_safety) {
                 (Some((sf, sf_rpm)), Some((sh, sh_rpm))) => format!(
-                    "Under the dynamic mesh force of the sweep (root stress × K, Hertz pressure × √K): the smallest S_F is {sf:.2} at {sf_rpm:.0} rpm, the smallest S_H {sh:.2} at {sh_rpm:.0} rpm (strength_over_speed.csv)."
+                    "Under the dynamic mesh force of the sweep on the LTCA's force law (root stress × K, Hertz pressure × √K, K its largest mesh force over the static one at each speed, up- or down-sweep): the smallest FE-based S_F is {sf:.2} at {sf_rpm:.0} rpm, the smallest S_H {sh:.2} at {sh_rpm:.0} rpm (strength_over_speed.csv, with ISO's beside). Not assessed: the back flanks, which a pair without backlash loads where the response is large (reversed bending, ISO's Y_M), and the damper's share of the mesh force."
                 ),
-                _ => "No sweep to scale them by.".to_string(),
+                _ if field(unmodified, &["safety_factors"]).is_none() => "The LTCA stage holds no safety factors (a folder written before them, or the stage did not finish): nothing to scale over speed.".to_string(),
+                _ => "The FE-based safety over speed is missing: no sweep on the LTCA's force law (sweep-ltca/sweep.csv), or no FE stress to scale.".to_string(),
             },
-        ],
+            field(ltca, &["iso_6336", "root"])
+                .and_then(|r| r.as_array().cloned())
+                .map(|gears| {
+                    gears
+                        .iter()
+                        .enumerate()
+                        .flat_map(|(g, root)| {
+                            root.get("notes")
+                                .and_then(|n| n.as_array().cloned())
+                                .unwrap_or_default()
+                                .into_iter()
+                                .filter_map(move |n| n.as_str().map(|n| format!("ISO 6336-3, gear {}: {n}.", g + 1)))
+                        })
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                })
+                .unwrap_or_default(),
+        ]
+        .into_iter()
+        .filter(|t| !t.is_empty())
+        .collect(),
         tables: vec![Table {
             name: "strength",
             caption: "FE and ISO 6336, gear 1 and gear 2".into(),
@@ -1114,11 +1148,12 @@ fn dynamic_factors(dir: &Path) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// The safety factors over the sweep's speeds from their static values (the smaller of the two
-/// gears'): (rpm, S_F FE, S_F ISO, S_H FE, S_H ISO), NaN where a static value is missing.
-fn safety_over_speed(ltca: &Option<Value>, factors: &[(f64, f64)]) -> Vec<[f64; 5]> {
+/// The safety factors over the sweep's speeds from the static ones of `variant` (ltca's summary
+/// of the unmodified pair, the one the sweep runs on; the smaller of the two gears'): (rpm, S_F
+/// FE, S_F ISO, S_H FE, S_H ISO), NaN where a static value is missing; empty when none is there.
+fn safety_over_speed(variant: &Option<Value>, factors: &[(f64, f64)]) -> Vec<[f64; 5]> {
     let smaller = |key: &str| {
-        field(ltca, &["safety_factors", key]).and_then(|v| match v {
+        field(variant, &["safety_factors", key]).and_then(|v| match v {
             Value::Array(a) => a.iter().filter_map(|x| x.as_f64()).reduce(f64::min),
             other => other.as_f64(),
         })

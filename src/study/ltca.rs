@@ -165,6 +165,8 @@ pub struct VariantSummary {
     /// Per gear, the largest fillet tension over the cycle, where, and the largest compression
     /// (FE, [`root_stress_cycle`]).
     pub root_stress: [Option<RootStressPeak>; 2],
+    /// The static safety factors of this variant's stresses and ISO's.
+    pub safety_factors: Option<SafetyFactors>,
 }
 
 /// Where a pressure peak sits.
@@ -351,7 +353,7 @@ pub fn safety_factors(
         contact_iso: iso
             .contact_pressure_iso_mpa
             .map(|p| safety::contact_safety(p, contact_limit)),
-        basis: "S_F = σ_Flim·Y_ST/σ_F (Y_ST = 2), S_H = σ_Hlim/σ_H; load, life, size, surface and lubrication factors 1",
+        basis: "S_F = σ_Flim·Y_ST/σ_F (Y_ST = 2), S_H = σ_Hlim/σ_H; load, life, size, surface and lubrication factors 1. σ_Flim is calibrated on ISO's σ_F0, which lies 4–13 % above the FE's fillet maximum (validation/strength): the FE-based S_F reads that much higher",
     }
 }
 
@@ -402,7 +404,8 @@ pub struct LtcaSummary {
     /// the FE's, the factors under `iso_6336`.
     #[serde(flatten)]
     pub iso_6336: IsoStrength,
-    /// S_F and S_H at the design torque, the first variant's FE stresses and ISO's.
+    /// S_F and S_H at the design torque, the first variant's FE stresses and ISO's (each
+    /// variant's in `variants`).
     pub safety_factors: SafetyFactors,
     pub elements: usize,
     pub wall_s: f64,
@@ -474,6 +477,12 @@ pub fn run(
             ),
         );
         summary.root_stress = root_stress_peaks(&root_stress, case);
+        summary.safety_factors = Some(safety_factors(
+            case,
+            summary.root_stress.map(|p| p.map(|p| p.tension_mpa)),
+            (summary.contact_pressure_max_mpa > 0.0).then_some(summary.contact_pressure_max_mpa),
+            &iso_strength(case, torque),
+        ));
         let mesh_stiffness = stiffness::from_ltca(
             &case.pair,
             &results,
@@ -535,12 +544,10 @@ pub fn run(
         contact_pressure_max_at: first.contact_pressure_max_at,
         root_stress_max_mpa: first.root_stress.map(|p| p.map(|p| p.tension_mpa)),
         root_stress_max_at: first.root_stress,
-        safety_factors: safety_factors(
-            case,
-            first.root_stress.map(|p| p.map(|p| p.tension_mpa)),
-            (first.contact_pressure_max_mpa > 0.0).then_some(first.contact_pressure_max_mpa),
-            &iso_6336,
-        ),
+        safety_factors: first
+            .safety_factors
+            .clone()
+            .expect("every variant's safety factors are set with its root stress"),
         iso_6336,
         elements: first.elements[0] + first.elements[1],
         wall_s: started.elapsed().as_secs_f64(),
@@ -631,8 +638,9 @@ pub fn variant_summary(
             teeth: tooth_pairs[p.pair],
         }),
         contact_pressure_at_tip_max_mpa: peak(true).map(|p| p.pressure_pa * 1e-6),
-        // The caller that computed the fillet stress sets it.
+        // The caller that computed the fillet stress sets these.
         root_stress: [None, None],
+        safety_factors: None,
     }
 }
 

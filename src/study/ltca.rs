@@ -331,7 +331,8 @@ pub struct SafetyFactors {
     pub basis: &'static str,
 }
 
-/// The static safety factors of the first variant's stresses.
+/// The static safety factors of one variant's FE stresses (the fillet maxima per gear, the
+/// largest Hertz pressure) and of ISO's.
 pub fn safety_factors(
     case: &Case,
     root_fe_mpa: [Option<f64>; 2],

@@ -70,6 +70,18 @@ pub fn elasticity_matrix(
 }
 
 const CORNERS: [(f64, f64); 4] = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+/// Natural coordinates (ξ, η) of the 8 nodes: the corners, then the mid-sides of edges 0-1, 1-2,
+/// 2-3, 3-0.
+pub const NODES: [(f64, f64); 8] = [
+    (-1.0, -1.0),
+    (1.0, -1.0),
+    (1.0, 1.0),
+    (-1.0, 1.0),
+    (0.0, -1.0),
+    (1.0, 0.0),
+    (0.0, 1.0),
+    (-1.0, 0.0),
+];
 const GAUSS_3: [(f64, f64); 3] = [
     (-0.774_596_669_241_483_4, 5.0 / 9.0),
     (0.0, 8.0 / 9.0),
@@ -305,17 +317,7 @@ mod tests {
 
     #[test]
     fn shape_functions_partition_unity_and_interpolate_nodes() {
-        let nat = [
-            (-1.0, -1.0),
-            (1.0, -1.0),
-            (1.0, 1.0),
-            (-1.0, 1.0),
-            (0.0, -1.0),
-            (1.0, 0.0),
-            (0.0, 1.0),
-            (-1.0, 0.0),
-        ];
-        for (i, (xi, eta)) in nat.iter().enumerate() {
+        for (i, (xi, eta)) in NODES.iter().enumerate() {
             let n = shape(*xi, *eta);
             for (j, v) in n.iter().enumerate() {
                 assert!((v - if i == j { 1.0 } else { 0.0 }).abs() < 1e-15);

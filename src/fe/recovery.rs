@@ -17,18 +17,6 @@ use nalgebra::{Matrix3, Point2, SMatrix};
 
 use super::q8;
 
-/// Natural coordinates of the Q8 nodes (corners, then mid-sides of edges 0-1, 1-2, 2-3, 3-0).
-const NODES: [(f64, f64); 8] = [
-    (-1.0, -1.0),
-    (1.0, -1.0),
-    (1.0, 1.0),
-    (-1.0, 1.0),
-    (0.0, -1.0),
-    (1.0, 0.0),
-    (0.0, 1.0),
-    (-1.0, 0.0),
-];
-
 /// The 3 × 16 maps from an element's displacements to the stress (σ_xx, σ_yy, τ_xy)
 /// extrapolated from its 2 × 2 Gauss points to each of its 8 nodes.
 pub fn element_nodal_stress(
@@ -38,7 +26,7 @@ pub fn element_nodal_stress(
     let g = 1.0 / 3f64.sqrt();
     let points = [(-g, -g), (g, -g), (g, g), (-g, g)];
     let at_points = points.map(|(xi, eta)| d * q8::strain_matrix(nodes, xi, eta).0);
-    NODES.map(|(xi, eta)| {
+    q8::NODES.map(|(xi, eta)| {
         let mut map = SMatrix::<f64, 3, 16>::zeros();
         for ((xg, eg), s) in points.iter().zip(&at_points) {
             let weight = 0.25 * (1.0 + 3.0 * xi * xg) * (1.0 + 3.0 * eta * eg);

@@ -94,6 +94,8 @@ fn ltca(c: &mut Criterion) {
         min_length: 0.25,
         min_contact_ratio: 1.2,
         contact_deflection: deflection,
+        max_root_stress: None,
+        max_contact_pressure: None,
     };
     let respond = |d: &ReliefDesign| robust::evaluate(&bodies, d, &range, 64).map(|e| e.response);
     group.bench_function("trust_region_linear_from_none", |b| {

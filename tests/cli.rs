@@ -1412,12 +1412,18 @@ fn optimize_writes_its_summary_and_the_optimum_beats_the_baselines() {
                 "50:150:3",
                 "--rpm",
                 "100:12000:20",
+                "--max-root-stress-mpa",
+                "103%",
                 "--out",
             ])
             .arg(&out),
     );
     let s = read_summary(&out);
     for key in [
+        "root_stress_none_mpa",
+        "root_stress_optimum_mpa",
+        "contact_pressure_none_mpa",
+        "contact_pressure_optimum_mpa",
         "tip_relief_um",
         "root_relief_um",
         "start_roll_deg",
@@ -1448,6 +1454,19 @@ fn optimize_writes_its_summary_and_the_optimum_beats_the_baselines() {
     }
     assert!(number("ste_pp_after_um") < number("ste_pp_before_um"));
     assert!(s["iterations"].as_u64().unwrap() >= 1);
+    // The root-stress limit is 103 % of the unmodified pair's peak, and the optimum keeps it
+    // (to the optimizer's 0.1 %); no contact-pressure limit was asked for.
+    let limit = number("max_root_stress_mpa");
+    assert!((limit / (1.03 * number("root_stress_none_mpa")) - 1.0).abs() < 1e-9);
+    assert!(number("root_stress_optimum_mpa") <= limit * 1.001);
+    assert!(s["max_contact_pressure_mpa"].is_null());
+    assert!(number("contact_pressure_optimum_mpa") > 0.0);
+    let candidates = std::fs::read_to_string(out.join("candidates.csv")).unwrap();
+    assert!(candidates
+        .lines()
+        .next()
+        .unwrap()
+        .contains("root_stress_max_gear1_mpa"));
     for (end, amounts) in [("tip", "tip_relief_um"), ("root", "root_relief_um")] {
         for g in 0..2 {
             let amount = s[amounts][g].as_f64().unwrap();
@@ -1473,6 +1492,13 @@ fn optimize_writes_its_summary_and_the_optimum_beats_the_baselines() {
     for (flag, value, named) in [
         ("--torque-range", "0:150:3", "torque-range"),
         ("--min-relief-length", "0", "min-relief-length"),
+        ("--max-root-stress-mpa", "-5", "max-root-stress-mpa"),
+        (
+            "--max-contact-pressure-mpa",
+            "x%",
+            "max-contact-pressure-mpa",
+        ),
+        ("--max-root-stress-mpa", "1%", "no start keeps the limits"),
     ] {
         let output = geardyn()
             .args(["optimize", flag, value, "--out"])

@@ -51,10 +51,16 @@ pub struct FilletStress {
 }
 
 impl FilletStress {
-    /// (σ_xx, σ_yy, τ_xy) at every fillet node under the candidate forces `forces` [N].
-    pub fn stresses(&self, forces: &[f64]) -> Vec<[f64; 3]> {
-        let f = nalgebra::DVector::from_column_slice(forces);
-        let s = &self.influence * f;
+    /// (σ_xx, σ_yy, τ_xy) at every fillet node under the loads (candidate index, inward force
+    /// [N]), a candidate possibly more than once: only the loaded candidates' columns are read, as a contact
+    /// loads a few of the hundreds of candidates.
+    pub fn stresses(&self, loads: impl IntoIterator<Item = (usize, f64)>) -> Vec<[f64; 3]> {
+        let mut s = vec![0.0; self.influence.nrows()];
+        for (candidate, force) in loads {
+            for (si, c) in s.iter_mut().zip(self.influence.column(candidate).iter()) {
+                *si += c * force;
+            }
+        }
         (0..self.nodes.len())
             .map(|i| [s[3 * i], s[3 * i + 1], s[3 * i + 2]])
             .collect()

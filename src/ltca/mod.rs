@@ -132,6 +132,8 @@ pub struct LtcaModel {
     /// The same as (gear-1 tooth, gear-2 tooth) mesh indices: the columns of the results.
     pub tooth_pairs: Vec<(usize, usize)>,
     modifications: [FlankModification; 2],
+    /// The bodies' material.
+    pub material: BodyMaterial,
     /// Stride of the coarse pass of the first-touch search (1: exhaustive).
     first_touch_stride: usize,
 }
@@ -200,6 +202,7 @@ impl LtcaModel {
             pairs,
             tooth_pairs,
             modifications: *modifications,
+            material,
             first_touch_stride: FIRST_TOUCH_STRIDE,
         })
     }
@@ -217,6 +220,7 @@ impl LtcaModel {
             pairs: self.pairs.clone(),
             tooth_pairs: self.tooth_pairs.clone(),
             modifications: *modifications,
+            material: self.material,
             first_touch_stride: self.first_touch_stride,
         }
     }
@@ -510,15 +514,39 @@ impl LtcaModel {
                 .enumerate()
                 .map(|(i, c)| (c.node, i))
                 .collect();
-            let mut forces = vec![0.0; body.candidates.len()];
-            for contact in &contacts.active {
-                for (node, weight, _) in contact.nodes[g] {
-                    if weight != 0.0 {
-                        forces[candidate_of[&node]] += contact.force * weight;
-                    }
-                }
-            }
-            body.fillet.stresses(&forces)
+            let loads = contacts.active.iter().flat_map(|contact| {
+                contact.nodes[g]
+                    .iter()
+                    .filter(|(_, weight, _)| *weight != 0.0)
+                    .map(|(node, weight, _)| (candidate_of[node], contact.force * weight))
+            });
+            body.fillet.stresses(loads)
+        })
+    }
+
+    /// Per gear, the largest principal stress on its loaded-side fillet nodes under the contact
+    /// forces `forces` of `points` [Pa] (−∞ without fillet nodes).
+    fn fillet_tension(&self, points: &[ContactPoint], forces: &DVector<f64>) -> [f64; 2] {
+        std::array::from_fn(|g| {
+            let loads = points
+                .iter()
+                .zip(forces.iter())
+                .filter(|(_, f)| **f > 0.0)
+                .flat_map(|(p, f)| {
+                    let weights = if g == 0 { p.weights1 } else { p.weights2 };
+                    weights
+                        .into_iter()
+                        .filter(|(_, w)| *w != 0.0)
+                        .map(move |(candidate, w)| (candidate, f * w))
+                });
+            let fillet = &self.bodies[g].fillet;
+            fillet
+                .nodes
+                .iter()
+                .zip(fillet.stresses(loads))
+                .filter(|(node, _)| node.loaded_side)
+                .map(|(_, s)| crate::fe::recovery::max_principal(s))
+                .fold(f64::NEG_INFINITY, f64::max)
         })
     }
 
@@ -765,6 +793,7 @@ impl PositionGeometry {
             active_points: forces.iter().filter(|f| **f > 0.0).count(),
             candidate_points: m,
             iterations: solution.iterations,
+            root_stress: model.fillet_tension(points, &forces),
         };
         Ok((result, forces))
     }
@@ -923,6 +952,10 @@ pub struct PositionResult {
     pub active_points: usize,
     pub candidate_points: usize,
     pub iterations: usize,
+    /// Per gear, the largest principal stress on the loaded flanks' fillets of its fine teeth
+    /// [Pa] ([`LtcaModel::fillet_stresses`]; −∞ for a body without fillet nodes): the tooth-root
+    /// tension at this position, what a root-stress limit reads.
+    pub root_stress: [f64; 2],
 }
 
 /// The loaded length of one tooth pair's engagement [samples]: the span over which `forces`

@@ -25,6 +25,13 @@
 //! over the cycle at the design torque, rim to rim: the one load the other pair carries alone
 //! as the relieved end comes into or out of contact), beyond which the relieved end is not
 //! reached under the design load (Smith, *Gear Noise and Vibration*, §3.3); and the loaded contact ratio ε_j ([`LtcaModel::loaded_contact_ratio`]) ≥ ε_min at every torque.
+//! Optionally, strength limits at every position i and torque j: each gear's tooth-root tension
+//! σ_ijg (the largest principal stress on the loaded fillets, [`crate::ltca::PositionResult::root_stress`])
+//! ≤ σ_max, and the largest Hertz pressure p_ij of the pairs in contact away from the tips
+//! ([`crate::strength::hertz`]; the involute's Hertz does not hold at a tip corner) ≤ p_max. A
+//! relief moves load along the flank: it lengthens single contact towards the tip (the root
+//! stress rises, as the same load acts on a longer arm) and towards the root (the curvature
+//! radii shrink, the pressure rises), which these limits bound.
 //!
 //! # Method
 //! Each iteration linearizes s_ij and ε_j about v₀ by forward differences (one LTCA per
@@ -33,8 +40,11 @@
 //! ```text
 //! minimize   Σ_j w_j (u_j − l_j) + ρ Σ_k r_k Δc_k     (a linear program in the trust region)
 //! subject to l_j ≤ s_ij + ∇s_ij·Δv ≤ u_j,   ε_j + ∇ε_j·Δv ≥ ε_min,   linear limits,
+//!            σ_ijg + ∇σ_ijg·Δv ≤ σ_max,   p_ij + ∇p_ij·Δv ≤ p_max   (when given),
 //!            |Δv_k| ≤ Δ  (trust region),     v_lo ≤ v₀ + Δv ≤ v_hi
 //! ```
+//! A stress row enters the QP only where it can bind inside the trust region
+//! (σ + Δ·‖∇σ‖₁ ≥ σ_max), which keeps the QP small: most positions are far below the peak.
 //! The step is re-evaluated with the LTCA; with ρ = actual/predicted reduction it is accepted
 //! when ρ ≥ 0.1 and ε_j ≥ ε_min holds in the LTCA (a rejected step keeps the linearization for
 //! the next, smaller one), and the radius grows (×2, ρ ≥ 0.75 on the
@@ -49,6 +59,8 @@ use super::qp::{self, QpError, QuadraticProgram};
 use super::relief::{ReliefDesign, VARIABLES};
 use crate::geometry::{FlankModification, GeometryError, ReliefShape};
 use crate::ltca::{LtcaError, LtcaModel};
+use crate::strength::hertz;
+use crate::strength::iso6336::Elastic;
 
 #[derive(Debug, thiserror::Error)]
 pub enum OptimizeError {
@@ -120,7 +132,19 @@ pub struct Limits {
     /// the combined relief at each end of the path may not exceed it (no loss of contact at the
     /// design torque).
     pub contact_deflection: f64,
+    /// Largest tooth-root tension of either gear at any position and torque [Pa] (None: no
+    /// limit).
+    pub max_root_stress: Option<f64>,
+    /// Largest Hertz pressure away from the tips at any position and torque [Pa] (None: no
+    /// limit).
+    pub max_contact_pressure: Option<f64>,
 }
+
+/// A strength limit holds to this share of itself: the LTCA's response is piecewise smooth
+/// (its maxima over nodes and pairs have kinks), so a linearized step lands a little beyond an
+/// active limit; 0.1 % is a tenth of the fillet stress's own discretization error at the
+/// default mesh (validation/strength: 76.1 → 76.9 → 77.0 MPa from 0.4 to 0.1 mm).
+pub const STRESS_LIMIT_TOLERANCE: f64 = 1e-3;
 
 /// Settings of the iteration.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -163,6 +187,50 @@ pub struct LoadResponse {
     pub objective_um: f64,
     /// Largest KKT residual of the contact solves.
     pub max_kkt_residual: f64,
+    /// Tooth-root tension of gear 1 and gear 2 [MPa], `[torque][position]`: the largest
+    /// principal stress on each gear's loaded fillets.
+    pub root_stress_mpa: Vec<Vec<[f64; 2]>>,
+    /// The largest Hertz pressure of the pairs in contact away from the tips [MPa] (0 where
+    /// none), `[torque][position]`.
+    pub contact_pressure_mpa: Vec<Vec<f64>>,
+}
+
+impl LoadResponse {
+    /// Each gear's largest root tension over the load range [MPa].
+    pub fn root_stress_peak_mpa(&self) -> [f64; 2] {
+        std::array::from_fn(|g| {
+            self.root_stress_mpa
+                .iter()
+                .flatten()
+                .map(|s| s[g])
+                .fold(f64::NEG_INFINITY, f64::max)
+        })
+    }
+
+    /// The largest Hertz pressure away from the tips over the load range [MPa].
+    pub fn contact_pressure_peak_mpa(&self) -> f64 {
+        self.contact_pressure_mpa
+            .iter()
+            .flatten()
+            .copied()
+            .fold(0.0, f64::max)
+    }
+}
+
+/// Per position of `run`, the largest Hertz pressure of its pairs in contact away from the
+/// tips [MPa] (0 where none).
+fn contact_pressures(model: &LtcaModel, run: &[crate::ltca::PositionResult]) -> Vec<f64> {
+    let elastic = Elastic {
+        youngs_modulus: model.material.youngs_modulus,
+        poisson_ratio: model.material.poisson_ratio,
+    };
+    let mut peak = vec![0.0f64; run.len()];
+    for point in hertz::along_path(&model.pair, [elastic; 2], run) {
+        if !point.at_tip {
+            peak[point.position] = peak[point.position].max(point.pressure_pa * 1e-6);
+        }
+    }
+    peak
 }
 
 /// The LTCA over `range` of `modifications` on `model`'s bodies.
@@ -203,6 +271,18 @@ pub fn load_response(
             .flatten()
             .map(|r| r.kkt_residual)
             .fold(0.0, f64::max),
+        root_stress_mpa: runs
+            .iter()
+            .map(|run| {
+                run.iter()
+                    .map(|r| r.root_stress.map(|s| s * 1e-6))
+                    .collect()
+            })
+            .collect(),
+        contact_pressure_mpa: runs
+            .iter()
+            .map(|run| contact_pressures(model, run))
+            .collect(),
         ste_um,
         ste_pp_um,
         objective_um,
@@ -357,6 +437,22 @@ pub fn feasible(evaluation: &Evaluation, limits: &Limits) -> bool {
             .contact_ratio
             .iter()
             .all(|e| *e >= limits.min_contact_ratio - 1e-6)
+        && stress_limits_hold(&evaluation.response, limits)
+}
+
+/// Whether the response keeps the strength limits (to [`STRESS_LIMIT_TOLERANCE`]).
+pub fn stress_limits_hold(response: &LoadResponse, limits: &Limits) -> bool {
+    let below = |value_mpa: f64, limit: Option<f64>| {
+        limit.is_none_or(|l| value_mpa * 1e6 <= l * (1.0 + STRESS_LIMIT_TOLERANCE))
+    };
+    response
+        .root_stress_peak_mpa()
+        .iter()
+        .all(|s| below(*s, limits.max_root_stress))
+        && below(
+            response.contact_pressure_peak_mpa(),
+            limits.max_contact_pressure,
+        )
 }
 
 /// Combined relief at the end of recess (C_a1 + C_f2) and at the start of approach (C_a2 + C_f1).
@@ -392,9 +488,23 @@ pub fn optimize(
     };
     let first = evaluate(start)?;
     if !feasible(&first, limits) {
+        let stress = |limit: Option<f64>, name: &str, peak: f64| {
+            limit.map_or(String::new(), |l| {
+                format!(", {name} {peak:.1} MPa against at most {:.1} MPa", l * 1e-6)
+            })
+        };
+        let [root1, root2] = first.response.root_stress_peak_mpa();
         return Err(OptimizeError::InfeasibleStart(format!(
-            "the start design {:?} breaks the limits (contact ratio {:?}, minimum {})",
-            start, first.response.contact_ratio, limits.min_contact_ratio
+            "the start design {:?} breaks the limits (contact ratio {:?}, minimum {}{}{})",
+            start,
+            first.response.contact_ratio,
+            limits.min_contact_ratio,
+            stress(limits.max_root_stress, "root stress", root1.max(root2)),
+            stress(
+                limits.max_contact_pressure,
+                "contact pressure",
+                first.response.contact_pressure_peak_mpa()
+            ),
         )));
     }
     let mut evaluations = 1;
@@ -522,7 +632,14 @@ fn finite(design: &ReliefDesign, response: LoadResponse) -> Result<LoadResponse,
     let numbers = std::iter::once(response.objective_um)
         .chain(response.ste_um.iter().flatten().copied())
         .chain(response.contact_ratio.iter().copied());
-    if numbers.into_iter().all(f64::is_finite) {
+    // A body without fillet nodes reads −∞ root stress (no limit can bind there), never NaN.
+    let stresses = response
+        .root_stress_mpa
+        .iter()
+        .flatten()
+        .flatten()
+        .chain(response.contact_pressure_mpa.iter().flatten());
+    if numbers.into_iter().all(f64::is_finite) && stresses.into_iter().all(|s| !s.is_nan()) {
         Ok(response)
     } else {
         Err(OptimizeError::NotFinite(format!(
@@ -545,6 +662,10 @@ fn finite(design: &ReliefDesign, response: LoadResponse) -> Result<LoadResponse,
 struct Jacobian {
     ste: Vec<Vec<[f64; VARIABLES]>>,
     contact_ratio: Vec<[f64; VARIABLES]>,
+    /// [torque][position][gear][variable], MPa per scaled unit.
+    root_stress: Vec<Vec<[[f64; VARIABLES]; 2]>>,
+    /// [torque][position][variable], MPa per scaled unit.
+    contact_pressure: Vec<Vec<[f64; VARIABLES]>>,
 }
 
 fn linearize(
@@ -562,6 +683,18 @@ fn linearize(
             .map(|s| vec![[0.0; VARIABLES]; s.len()])
             .collect(),
         contact_ratio: vec![[0.0; VARIABLES]; current.response.contact_ratio.len()],
+        root_stress: current
+            .response
+            .root_stress_mpa
+            .iter()
+            .map(|s| vec![[[0.0; VARIABLES]; 2]; s.len()])
+            .collect(),
+        contact_pressure: current
+            .response
+            .contact_pressure_mpa
+            .iter()
+            .map(|s| vec![[0.0; VARIABLES]; s.len()])
+            .collect(),
     };
     for k in 0..VARIABLES {
         let forward = v0[k] + settings.step <= hi[k];
@@ -599,6 +732,29 @@ fn linearize(
             }
             jacobian.contact_ratio[j][k] =
                 (shifted.response.contact_ratio[j] - current.response.contact_ratio[j]) / h;
+        }
+        let (after, before) = (&shifted.response, &current.response);
+        for (j, (a, b)) in after
+            .root_stress_mpa
+            .iter()
+            .zip(&before.root_stress_mpa)
+            .enumerate()
+        {
+            for (i, (a, b)) in a.iter().zip(b).enumerate() {
+                for g in 0..2 {
+                    jacobian.root_stress[j][i][g][k] = (a[g] - b[g]) / h;
+                }
+            }
+        }
+        for (j, (a, b)) in after
+            .contact_pressure_mpa
+            .iter()
+            .zip(&before.contact_pressure_mpa)
+            .enumerate()
+        {
+            for (i, (a, b)) in a.iter().zip(b).enumerate() {
+                jacobian.contact_pressure[j][i][k] = (a - b) / h;
+            }
         }
     }
     Ok(jacobian)
@@ -647,6 +803,33 @@ fn step_problem(
                 .collect(),
             (current.response.contact_ratio[j] - limits.min_contact_ratio).max(0.0),
         ));
+    }
+    // value + ∇value·Δv ≤ limit [MPa], where it can bind inside the trust region (the bound is
+    // held at ≥ 0 so that a start a hair beyond the limit, within its tolerance, stays feasible).
+    let mut limit_row = |value: f64, grad: &[f64; VARIABLES], limit_mpa: f64| {
+        let reach: f64 = grad.iter().map(|g| g.abs()).sum::<f64>() * radius;
+        if value.is_finite() && value + reach >= limit_mpa {
+            rows.push((
+                (0..VARIABLES).map(|k| (k, grad[k])).collect(),
+                (limit_mpa - value).max(0.0),
+            ));
+        }
+    };
+    if let Some(limit) = limits.max_root_stress {
+        for (j, stresses) in current.response.root_stress_mpa.iter().enumerate() {
+            for (i, s) in stresses.iter().enumerate() {
+                for (value, grad) in s.iter().zip(&jacobian.root_stress[j][i]) {
+                    limit_row(*value, grad, limit * 1e-6);
+                }
+            }
+        }
+    }
+    if let Some(limit) = limits.max_contact_pressure {
+        for (j, pressures) in current.response.contact_pressure_mpa.iter().enumerate() {
+            for (i, p) in pressures.iter().enumerate() {
+                limit_row(*p, &jacobian.contact_pressure[j][i], limit * 1e-6);
+            }
+        }
     }
     for k in 0..VARIABLES {
         rows.push((vec![(k, 1.0)], radius.min(hi[k] - v0[k])));

@@ -47,15 +47,29 @@ pub fn console(study: &OptimizeStudy) -> String {
         s.root_relief_um[0],
         s.root_relief_um[1]
     );
-    out += "candidate            robust STE p-p  at design  min contact ratio  max dyn. factor\n";
+    let limit = |name: &str, l: Option<f64>| {
+        l.map_or(String::new(), |l| format!(", {name} at most {l:.1} MPa"))
+    };
+    out += &format!(
+        "strength over the load range: root stress {:.1} -> {:.1} MPa, contact pressure {:.1} -> {:.1} MPa (unmodified -> optimum){}{}\n",
+        s.root_stress_none_mpa,
+        s.root_stress_optimum_mpa,
+        s.contact_pressure_none_mpa,
+        s.contact_pressure_optimum_mpa,
+        limit("root stress", s.max_root_stress_mpa),
+        limit("contact pressure", s.max_contact_pressure_mpa),
+    );
+    out += "candidate            robust STE p-p  at design  min contact ratio  root stress  contact pressure  max dyn. factor\n";
     for c in &s.candidates {
         out += &format!(
-            "  {:<18} {:>10.3} um {:>8.3} um {:>12.3}{} {:>12.3} at {:.0} rpm\n",
+            "  {:<18} {:>10.3} um {:>8.3} um {:>12.3}{} {:>8.1} MPa {:>11.1} MPa {:>12.3} at {:.0} rpm\n",
             c.name,
             c.objective_um,
             c.ste_pp_design_um,
             c.contact_ratio_min,
             if c.feasible { " " } else { "*" },
+            c.root_stress_max_mpa[0].max(c.root_stress_max_mpa[1]),
+            c.contact_pressure_max_mpa,
             c.max_dynamic_factor,
             c.max_dynamic_factor_rpm
         );
@@ -133,6 +147,9 @@ pub fn write(dir: OutputDir, case: &Case, study: &OptimizeStudy) -> Result<(), R
             "contact_ratio_design",
             "end_relief_recess_um",
             "end_relief_approach_um",
+            "root_stress_max_gear1_mpa",
+            "root_stress_max_gear2_mpa",
+            "contact_pressure_max_mpa",
             "feasible",
             "max_dynamic_factor",
             "max_dynamic_factor_rpm",
@@ -157,6 +174,9 @@ pub fn write(dir: OutputDir, case: &Case, study: &OptimizeStudy) -> Result<(), R
                     f(c.contact_ratio_design),
                     f(c.end_relief_um[0]),
                     f(c.end_relief_um[1]),
+                    f(line.root_stress_max_mpa[0]),
+                    f(line.root_stress_max_mpa[1]),
+                    f(line.contact_pressure_max_mpa),
                     c.feasible.to_string(),
                     f(c.sweep.max_dynamic_factor),
                     f(c.sweep.max_dynamic_factor_rpm),

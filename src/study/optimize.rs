@@ -75,6 +75,54 @@ impl std::str::FromStr for TorqueRange {
     }
 }
 
+/// A strength limit of the optimizer: absolute, or relative to the unmodified pair's peak over
+/// the load range (on the same bodies, at the same torques).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum StressLimit {
+    /// At most this [MPa].
+    Mpa(f64),
+    /// At most this percentage of the unmodified pair's peak (100: no rise).
+    PercentOfUnmodified(f64),
+}
+
+impl std::str::FromStr for StressLimit {
+    type Err = String;
+
+    /// `180` (MPa) or `105%` (of the unmodified pair's peak over the load range).
+    fn from_str(text: &str) -> Result<Self, String> {
+        let bad = || {
+            format!(
+                "{text:?} is invalid: give a stress in MPa (e.g. 180) or a percentage of the \
+                 unmodified pair's peak over the load range (e.g. 105%), positive"
+            )
+        };
+        let (number, percent) = match text.trim().strip_suffix('%') {
+            Some(number) => (number, true),
+            None => (text.trim(), false),
+        };
+        let value: f64 = number.trim().parse().map_err(|_| bad())?;
+        if !(value > 0.0 && value.is_finite()) {
+            return Err(bad());
+        }
+        Ok(if percent {
+            StressLimit::PercentOfUnmodified(value)
+        } else {
+            StressLimit::Mpa(value)
+        })
+    }
+}
+
+impl StressLimit {
+    /// The limit [Pa] given the unmodified pair's peak `unmodified_mpa`.
+    pub fn resolve(self, unmodified_mpa: f64) -> f64 {
+        match self {
+            StressLimit::Mpa(mpa) => mpa * 1e6,
+            StressLimit::PercentOfUnmodified(percent) => percent / 100.0 * unmodified_mpa * 1e6,
+        }
+    }
+}
+
 /// Options of the study.
 #[derive(Debug, Clone, PartialEq)]
 pub struct OptimizeOptions {
@@ -92,6 +140,10 @@ pub struct OptimizeOptions {
     pub rpm: RpmRange,
     /// Torques of the Harris map, in percent of the design torque.
     pub harris_range: TorqueRange,
+    /// Largest tooth-root tension of either gear over the load range (None: no limit).
+    pub max_root_stress: Option<StressLimit>,
+    /// Largest Hertz pressure away from the tips over the load range (None: no limit).
+    pub max_contact_pressure: Option<StressLimit>,
 }
 
 /// The smallest loaded contact ratio a relief may leave by default: ⌊ε_α⌋ + 0.2, at most ε_α —
@@ -126,6 +178,8 @@ impl Default for OptimizeOptions {
             min_length: DEFAULT_MIN_LENGTH,
             rpm: DEFAULT_RPM.parse().expect("a valid default"),
             harris_range: parse(HARRIS_RANGE),
+            max_root_stress: None,
+            max_contact_pressure: None,
         }
     }
 }
@@ -245,6 +299,16 @@ pub struct OptimizeSummary {
     pub objective_classic: f64,
     pub objective_classic_short: f64,
     pub contact_ratio_optimum: Vec<f64>,
+    /// The strength limits the optimizer kept [MPa] (None: not asked for; `--max-root-stress-mpa`,
+    /// `--max-contact-pressure-mpa`, a percentage resolved on the unmodified pair's peak).
+    pub max_root_stress_mpa: Option<f64>,
+    pub max_contact_pressure_mpa: Option<f64>,
+    /// The largest tooth-root tension (either gear) and Hertz pressure away from the tips over
+    /// the load range, unmodified and at the optimum [MPa].
+    pub root_stress_none_mpa: f64,
+    pub root_stress_optimum_mpa: f64,
+    pub contact_pressure_none_mpa: f64,
+    pub contact_pressure_optimum_mpa: f64,
     /// Trust-region iterations of the winning start, and of all starts.
     pub iterations: usize,
     pub iterations_all_starts: usize,
@@ -340,6 +404,10 @@ pub struct CandidateLine {
     pub objective_um: f64,
     pub ste_pp_design_um: f64,
     pub contact_ratio_min: f64,
+    /// Each gear's largest tooth-root tension over the load range [MPa] (LTCA, fixed bodies).
+    pub root_stress_max_mpa: [f64; 2],
+    /// The largest Hertz pressure away from the tips over the load range [MPa].
+    pub contact_pressure_max_mpa: f64,
     pub feasible: bool,
     pub max_dynamic_factor: f64,
     pub max_dynamic_factor_rpm: f64,
@@ -415,6 +483,18 @@ pub fn run(
     // unloaded teeth with the loaded ones and closes no flank gap, so relief need not take it up.
     let twist = super::compare::body_twist(case);
     let deflection = hub_deflection - torque / rb2 * (twist[0] + twist[1]);
+    let respond = |design: &ReliefDesign| {
+        robust::evaluate(&model, design, &range, options.positions).map(|e| e.response)
+    };
+    // A relative strength limit reads the unmodified pair's peaks over the load range.
+    let unmodified_peaks =
+        if options.max_root_stress.is_some() || options.max_contact_pressure.is_some() {
+            let response = respond(&ReliefDesign::none(ReliefShape::Linear))?;
+            let [root1, root2] = response.root_stress_peak_mpa();
+            Some((root1.max(root2), response.contact_pressure_peak_mpa()))
+        } else {
+            None
+        };
     let limits = robust::Limits {
         max_amount: options.max_relief_um * 1e-6,
         min_length: options.min_length,
@@ -422,11 +502,16 @@ pub fn run(
             .min_contact_ratio
             .unwrap_or_else(|| default_min_contact_ratio(pair)),
         contact_deflection: deflection,
+        max_root_stress: options
+            .max_root_stress
+            .zip(unmodified_peaks)
+            .map(|(l, (root, _))| l.resolve(root)),
+        max_contact_pressure: options
+            .max_contact_pressure
+            .zip(unmodified_peaks)
+            .map(|(l, (_, pressure))| l.resolve(pressure)),
     };
     let settings = robust::Settings::default();
-    let respond = |design: &ReliefDesign| {
-        robust::evaluate(&model, design, &range, options.positions).map(|e| e.response)
-    };
     let classic = |length: f64, shape: ReliefShape| ReliefDesign {
         tip: [deflection; 2],
         root: [0.0; 2],
@@ -488,7 +573,8 @@ pub fn run(
     if optima.is_empty() {
         return Err(StudyError::Input(format!(
             "no start keeps the limits, so there is nothing to optimize from: {}. Loosen \
-             --min-contact-ratio or --max-relief-um",
+             --min-contact-ratio, --max-relief-um, --max-root-stress-mpa or \
+             --max-contact-pressure-mpa",
             skipped.join("; ")
         )));
     }
@@ -742,6 +828,7 @@ fn summarize(
         .expect("an unmodified baseline is always judged");
     let optimum = find(BEST).expect("the best optimum is a candidate");
     let modifications = &optimum.modifications;
+    let max_of = |[a, b]: [f64; 2]| a.max(b);
     Ok(OptimizeSummary {
         case: case.name().to_string(),
         design_torque_nm: torque,
@@ -767,6 +854,12 @@ fn summarize(
         objective_classic: objective("classic-long").unwrap_or(f64::NAN),
         objective_classic_short: objective("classic-short").unwrap_or(f64::NAN),
         contact_ratio_optimum: optimum.response.contact_ratio.clone(),
+        max_root_stress_mpa: limits.max_root_stress.map(|l| l * 1e-6),
+        max_contact_pressure_mpa: limits.max_contact_pressure.map(|l| l * 1e-6),
+        root_stress_none_mpa: max_of(unmodified.response.root_stress_peak_mpa()),
+        root_stress_optimum_mpa: max_of(optimum.response.root_stress_peak_mpa()),
+        contact_pressure_none_mpa: unmodified.response.contact_pressure_peak_mpa(),
+        contact_pressure_optimum_mpa: optimum.response.contact_pressure_peak_mpa(),
         iterations: best.iterations.len(),
         iterations_all_starts: optima.iter().map(|(_, o)| o.iterations.len()).sum(),
         ltca_evaluations: optima.iter().map(|(_, o)| o.ltca_evaluations).sum(),
@@ -794,6 +887,8 @@ fn summarize(
                     .iter()
                     .copied()
                     .fold(f64::INFINITY, f64::min),
+                root_stress_max_mpa: c.response.root_stress_peak_mpa(),
+                contact_pressure_max_mpa: c.response.contact_pressure_peak_mpa(),
                 feasible: c.feasible,
                 max_dynamic_factor: c.sweep.max_dynamic_factor,
                 max_dynamic_factor_rpm: c.sweep.max_dynamic_factor_rpm,

@@ -475,6 +475,7 @@ mod tests {
                 active_points: 1,
                 candidate_points: 1,
                 iterations: 1,
+                root_stress: [0.0; 2],
             })
             .collect()
     }

@@ -422,6 +422,15 @@ pub struct OptimizeArgs {
     /// Shortest relief, as a fraction of the double-contact zone (1 = long relief).
     #[arg(long, default_value_t = optimize::DEFAULT_MIN_LENGTH, value_name = "FRACTION")]
     pub min_relief_length: f64,
+    /// Largest tooth-root tension of either gear at any position and torque of the range: MPa
+    /// (e.g. 90), or a percentage of the unmodified pair's peak (e.g. 105%). Default: no limit
+    #[arg(long, value_name = "MPA|PCT%", allow_hyphen_values = true)]
+    pub max_root_stress_mpa: Option<optimize::StressLimit>,
+    /// Largest Hertz contact pressure away from the tips at any position and torque of the
+    /// range: MPa (e.g. 800), or a percentage of the unmodified pair's peak (e.g. 102%).
+    /// Default: no limit
+    #[arg(long, value_name = "MPA|PCT%", allow_hyphen_values = true)]
+    pub max_contact_pressure_mpa: Option<optimize::StressLimit>,
     /// Driver speeds of each candidate's lumped sweep, FROM:TO:N in rpm.
     #[arg(long, default_value = optimize::DEFAULT_RPM, value_name = "FROM:TO:N")]
     pub rpm: RpmRange,
@@ -481,6 +490,8 @@ impl OptimizeArgs {
             max_relief_um: self.max_relief_um,
             min_length: self.min_relief_length,
             rpm: self.rpm.clone(),
+            max_root_stress: self.max_root_stress_mpa,
+            max_contact_pressure: self.max_contact_pressure_mpa,
             ..Default::default()
         }
     }

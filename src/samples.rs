@@ -50,7 +50,6 @@ pub fn rectangle_mesh(
     ny: usize,
     skew: f64,
 ) -> (Vec<Point2<f64>>, Vec<[usize; 8]>) {
-    let (cols, rows) = (2 * nx + 1, 2 * ny + 1);
     let dx = length / nx as f64;
     let corner_x = |i: usize, j: usize| {
         let base = i as f64 * dx;
@@ -70,6 +69,24 @@ pub fn rectangle_mesh(
             );
         }
     }
+    structured_q8(&corners)
+}
+
+/// A structured Q8 mesh of the rectangle with corner coordinates `xs` × `ys` (ascending;
+/// graded as given). Returns (nodes, elements).
+pub fn block_mesh(xs: &[f64], ys: &[f64]) -> (Vec<Point2<f64>>, Vec<[usize; 8]>) {
+    let corners: Vec<Vec<Point2<f64>>> = xs
+        .iter()
+        .map(|&x| ys.iter().map(|&y| Point2::new(x, y)).collect())
+        .collect();
+    structured_q8(&corners)
+}
+
+/// The Q8 mesh of a grid of element corners `corners[i][j]` (straight edges, mid-side nodes
+/// at the edge midpoints).
+fn structured_q8(corners: &[Vec<Point2<f64>>]) -> (Vec<Point2<f64>>, Vec<[usize; 8]>) {
+    let (nx, ny) = (corners.len() - 1, corners[0].len() - 1);
+    let (cols, rows) = (2 * nx + 1, 2 * ny + 1);
     let mut nodes = Vec::new();
     let mut id = vec![vec![usize::MAX; rows]; cols];
     for (c, column) in id.iter_mut().enumerate() {

@@ -303,9 +303,23 @@ fn ltca_writes_csv_plots_and_summary() {
         "contact_pressure.svg",
         "root_stress.png",
         "root_stress.svg",
+        "stress_field.png",
+        "stress_field.vtk",
     ] {
         assert!(out.join(plot).exists(), "{plot}");
     }
+    // The field picture is of the tooth and position of the largest fillet tension.
+    let field = &summary["stress_field"];
+    let fe_peak = (0..2)
+        .map(|g| summary["root_stress_max_mpa"][g].as_f64().unwrap())
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert!((field["fillet_tension_mpa"].as_f64().unwrap() - fe_peak).abs() < 1e-9);
+    assert!(field["von_mises_max_mpa"].as_f64().unwrap() > 0.0);
+    let vtk = std::fs::read_to_string(out.join("stress_field.vtk")).unwrap();
+    for name in ["max_principal_mpa", "von_mises_mpa", "displacement_um"] {
+        assert!(vtk.contains(name), "{name}");
+    }
+    assert!(summary["contact_pressure_fe_max_mpa"].as_f64().unwrap() > 0.0);
     // Strength: the Hertz pressure along the path (one row per loaded pair and position, the
     // summary's peak among them) and ISO 6336 beside it.
     let pressure: Vec<f64> = csv::Reader::from_path(out.join("contact_pressure_none.csv"))

@@ -112,6 +112,37 @@ impl NodalStress {
     }
 }
 
+/// The normal traction along a surface of quadratic edges from the nodal forces on it: the
+/// pressure p(s) = Σ N_i(s) p_i whose consistent nodal forces are the given ones,
+/// ```text
+/// F_i = B ∫ N_i p ds  →  M p = F / B,   M_edge = L/30 [[4, 2, −1], [2, 16, 2], [−1, 2, 4]]
+/// ```
+/// (corner, mid-side, corner; B the thickness, L the edge's chord). `points` run corner,
+/// mid-side, corner, … (2n + 1 points of n edges), `forces` [N] at them; returns p_i [Pa]. A
+/// uniform pressure's forces (1/6, 2/3, 1/6 of each edge's load) come back uniform.
+pub fn edge_traction(points: &[Point2<f64>], forces: &[f64], thickness: f64) -> Vec<f64> {
+    let n = points.len();
+    assert!(
+        n >= 3 && n % 2 == 1 && forces.len() == n,
+        "2n + 1 points of n quadratic edges"
+    );
+    let mut m = nalgebra::DMatrix::<f64>::zeros(n, n);
+    const EDGE: [[f64; 3]; 3] = [[4.0, 2.0, -1.0], [2.0, 16.0, 2.0], [-1.0, 2.0, 4.0]];
+    for e in (0..n - 1).step_by(2) {
+        let length = (points[e + 2] - points[e]).norm();
+        for a in 0..3 {
+            for b in 0..3 {
+                m[(e + a, e + b)] += length / 30.0 * EDGE[a][b];
+            }
+        }
+    }
+    let f = nalgebra::DVector::from_iterator(n, forces.iter().map(|f| f / thickness));
+    match m.clone().cholesky() {
+        Some(llt) => llt.solve(&f).iter().copied().collect(),
+        None => vec![f64::NAN; n],
+    }
+}
+
 /// The larger in-plane principal stress of (σ_xx, σ_yy, τ_xy).
 pub fn max_principal([sx, sy, txy]: [f64; 3]) -> f64 {
     0.5 * (sx + sy) + (0.25 * (sx - sy) * (sx - sy) + txy * txy).sqrt()
@@ -126,6 +157,35 @@ pub fn min_principal([sx, sy, txy]: [f64; 3]) -> f64 {
 mod tests {
     use super::*;
     use crate::fe::{elasticity_matrix, PlaneState};
+
+    /// Consistent nodal forces of a uniform and of a linear pressure on a polyline of unequal
+    /// edges come back as that pressure at every node.
+    #[test]
+    fn edge_traction_inverts_consistent_nodal_forces() {
+        let xs = [0.0, 0.5, 1.0, 1.75, 2.5, 2.8, 3.1];
+        let points: Vec<Point2<f64>> = xs.iter().map(|&x| Point2::new(x, 0.2 * x)).collect();
+        let stretch = (1.0f64 + 0.04).sqrt();
+        for (a, b) in [(3.0, 0.0), (1.0, 2.0)] {
+            let p = |x: f64| a + b * x;
+            // Simpson's rule is exact for the quadratic N_i · linear p per edge.
+            let mut forces = vec![0.0; xs.len()];
+            for e in (0..xs.len() - 1).step_by(2) {
+                let (x0, x2) = (xs[e], xs[e + 2]);
+                let length = (x2 - x0) * stretch;
+                let shape = |s: f64| [0.5 * s * (s - 1.0), 1.0 - s * s, 0.5 * s * (s + 1.0)];
+                for (s, w) in [(-1.0, 1.0 / 6.0), (0.0, 4.0 / 6.0), (1.0, 1.0 / 6.0)] {
+                    let x = x0 + (s + 1.0) * 0.5 * (x2 - x0);
+                    for (k, n) in shape(s).iter().enumerate() {
+                        forces[e + k] += 0.1 * length * w * n * p(x);
+                    }
+                }
+            }
+            let traction = edge_traction(&points, &forces, 0.1);
+            for (x, t) in xs.iter().zip(&traction) {
+                assert!((t - p(*x)).abs() < 1e-12, "{t} against {}", p(*x));
+            }
+        }
+    }
 
     /// A linear displacement field gives its constant stress at every node of a distorted
     /// element: the assembly of the rows (DOFs, components, averaging) is right. (Any weights

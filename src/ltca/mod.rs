@@ -35,12 +35,14 @@
 
 pub mod body;
 pub mod contact;
+pub mod field;
 pub mod modal;
 
 use nalgebra::{DMatrix, DVector, Point2, Rotation2, Vector2};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use crate::fe::recovery::edge_traction;
 use crate::fe::FeError;
 use crate::geometry::engagement::{self, ToothPair};
 use crate::geometry::{FlankModification, GearPair, OutlineResolution, Segment, Side};
@@ -507,20 +509,65 @@ impl LtcaModel {
     /// τ_xy) at each of `bodies[g].fillet.nodes` [Pa].
     pub fn fillet_stresses(&self, contacts: &LoadedContacts) -> [Vec<[f64; 3]>; 2] {
         std::array::from_fn(|g| {
-            let body = &self.bodies[g];
-            let candidate_of: std::collections::HashMap<usize, usize> = body
-                .candidates
-                .iter()
-                .enumerate()
-                .map(|(i, c)| (c.node, i))
-                .collect();
-            let loads = contacts.active.iter().flat_map(|contact| {
-                contact.nodes[g]
+            let forces = self.candidate_forces(contacts, g);
+            self.bodies[g].fillet.stresses(
+                forces
                     .iter()
-                    .filter(|(_, weight, _)| *weight != 0.0)
-                    .map(|(node, weight, _)| (candidate_of[node], contact.force * weight))
-            });
-            body.fillet.stresses(loads)
+                    .enumerate()
+                    .filter(|(_, f)| **f != 0.0)
+                    .map(|(i, f)| (i, *f)),
+            )
+        })
+    }
+
+    /// Gear `g`'s inward force at each candidate flank node in a loaded state: each active
+    /// contact's force spread by its weights [N].
+    pub fn candidate_forces(&self, contacts: &LoadedContacts, g: usize) -> Vec<f64> {
+        let body = &self.bodies[g];
+        let candidate_of: std::collections::HashMap<usize, usize> = body
+            .candidates
+            .iter()
+            .enumerate()
+            .map(|(i, c)| (c.node, i))
+            .collect();
+        let mut forces = vec![0.0; body.candidates.len()];
+        for contact in &contacts.active {
+            for (node, weight, _) in contact.nodes[g] {
+                if weight != 0.0 {
+                    forces[candidate_of[&node]] += contact.force * weight;
+                }
+            }
+        }
+        forces
+    }
+
+    /// Per gear, the contact pressure at each candidate flank node in a loaded state [Pa]: the
+    /// nodal forces of each tooth's flank as the consistent traction of its quadratic edges
+    /// ([`crate::fe::recovery::edge_traction`], the gear's face width as thickness). Where a
+    /// tip corner carries load the force sits on the corner node and the traction there grows
+    /// as the flank elements shrink: an edge contact, which the FE resolves only as far as its
+    /// mesh does.
+    pub fn flank_tractions(&self, contacts: &LoadedContacts) -> [Vec<f64>; 2] {
+        std::array::from_fn(|g| {
+            let body = &self.bodies[g];
+            let forces = self.candidate_forces(contacts, g);
+            let mut traction = vec![0.0; forces.len()];
+            let mut teeth: Vec<usize> = body.candidates.iter().map(|c| c.tooth).collect();
+            teeth.dedup();
+            for tooth in teeth {
+                let nodes = tooth_nodes(body, tooth);
+                if nodes.iter().all(|&i| forces[i] == 0.0) {
+                    continue;
+                }
+                let points: Vec<Point2<f64>> =
+                    nodes.iter().map(|&i| body.candidates[i].position).collect();
+                let f: Vec<f64> = nodes.iter().map(|&i| forces[i]).collect();
+                let face_width = self.pair.gears[g].spec.face_width;
+                for (&i, t) in nodes.iter().zip(edge_traction(&points, &f, face_width)) {
+                    traction[i] = t;
+                }
+            }
+            traction
         })
     }
 

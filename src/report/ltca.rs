@@ -18,6 +18,7 @@ pub fn write(out: OutputDir, case: &Case, study: &LtcaStudy) -> Result<(), Repor
     let mut k_series = Vec::new();
     let mut pressure_series = Vec::new();
     let mut root_series = Vec::new();
+    let mut pressure_markers = Vec::new();
     for cycle in &study.cycles {
         out.csv(
             &format!("contact_pressure_{}.csv", cycle.name),
@@ -33,10 +34,18 @@ pub fn write(out: OutputDir, case: &Case, study: &LtcaStudy) -> Result<(), Repor
                 "hertz_pressure_mpa",
                 "half_width_um",
                 "at_tip",
+                "fe_pressure_mpa",
+                "fe_pressure_gear",
+                "fe_pressure_roll_angle_deg",
+                "fe_at_tip_corner",
             ],
             cycle.pressure.iter().map(|p| {
                 let (t1, t2) = cycle.tooth_pairs[p.pair];
-                vec![
+                let fe = cycle
+                    .fe_pressure
+                    .iter()
+                    .find(|r| r.position == p.position && r.pair == p.pair);
+                let mut row = vec![
                     p.position.to_string(),
                     format!("{:.6}", cycle.results[p.position].roll_angle.to_degrees()),
                     t1.to_string(),
@@ -48,9 +57,35 @@ pub fn write(out: OutputDir, case: &Case, study: &LtcaStudy) -> Result<(), Repor
                     format!("{:.4}", p.pressure_pa * 1e-6),
                     format!("{:.4}", p.half_width_m * 1e6),
                     p.at_tip.to_string(),
-                ]
+                ];
+                row.extend(match fe {
+                    Some(r) => [
+                        format!("{:.4}", r.pressure_mpa),
+                        r.gear.to_string(),
+                        format!("{:.6}", r.roll_angle_deg),
+                        r.at_tip_corner.to_string(),
+                    ],
+                    None => Default::default(),
+                });
+                row
             }),
         )?;
+        // The FE's own pressure at the pair's contact, away from tip corners (a corner's is
+        // bound by the mesh and would squash the plot).
+        pressure_markers.push((
+            format!("{} FE contact (nodal tractions)", cycle.name),
+            cycle
+                .pressure
+                .iter()
+                .filter_map(|p| {
+                    let fe = cycle
+                        .fe_pressure
+                        .iter()
+                        .find(|r| r.position == p.position && r.pair == p.pair)?;
+                    (!fe.at_tip_corner).then_some((p.path_m * 1e3, fe.pressure_mpa))
+                })
+                .collect(),
+        ));
         out.csv(
             &format!("root_stress_{}.csv", cycle.name),
             &[
@@ -191,7 +226,7 @@ pub fn write(out: OutputDir, case: &Case, study: &LtcaStudy) -> Result<(), Repor
         "contact_pressure",
         &LinePlot {
             y_range: None,
-            markers: Vec::new(),
+            markers: pressure_markers,
             title: format!(
                 "{}: Hertz pressure along the path of contact, T = {torque} N·m",
                 case.name()
@@ -245,6 +280,9 @@ pub fn write(out: OutputDir, case: &Case, study: &LtcaStudy) -> Result<(), Repor
             series: k_series,
         },
     )?;
+    if let Some(peak) = &study.peak_field {
+        super::field::write(out, case, peak)?;
+    }
     out.json("summary.json", &study.summary)
 }
 
@@ -288,6 +326,14 @@ pub fn console(study: &LtcaStudy) -> String {
                     .map(|p| format!(
                         "; {p:.0} MPa at a tip corner (involute Hertz does not hold there)"
                     ))
+                    .unwrap_or_default()
+            ));
+            text.push_str(&format!(
+                "{:<16} FE contact pressure (nodal tractions; not resolved where the Hertz width spans few flank elements) max {:.0} MPa{}\n",
+                "",
+                s.contact_pressure_fe_max_mpa,
+                s.contact_pressure_fe_at_tip_corner_max_mpa
+                    .map(|p| format!("; {p:.0} MPa at a loaded tip corner (edge contact: bound by the mesh, grows as it is refined)"))
                     .unwrap_or_default()
             ));
         }

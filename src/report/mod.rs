@@ -5,6 +5,7 @@
 
 pub mod compare;
 pub mod fe;
+pub mod field;
 pub mod geometry;
 pub mod ltca;
 pub mod lumped;

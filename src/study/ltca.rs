@@ -135,6 +135,8 @@ pub struct VariantCycle {
     pub pressure: Vec<PressurePoint>,
     /// The fillet stress of every tooth of a pair at every position ([`root_stress_cycle`]).
     pub root_stress: Vec<RootStressRow>,
+    /// The FE's contact pressure of every loaded pair at every position ([`fe_pressure_cycle`]).
+    pub fe_pressure: Vec<FePressureRow>,
 }
 
 /// Headline numbers of one relief variant.
@@ -162,6 +164,11 @@ pub struct VariantSummary {
     /// The largest at a tip corner, where the involute's Hertz does not hold (null: no tip
     /// carried load).
     pub contact_pressure_at_tip_max_mpa: Option<f64>,
+    /// The FE's own contact pressure ([`fe_pressure_cycle`]): the largest away from tip corners,
+    /// and the largest at a tip corner (null: no corner carried load), which is an edge contact
+    /// the mesh bounds (it grows as the flank elements shrink) [MPa].
+    pub contact_pressure_fe_max_mpa: f64,
+    pub contact_pressure_fe_at_tip_corner_max_mpa: Option<f64>,
     /// Per gear, the largest fillet tension over the cycle, where, and the largest compression
     /// (FE, [`root_stress_cycle`]).
     pub root_stress: [Option<RootStressPeak>; 2],
@@ -283,6 +290,151 @@ pub fn root_stress_cycle(
     Ok(per_position.into_iter().flatten().collect())
 }
 
+/// The FE's contact pressure of one loaded tooth pair at one position: the largest traction of
+/// the flank nodes of its two teeth ([`crate::ltca::LtcaModel::flank_tractions`]).
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct FePressureRow {
+    pub position: usize,
+    /// Tooth pair (index into the model's `tooth_pairs`).
+    pub pair: usize,
+    pub pressure_mpa: f64,
+    /// The gear (1 or 2) whose flank node carries it, and that node's roll angle on its gear.
+    pub gear: usize,
+    pub roll_angle_deg: f64,
+    /// An end of the pair's flanks carries load — a tip corner, or a form point (where the
+    /// involute meets the fillet, which a mating tip reaches when it contacts below the
+    /// involute): an edge contact, resolved only as far as the mesh is (the traction near it
+    /// grows as the flank elements shrink).
+    pub at_tip_corner: bool,
+}
+
+/// [`FePressureRow`] of every loaded pair at every position of a cycle.
+pub fn fe_pressure_cycle(
+    model: &LtcaModel,
+    positions: usize,
+    torque: f64,
+) -> Result<Vec<FePressureRow>, StudyError> {
+    use rayon::prelude::*;
+    // Each tooth's flank runs root to tip: its first candidate is the form point (where the
+    // involute meets the fillet), its last the tip corner. A contact beyond either end of the
+    // involute puts its whole force there (an edge contact).
+    let corner: [Vec<bool>; 2] = std::array::from_fn(|g| {
+        let candidates = &model.bodies[g].candidates;
+        let tooth = |i: Option<usize>| i.and_then(|i| candidates.get(i)).map(|c| c.tooth);
+        (0..candidates.len())
+            .map(|i| {
+                let own = tooth(Some(i));
+                tooth(i.checked_add(1)) != own || tooth(i.checked_sub(1)) != own
+            })
+            .collect()
+    });
+    let per_position: Vec<Vec<FePressureRow>> = (0..positions)
+        .into_par_iter()
+        .map(|j| -> Result<Vec<FePressureRow>, StudyError> {
+            let contacts = model.loaded_contacts(j, positions, torque)?;
+            let traction = model.flank_tractions(&contacts);
+            let forces = [0, 1].map(|g| model.candidate_forces(&contacts, g));
+            let result = &contacts.result;
+            let mut rows = Vec::new();
+            for (k, &(t1, t2)) in model.tooth_pairs.iter().enumerate() {
+                if !(result.pair_forces[k] > 0.0) {
+                    continue;
+                }
+                let mut best: Option<FePressureRow> = None;
+                let at_tip_corner = [(0, t1), (1, t2)].iter().any(|&(g, tooth)| {
+                    model.bodies[g]
+                        .candidates
+                        .iter()
+                        .enumerate()
+                        .any(|(i, c)| c.tooth == tooth && corner[g][i] && forces[g][i] != 0.0)
+                });
+                for (g, tooth) in [(0, t1), (1, t2)] {
+                    for (i, c) in model.bodies[g].candidates.iter().enumerate() {
+                        let t = traction[g][i] * 1e-6;
+                        if c.tooth == tooth && best.is_none_or(|b| t > b.pressure_mpa) {
+                            best = Some(FePressureRow {
+                                position: j,
+                                pair: k,
+                                pressure_mpa: t,
+                                gear: g + 1,
+                                roll_angle_deg: c.roll_angle.to_degrees(),
+                                at_tip_corner,
+                            });
+                        }
+                    }
+                }
+                rows.extend(best);
+            }
+            Ok(rows)
+        })
+        .collect::<Result<_, _>>()?;
+    Ok(per_position.into_iter().flatten().collect())
+}
+
+/// The stress field of the tooth with the largest fillet tension of a cycle (either gear), at
+/// the position where it peaks.
+#[derive(Debug, Clone)]
+pub struct PeakField {
+    pub field: crate::ltca::field::StressField,
+    pub peak: RootStressRow,
+}
+
+/// Where the field picture is and what it shows (`summary.json`'s `stress_field`).
+#[derive(Debug, Clone, Serialize)]
+pub struct PeakFieldSummary {
+    /// 1 or 2.
+    pub gear: usize,
+    pub tooth: usize,
+    pub position: usize,
+    pub roll_angle_deg: f64,
+    /// The fillet tension there (the cycle's peak) and the field's largest max principal and
+    /// von Mises stress over its window (the window holds the contact's Hertz zone too) [MPa].
+    pub fillet_tension_mpa: f64,
+    pub max_principal_max_mpa: f64,
+    pub von_mises_max_mpa: f64,
+    /// Angular pitches either side of the tooth's centre line in the window.
+    pub half_window_pitches: f64,
+}
+
+impl PeakField {
+    pub fn summary(&self) -> PeakFieldSummary {
+        let max = |v: Vec<f64>| v.into_iter().fold(f64::NEG_INFINITY, f64::max) * 1e-6;
+        PeakFieldSummary {
+            gear: self.peak.gear,
+            tooth: self.peak.tooth,
+            position: self.peak.position,
+            roll_angle_deg: self.peak.roll_angle_deg,
+            fillet_tension_mpa: self.peak.tension_mpa,
+            max_principal_max_mpa: max(self.field.max_principal()),
+            von_mises_max_mpa: max(self.field.von_mises()),
+            half_window_pitches: FIELD_HALF_WINDOW,
+        }
+    }
+}
+
+/// The field window: the tooth and half of each neighbour.
+pub const FIELD_HALF_WINDOW: f64 = 1.0;
+
+/// The [`PeakField`] of `rows` (a [`root_stress_cycle`] of `model` at `positions`, `torque`).
+pub fn peak_field(
+    model: &LtcaModel,
+    rows: &[RootStressRow],
+    positions: usize,
+    torque: f64,
+) -> Result<Option<PeakField>, StudyError> {
+    let Some(peak) = rows
+        .iter()
+        .max_by(|a, b| a.tension_mpa.total_cmp(&b.tension_mpa))
+    else {
+        return Ok(None);
+    };
+    let contacts = model.loaded_contacts(peak.position, positions, torque)?;
+    let field = model
+        .stress_field(&contacts, peak.gear - 1, peak.tooth, FIELD_HALF_WINDOW)
+        .map_err(|e| StudyError::Input(format!("the stress field of the peak: {e}")))?;
+    Ok(Some(PeakField { field, peak: *peak }))
+}
+
 /// The largest fillet tension of one gear over a cycle, and where.
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct RootStressPeak {
@@ -398,6 +550,10 @@ pub struct LtcaSummary {
     /// The first variant's largest Hertz pressure away from the tips, and where.
     pub contact_pressure_max_mpa: f64,
     pub contact_pressure_max_at: Option<PressureAt>,
+    /// The FE's own contact pressure away from tip corners, and at them (mesh-bound edge
+    /// contact), first variant [MPa] (each variant's in `variants`).
+    pub contact_pressure_fe_max_mpa: f64,
+    pub contact_pressure_fe_at_tip_corner_max_mpa: Option<f64>,
     /// The first variant's largest fillet tension per gear over the cycle (FE), and where.
     pub root_stress_max_mpa: [Option<f64>; 2],
     pub root_stress_max_at: [Option<RootStressPeak>; 2],
@@ -408,6 +564,9 @@ pub struct LtcaSummary {
     /// S_F and S_H at the design torque, the first variant's FE stresses and ISO's (each
     /// variant's in `variants`).
     pub safety_factors: SafetyFactors,
+    /// The first variant's stress field at its largest fillet tension (`stress_field.vtk`,
+    /// `stress_field.png`).
+    pub stress_field: Option<PeakFieldSummary>,
     pub elements: usize,
     pub wall_s: f64,
     pub variants: Vec<VariantSummary>,
@@ -427,6 +586,8 @@ pub struct LtcaStudy {
     pub cycles: Vec<VariantCycle>,
     pub potential_energy: MeshStiffness,
     pub iso: IsoStiffness,
+    /// The first variant's stress field at its largest fillet tension.
+    pub peak_field: Option<PeakField>,
     pub summary: LtcaSummary,
 }
 
@@ -445,6 +606,7 @@ pub fn run(
     let rb2 = case.pair.gears[1].base_radius;
     let positions = options.positions;
     let mut cycles = Vec::new();
+    let mut peak = None;
     for variant in variants {
         let stage = format!("LTCA \"{}\"", variant.name);
         progress(&stage, 0, positions);
@@ -464,6 +626,9 @@ pub fn run(
         let [b1, b2] = &*model.bodies;
         let pressure = hertz::along_path(&case.pair, elastic(case), &results);
         let root_stress = root_stress_cycle(&model, positions, torque)?;
+        if cycles.is_empty() {
+            peak = peak_field(&model, &root_stress, positions, torque)?;
+        }
         let mut summary = variant_summary(
             &variant.name,
             &results,
@@ -478,6 +643,16 @@ pub fn run(
             ),
         );
         summary.root_stress = root_stress_peaks(&root_stress, case);
+        let fe_pressure = fe_pressure_cycle(&model, positions, torque)?;
+        let fe_peak = |corner: bool| {
+            fe_pressure
+                .iter()
+                .filter(|r| r.at_tip_corner == corner)
+                .map(|r| r.pressure_mpa)
+                .reduce(f64::max)
+        };
+        summary.contact_pressure_fe_max_mpa = fe_peak(false).unwrap_or(0.0);
+        summary.contact_pressure_fe_at_tip_corner_max_mpa = fe_peak(true);
         summary.safety_factors = Some(safety_factors(
             case,
             summary.root_stress.map(|p| p.map(|p| p.tension_mpa)),
@@ -501,6 +676,7 @@ pub fn run(
             checks,
             pressure,
             root_stress,
+            fe_pressure,
         });
     }
     let pe = potential_energy::potential_energy_table(
@@ -543,12 +719,15 @@ pub fn run(
         potential_energy_max_n_per_m: pe.max(),
         contact_pressure_max_mpa: first.contact_pressure_max_mpa,
         contact_pressure_max_at: first.contact_pressure_max_at,
+        contact_pressure_fe_max_mpa: first.contact_pressure_fe_max_mpa,
+        contact_pressure_fe_at_tip_corner_max_mpa: first.contact_pressure_fe_at_tip_corner_max_mpa,
         root_stress_max_mpa: first.root_stress.map(|p| p.map(|p| p.tension_mpa)),
         root_stress_max_at: first.root_stress,
         safety_factors: first
             .safety_factors
             .clone()
             .expect("every variant's safety factors are set with its root stress"),
+        stress_field: peak.as_ref().map(PeakField::summary),
         iso_6336,
         elements: first.elements[0] + first.elements[1],
         wall_s: started.elapsed().as_secs_f64(),
@@ -566,6 +745,7 @@ pub fn run(
         cycles,
         potential_energy: pe,
         iso,
+        peak_field: peak,
         summary,
     })
 }
@@ -639,6 +819,8 @@ pub fn variant_summary(
             teeth: tooth_pairs[p.pair],
         }),
         contact_pressure_at_tip_max_mpa: peak(true).map(|p| p.pressure_pa * 1e-6),
+        contact_pressure_fe_max_mpa: 0.0,
+        contact_pressure_fe_at_tip_corner_max_mpa: None,
         // The caller that computed the fillet stress sets these.
         root_stress: [None, None],
         safety_factors: None,

@@ -86,19 +86,43 @@ pub fn block_mesh(xs: &[f64], ys: &[f64]) -> (Vec<Point2<f64>>, Vec<[usize; 8]>)
 /// at the edge midpoints).
 fn structured_q8(corners: &[Vec<Point2<f64>>]) -> (Vec<Point2<f64>>, Vec<[usize; 8]>) {
     let (nx, ny) = (corners.len() - 1, corners[0].len() - 1);
+    grid_q8(nx, ny, |c, r| {
+        let (i0, j0) = (c / 2, r / 2);
+        let (i1, j1) = (c.div_ceil(2), r.div_ceil(2));
+        Point2::from((corners[i0][j0].coords + corners[i1][j1].coords) * 0.5)
+    })
+}
+
+/// A structured Q8 mesh of `nx` × `ny` elements mapped from the unit square by `map(u, v)`:
+/// every node, mid-side nodes too, on the map (curved edges follow it). Returns (nodes,
+/// elements).
+pub fn mapped_mesh(
+    nx: usize,
+    ny: usize,
+    map: impl Fn(f64, f64) -> Point2<f64>,
+) -> (Vec<Point2<f64>>, Vec<[usize; 8]>) {
+    grid_q8(nx, ny, |c, r| {
+        map(c as f64 / (2 * nx) as f64, r as f64 / (2 * ny) as f64)
+    })
+}
+
+/// The Q8 mesh of `nx` × `ny` elements whose node at grid point (c, r) of the
+/// (2nx + 1) × (2ny + 1) node grid is `position(c, r)`.
+fn grid_q8(
+    nx: usize,
+    ny: usize,
+    position: impl Fn(usize, usize) -> Point2<f64>,
+) -> (Vec<Point2<f64>>, Vec<[usize; 8]>) {
     let (cols, rows) = (2 * nx + 1, 2 * ny + 1);
     let mut nodes = Vec::new();
     let mut id = vec![vec![usize::MAX; rows]; cols];
     for (c, column) in id.iter_mut().enumerate() {
         for (r, slot) in column.iter_mut().enumerate() {
-            let (i0, j0) = (c / 2, r / 2);
-            let (i1, j1) = (c.div_ceil(2), r.div_ceil(2));
             if c % 2 == 1 && r % 2 == 1 {
                 continue; // element centre: Q8 has no node there
             }
-            let p = Point2::from((corners[i0][j0].coords + corners[i1][j1].coords) * 0.5);
             *slot = nodes.len();
-            nodes.push(p);
+            nodes.push(position(c, r));
         }
     }
     let mut elements = Vec::new();

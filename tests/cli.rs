@@ -319,7 +319,12 @@ fn ltca_writes_csv_plots_and_summary() {
     for name in ["max_principal_mpa", "von_mises_mpa", "displacement_um"] {
         assert!(vtk.contains(name), "{name}");
     }
-    assert!(summary["contact_pressure_fe_max_mpa"].as_f64().unwrap() > 0.0);
+    assert!(
+        summary["variants"][0]["contact_pressure_fe_max_mpa"]
+            .as_f64()
+            .unwrap()
+            > 0.0
+    );
     // Strength: the Hertz pressure along the path (one row per loaded pair and position, the
     // summary's peak among them) and ISO 6336 beside it.
     let pressure: Vec<f64> = csv::Reader::from_path(out.join("contact_pressure_none.csv"))
@@ -1468,11 +1473,16 @@ fn optimize_writes_its_summary_and_the_optimum_beats_the_baselines() {
     }
     assert!(number("ste_pp_after_um") < number("ste_pp_before_um"));
     assert!(s["iterations"].as_u64().unwrap() >= 1);
-    // The root-stress limit is 103 % of the unmodified pair's peak, and the optimum keeps it
-    // (to the optimizer's 0.1 %); no contact-pressure limit was asked for.
-    let limit = number("max_root_stress_mpa");
-    assert!((limit / (1.03 * number("root_stress_none_mpa")) - 1.0).abs() < 1e-9);
-    assert!(number("root_stress_optimum_mpa") <= limit * 1.001);
+    // The root-stress limit is 103 % of each gear's unmodified peak (the larger of them is
+    // `root_stress_none_mpa`), and the optimum keeps it to the optimizer's 0.1 %. This checks the
+    // wiring: the free optimum raises the root stress by less than 3 %, so the limit need not
+    // bind here (tests/optimize.rs holds a binding one on the LTCA).
+    let limits: Vec<f64> = (0..2)
+        .map(|g| s["max_root_stress_mpa"][g].as_f64().unwrap())
+        .collect();
+    let larger = limits[0].max(limits[1]);
+    assert!((larger / (1.03 * number("root_stress_none_mpa")) - 1.0).abs() < 1e-9);
+    assert!(number("root_stress_optimum_mpa") <= larger * 1.001);
     assert!(s["max_contact_pressure_mpa"].is_null());
     assert!(number("contact_pressure_optimum_mpa") > 0.0);
     let candidates = std::fs::read_to_string(out.join("candidates.csv")).unwrap();

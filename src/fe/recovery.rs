@@ -115,11 +115,13 @@ impl NodalStress {
 /// The normal traction along a surface of quadratic edges from the nodal forces on it: the
 /// pressure p(s) = Σ N_i(s) p_i whose consistent nodal forces are the given ones,
 /// ```text
-/// F_i = B ∫ N_i p ds  →  M p = F / B,   M_edge = L/30 [[4, 2, −1], [2, 16, 2], [−1, 2, 4]]
+/// F_i = B ∫ N_i p ds  →  M p = F / B,   M_ab = ∫ N_a N_b |dx/dξ| dξ   (ξ ∈ [−1, 1])
 /// ```
-/// (corner, mid-side, corner; B the thickness, L the edge's chord). `points` run corner,
-/// mid-side, corner, … (2n + 1 points of n edges), `forces` [N] at them; returns p_i [Pa]. A
-/// uniform pressure's forces (1/6, 2/3, 1/6 of each edge's load) come back uniform.
+/// with the edge's own isoparametric map x(ξ) = Σ N_k x_k (a straight edge with its mid-side
+/// node at the middle gives L/30 [[4, 2, −1], [2, 16, 2], [−1, 2, 4]]), by 4-point Gauss
+/// quadrature; B the thickness. `points` run corner, mid-side, corner, … (2n + 1 points of n
+/// edges), `forces` [N] at them; returns p_i [Pa]. A uniform pressure's consistent forces come
+/// back uniform.
 pub fn edge_traction(points: &[Point2<f64>], forces: &[f64], thickness: f64) -> Vec<f64> {
     let n = points.len();
     assert!(
@@ -127,17 +129,25 @@ pub fn edge_traction(points: &[Point2<f64>], forces: &[f64], thickness: f64) -> 
         "2n + 1 points of n quadratic edges"
     );
     let mut m = nalgebra::DMatrix::<f64>::zeros(n, n);
-    const EDGE: [[f64; 3]; 3] = [[4.0, 2.0, -1.0], [2.0, 16.0, 2.0], [-1.0, 2.0, 4.0]];
+    let (g1, g2) = (0.339_981_043_584_856, 0.861_136_311_594_053);
+    let (w1, w2) = (0.652_145_154_862_546, 0.347_854_845_137_454);
     for e in (0..n - 1).step_by(2) {
-        let length = (points[e + 2] - points[e]).norm();
-        for a in 0..3 {
-            for b in 0..3 {
-                m[(e + a, e + b)] += length / 30.0 * EDGE[a][b];
+        for (xi, w) in [(-g2, w2), (-g1, w1), (g1, w1), (g2, w2)] {
+            let shape = [0.5 * xi * (xi - 1.0), 1.0 - xi * xi, 0.5 * xi * (xi + 1.0)];
+            let slope = [xi - 0.5, -2.0 * xi, xi + 0.5];
+            let tangent = (0..3).fold(nalgebra::Vector2::zeros(), |t, k| {
+                t + points[e + k].coords * slope[k]
+            });
+            let jacobian = tangent.norm();
+            for a in 0..3 {
+                for b in 0..3 {
+                    m[(e + a, e + b)] += w * shape[a] * shape[b] * jacobian;
+                }
             }
         }
     }
     let f = nalgebra::DVector::from_iterator(n, forces.iter().map(|f| f / thickness));
-    match m.clone().cholesky() {
+    match m.cholesky() {
         Some(llt) => llt.solve(&f).iter().copied().collect(),
         None => vec![f64::NAN; n],
     }
@@ -159,7 +169,7 @@ mod tests {
     use crate::fe::{elasticity_matrix, PlaneState};
 
     /// Consistent nodal forces of a uniform and of a linear pressure on a polyline of unequal
-    /// edges come back as that pressure at every node.
+    /// straight edges come back as that pressure at every node; and on a curved edge.
     #[test]
     fn edge_traction_inverts_consistent_nodal_forces() {
         let xs = [0.0, 0.5, 1.0, 1.75, 2.5, 2.8, 3.1];
@@ -184,6 +194,38 @@ mod tests {
             for (x, t) in xs.iter().zip(&traction) {
                 assert!((t - p(*x)).abs() < 1e-12, "{t} against {}", p(*x));
             }
+        }
+        // A curved edge with its mid-side node off the middle (as a flank's, uniform in roll
+        // angle): a uniform pressure's forces, integrated finely along the edge's own map, come
+        // back uniform to the 4-point rule's accuracy.
+        let points = [
+            Point2::new(0.0, 0.0),
+            Point2::new(0.55, 0.05),
+            Point2::new(1.0, 0.2),
+        ];
+        let mut forces = [0.0; 3];
+        let steps = 2000;
+        for k in 0..=steps {
+            let xi = -1.0 + 2.0 * k as f64 / steps as f64;
+            let simpson = if k == 0 || k == steps {
+                1.0
+            } else if k % 2 == 1 {
+                4.0
+            } else {
+                2.0
+            } * (2.0 / steps as f64)
+                / 3.0;
+            let shape = [0.5 * xi * (xi - 1.0), 1.0 - xi * xi, 0.5 * xi * (xi + 1.0)];
+            let slope = [xi - 0.5, -2.0 * xi, xi + 0.5];
+            let tangent = (0..3).fold(nalgebra::Vector2::zeros(), |t, j| {
+                t + points[j].coords * slope[j]
+            });
+            for j in 0..3 {
+                forces[j] += 0.1 * 5.0 * shape[j] * tangent.norm() * simpson;
+            }
+        }
+        for t in edge_traction(&points, &forces, 0.1) {
+            assert!((t / 5.0 - 1.0).abs() < 1e-5, "{t}");
         }
     }
 

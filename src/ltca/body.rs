@@ -118,6 +118,29 @@ fn fillet_nodes(gear: &Gear, mesh: &GearMesh, loaded_side_sign: f64) -> Vec<Fill
     nodes
 }
 
+/// The body's stiffness with its bore nodes held, factorized, and its elasticity matrix.
+pub fn bore_held_stiffness(
+    mesh: &GearMesh,
+    material: BodyMaterial,
+    face_width: f64,
+) -> Result<(FactorizedStiffness, nalgebra::Matrix3<f64>), FeError> {
+    let d = elasticity_matrix(
+        material.youngs_modulus,
+        material.poisson_ratio,
+        material.plane,
+    );
+    let triplets = stiffness_triplets(&mesh.nodes, &mesh.elements, &d, face_width);
+    let fixed: Vec<usize> = mesh
+        .bore_nodes
+        .iter()
+        .flat_map(|&i| [2 * i, 2 * i + 1])
+        .collect();
+    Ok((
+        FactorizedStiffness::new(2 * mesh.nodes.len(), triplets, &fixed)?,
+        d,
+    ))
+}
+
 /// A meshed, factorized gear with its condensed flank compliance.
 pub struct LtcaBody {
     pub mesh: GearMesh,
@@ -154,19 +177,7 @@ impl LtcaBody {
         let started = std::time::Instant::now();
         let mesh = mesh_gear(gear, modification, spec);
         check_elements(&mesh.nodes, &mesh.elements)?;
-        let d = elasticity_matrix(
-            material.youngs_modulus,
-            material.poisson_ratio,
-            material.plane,
-        );
-        let triplets = stiffness_triplets(&mesh.nodes, &mesh.elements, &d, gear.spec.face_width);
-        let fixed: Vec<usize> = mesh
-            .bore_nodes
-            .iter()
-            .flat_map(|&i| [2 * i, 2 * i + 1])
-            .collect();
-        let dofs = 2 * mesh.nodes.len();
-        let stiffness = FactorizedStiffness::new(dofs, triplets, &fixed)?;
+        let (stiffness, d) = bore_held_stiffness(&mesh, material, gear.spec.face_width)?;
         let factorization_s = started.elapsed().as_secs_f64();
 
         let started = std::time::Instant::now();

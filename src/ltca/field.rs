@@ -14,9 +14,9 @@
 use nalgebra::{Point2, Vector2};
 
 use super::{LoadedContacts, LtcaModel};
-use crate::fe::assembly::{stiffness_triplets, FactorizedStiffness, FeError};
+use crate::fe::assembly::FeError;
 use crate::fe::recovery::{max_principal, NodalStress};
-use crate::fe::{elasticity_matrix, PlaneState};
+use crate::fe::PlaneState;
 
 /// The displacements and stresses of a window of one body's mesh.
 #[derive(Debug, Clone)]
@@ -77,18 +77,8 @@ impl LtcaModel {
         let body = &self.bodies[gear];
         let mesh = &body.mesh;
         let spec = &self.pair.gears[gear];
-        let d = elasticity_matrix(
-            self.material.youngs_modulus,
-            self.material.poisson_ratio,
-            self.material.plane,
-        );
-        let triplets = stiffness_triplets(&mesh.nodes, &mesh.elements, &d, spec.spec.face_width);
-        let fixed: Vec<usize> = mesh
-            .bore_nodes
-            .iter()
-            .flat_map(|&i| [2 * i, 2 * i + 1])
-            .collect();
-        let stiffness = FactorizedStiffness::new(2 * mesh.nodes.len(), triplets, &fixed)?;
+        let (stiffness, d) =
+            super::body::bore_held_stiffness(mesh, self.material, spec.spec.face_width)?;
         let mut load = vec![0.0; 2 * mesh.nodes.len()];
         for contact in &contacts.active {
             for (node, weight, inward) in contact.nodes[gear] {

@@ -522,7 +522,7 @@ impl LtcaModel {
 
     /// Gear `g`'s inward force at each candidate flank node in a loaded state: each active
     /// contact's force spread by its weights [N].
-    pub fn candidate_forces(&self, contacts: &LoadedContacts, g: usize) -> Vec<f64> {
+    fn candidate_forces(&self, contacts: &LoadedContacts, g: usize) -> Vec<f64> {
         let body = &self.bodies[g];
         let candidate_of: std::collections::HashMap<usize, usize> = body
             .candidates
@@ -543,11 +543,16 @@ impl LtcaModel {
 
     /// Per gear, the contact pressure at each candidate flank node in a loaded state [Pa]: the
     /// nodal forces of each tooth's flank as the consistent traction of its quadratic edges
-    /// ([`crate::fe::recovery::edge_traction`], the gear's face width as thickness). Where a
+    /// ([`crate::fe::recovery::edge_traction`], over the pair's common face width, as the
+    /// Hertz pressure is). Where a
     /// tip corner carries load the force sits on the corner node and the traction there grows
     /// as the flank elements shrink: an edge contact, which the FE resolves only as far as its
     /// mesh does.
     pub fn flank_tractions(&self, contacts: &LoadedContacts) -> [Vec<f64>; 2] {
+        let face_width = self.pair.gears[0]
+            .spec
+            .face_width
+            .min(self.pair.gears[1].spec.face_width);
         std::array::from_fn(|g| {
             let body = &self.bodies[g];
             let forces = self.candidate_forces(contacts, g);
@@ -562,7 +567,6 @@ impl LtcaModel {
                 let points: Vec<Point2<f64>> =
                     nodes.iter().map(|&i| body.candidates[i].position).collect();
                 let f: Vec<f64> = nodes.iter().map(|&i| forces[i]).collect();
-                let face_width = self.pair.gears[g].spec.face_width;
                 for (&i, t) in nodes.iter().zip(edge_traction(&points, &f, face_width)) {
                     traction[i] = t;
                 }

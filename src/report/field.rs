@@ -65,7 +65,7 @@ struct FieldDrawing {
     values: [Vec<f64>; 2],
     /// The view's radial range [mm] (its width follows from the panel's shape, equal scales).
     y_range: (f64, f64),
-    /// The fillet node of the peak tension [mm] (nearest node of the field to it).
+    /// The fillet node of the peak tension [mm].
     peak: Option<(f64, f64)>,
 }
 
@@ -94,13 +94,11 @@ impl FieldDrawing {
         let module = gear.module() * 1e3;
         let (root, tip) = (gear.root_radius * 1e3, gear.tip_radius * 1e3);
         let y_range = (root - 2.5 * module, tip + 0.5 * module);
-        // The peak sits on the fillet at its radius, on the loaded side: the field node at that
-        // radius with the largest max principal stress.
         let principal = field.max_principal();
-        let radius = peak.peak.tension_radius_mm * 1e-3;
-        let peak_node = (0..field.nodes.len())
-            .filter(|&i| (field.nodes[i].coords.norm() - radius).abs() < 1e-9)
-            .max_by(|&a, &b| principal[a].total_cmp(&principal[b]));
+        let peak_node = field
+            .mesh_node
+            .iter()
+            .position(|&n| n == peak.peak.tension_node);
         FieldDrawing {
             title,
             polygons,

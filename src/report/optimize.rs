@@ -56,7 +56,8 @@ pub fn console(study: &OptimizeStudy) -> String {
         s.root_stress_optimum_mpa,
         s.contact_pressure_none_mpa,
         s.contact_pressure_optimum_mpa,
-        limit("root stress", s.max_root_stress_mpa),
+        limit("gear 1's root stress", s.max_root_stress_mpa.map(|l| l[0]))
+            + &limit("gear 2's", s.max_root_stress_mpa.map(|l| l[1])),
         limit("contact pressure", s.max_contact_pressure_mpa),
     );
     out += "candidate            robust STE p-p  at design  min contact ratio  root stress  contact pressure  max dyn. factor\n";

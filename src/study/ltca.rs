@@ -164,9 +164,11 @@ pub struct VariantSummary {
     /// The largest at a tip corner, where the involute's Hertz does not hold (null: no tip
     /// carried load).
     pub contact_pressure_at_tip_max_mpa: Option<f64>,
-    /// The FE's own contact pressure ([`fe_pressure_cycle`]): the largest away from tip corners,
-    /// and the largest at a tip corner (null: no corner carried load), which is an edge contact
-    /// the mesh bounds (it grows as the flank elements shrink) [MPa].
+    /// The FE's own contact pressure ([`fe_pressure_cycle`]): the largest away from edge
+    /// contacts, and the largest with one (null: none), which the mesh bounds (it grows as the
+    /// flank elements shrink) [MPa]. Not resolved where the Hertz half width spans few flank
+    /// elements (the default mesh reads about 1.5 × Hertz on the paper pair, validation/strength):
+    /// the safety factors take the Hertz pressure.
     pub contact_pressure_fe_max_mpa: f64,
     pub contact_pressure_fe_at_tip_corner_max_mpa: Option<f64>,
     /// Per gear, the largest fillet tension over the cycle, where, and the largest compression
@@ -203,6 +205,9 @@ pub struct RootStressRow {
     pub path_mm: Option<f64>,
     pub tension_mpa: f64,
     pub tension_radius_mm: f64,
+    /// The mesh node of the tension's fillet node.
+    #[serde(skip)]
+    pub tension_node: usize,
     pub compression_mpa: f64,
     pub compression_radius_mm: f64,
 }
@@ -249,6 +254,7 @@ pub fn root_stress_cycle(
                         path_mm,
                         tension_mpa: f64::NEG_INFINITY,
                         tension_radius_mm: f64::NAN,
+                        tension_node: usize::MAX,
                         compression_mpa: f64::INFINITY,
                         compression_radius_mm: f64::NAN,
                     };
@@ -259,7 +265,8 @@ pub fn root_stress_cycle(
                         if node.loaded_side {
                             let t = max_principal(*s) * 1e-6;
                             if t > row.tension_mpa {
-                                (row.tension_mpa, row.tension_radius_mm) = (t, node.radius * 1e3);
+                                (row.tension_mpa, row.tension_radius_mm, row.tension_node) =
+                                    (t, node.radius * 1e3, node.node);
                             }
                         } else {
                             let c = min_principal(*s) * 1e-6;
@@ -301,10 +308,11 @@ pub struct FePressureRow {
     /// The gear (1 or 2) whose flank node carries it, and that node's roll angle on its gear.
     pub gear: usize,
     pub roll_angle_deg: f64,
-    /// An end of the pair's flanks carries load — a tip corner, or a form point (where the
-    /// involute meets the fillet, which a mating tip reaches when it contacts below the
-    /// involute): an edge contact, resolved only as far as the mesh is (the traction near it
-    /// grows as the flank elements shrink).
+    /// A contact of the pair lies at or beyond an end of the involute and puts its whole force
+    /// on the end of a flank
+    /// — a tip corner, or a form point (where the involute meets the fillet, which a mating tip
+    /// reaches below the involute): an edge contact, resolved only as far as the mesh is (the
+    /// traction near it grows as the flank elements shrink).
     pub at_tip_corner: bool,
 }
 
@@ -333,7 +341,18 @@ pub fn fe_pressure_cycle(
         .map(|j| -> Result<Vec<FePressureRow>, StudyError> {
             let contacts = model.loaded_contacts(j, positions, torque)?;
             let traction = model.flank_tractions(&contacts);
-            let forces = [0, 1].map(|g| model.candidate_forces(&contacts, g));
+            // The nodes that carry a contact's whole force: a contact at or beyond an end of
+            // the involute (`flank_weights` puts it all on the end node); a contact inside the
+            // end edge loads the end node by a shape function below 1 and is no edge contact.
+            let whole: [std::collections::HashSet<usize>; 2] = [0, 1].map(|g| {
+                contacts
+                    .active
+                    .iter()
+                    .flat_map(|c| c.nodes[g])
+                    .filter(|(_, weight, _)| *weight >= 1.0 - 1e-9)
+                    .map(|(node, _, _)| node)
+                    .collect()
+            });
             let result = &contacts.result;
             let mut rows = Vec::new();
             for (k, &(t1, t2)) in model.tooth_pairs.iter().enumerate() {
@@ -342,11 +361,9 @@ pub fn fe_pressure_cycle(
                 }
                 let mut best: Option<FePressureRow> = None;
                 let at_tip_corner = [(0, t1), (1, t2)].iter().any(|&(g, tooth)| {
-                    model.bodies[g]
-                        .candidates
-                        .iter()
-                        .enumerate()
-                        .any(|(i, c)| c.tooth == tooth && corner[g][i] && forces[g][i] != 0.0)
+                    model.bodies[g].candidates.iter().enumerate().any(|(i, c)| {
+                        c.tooth == tooth && corner[g][i] && whole[g].contains(&c.node)
+                    })
                 });
                 for (g, tooth) in [(0, t1), (1, t2)] {
                     for (i, c) in model.bodies[g].candidates.iter().enumerate() {
@@ -550,10 +567,6 @@ pub struct LtcaSummary {
     /// The first variant's largest Hertz pressure away from the tips, and where.
     pub contact_pressure_max_mpa: f64,
     pub contact_pressure_max_at: Option<PressureAt>,
-    /// The FE's own contact pressure away from tip corners, and at them (mesh-bound edge
-    /// contact), first variant [MPa] (each variant's in `variants`).
-    pub contact_pressure_fe_max_mpa: f64,
-    pub contact_pressure_fe_at_tip_corner_max_mpa: Option<f64>,
     /// The first variant's largest fillet tension per gear over the cycle (FE), and where.
     pub root_stress_max_mpa: [Option<f64>; 2],
     pub root_stress_max_at: [Option<RootStressPeak>; 2],
@@ -719,8 +732,6 @@ pub fn run(
         potential_energy_max_n_per_m: pe.max(),
         contact_pressure_max_mpa: first.contact_pressure_max_mpa,
         contact_pressure_max_at: first.contact_pressure_max_at,
-        contact_pressure_fe_max_mpa: first.contact_pressure_fe_max_mpa,
-        contact_pressure_fe_at_tip_corner_max_mpa: first.contact_pressure_fe_at_tip_corner_max_mpa,
         root_stress_max_mpa: first.root_stress.map(|p| p.map(|p| p.tension_mpa)),
         root_stress_max_at: first.root_stress,
         safety_factors: first

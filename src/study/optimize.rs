@@ -140,9 +140,10 @@ pub struct OptimizeOptions {
     pub rpm: RpmRange,
     /// Torques of the Harris map, in percent of the design torque.
     pub harris_range: TorqueRange,
-    /// Largest tooth-root tension of either gear over the load range (None: no limit).
+    /// Largest tooth-root tension of each gear over the load range (None: no limit; a
+    /// percentage is of each gear's own unmodified peak).
     pub max_root_stress: Option<StressLimit>,
-    /// Largest Hertz pressure away from the tips over the load range (None: no limit).
+    /// Largest Hertz pressure over the load range (None: no limit).
     pub max_contact_pressure: Option<StressLimit>,
 }
 
@@ -299,12 +300,13 @@ pub struct OptimizeSummary {
     pub objective_classic: f64,
     pub objective_classic_short: f64,
     pub contact_ratio_optimum: Vec<f64>,
-    /// The strength limits the optimizer kept [MPa] (None: not asked for; `--max-root-stress-mpa`,
-    /// `--max-contact-pressure-mpa`, a percentage resolved on the unmodified pair's peak).
-    pub max_root_stress_mpa: Option<f64>,
+    /// The strength limits the optimizer kept [MPa] (None: not asked for; `--max-root-stress-mpa`
+    /// per gear, `--max-contact-pressure-mpa`, a percentage resolved on the unmodified pair's
+    /// peaks).
+    pub max_root_stress_mpa: Option<[f64; 2]>,
     pub max_contact_pressure_mpa: Option<f64>,
-    /// The largest tooth-root tension (either gear) and Hertz pressure away from the tips over
-    /// the load range, unmodified and at the optimum [MPa].
+    /// The largest tooth-root tension (either gear) and Hertz pressure over the load range,
+    /// unmodified and at the optimum [MPa].
     pub root_stress_none_mpa: f64,
     pub root_stress_optimum_mpa: f64,
     pub contact_pressure_none_mpa: f64,
@@ -406,7 +408,7 @@ pub struct CandidateLine {
     pub contact_ratio_min: f64,
     /// Each gear's largest tooth-root tension over the load range [MPa] (LTCA, fixed bodies).
     pub root_stress_max_mpa: [f64; 2],
-    /// The largest Hertz pressure away from the tips over the load range [MPa].
+    /// The largest Hertz pressure over the load range [MPa].
     pub contact_pressure_max_mpa: f64,
     pub feasible: bool,
     pub max_dynamic_factor: f64,
@@ -486,15 +488,16 @@ pub fn run(
     let respond = |design: &ReliefDesign| {
         robust::evaluate(&model, design, &range, options.positions).map(|e| e.response)
     };
-    // A relative strength limit reads the unmodified pair's peaks over the load range.
-    let unmodified_peaks =
-        if options.max_root_stress.is_some() || options.max_contact_pressure.is_some() {
-            let response = respond(&ReliefDesign::none(ReliefShape::Linear))?;
-            let [root1, root2] = response.root_stress_peak_mpa();
-            Some((root1.max(root2), response.contact_pressure_peak_mpa()))
+    // A relative strength limit reads the unmodified pair's peaks over the load range (each
+    // gear's own root stress).
+    let relative = |l: &Option<StressLimit>| matches!(l, Some(StressLimit::PercentOfUnmodified(_)));
+    let unmodified =
+        if relative(&options.max_root_stress) || relative(&options.max_contact_pressure) {
+            Some(respond(&ReliefDesign::none(ReliefShape::Linear))?)
         } else {
             None
         };
+    let peak_of = |pick: &dyn Fn(&LoadResponse) -> f64| unmodified.as_ref().map_or(0.0, pick);
     let limits = robust::Limits {
         max_amount: options.max_relief_um * 1e-6,
         min_length: options.min_length,
@@ -502,14 +505,12 @@ pub fn run(
             .min_contact_ratio
             .unwrap_or_else(|| default_min_contact_ratio(pair)),
         contact_deflection: deflection,
-        max_root_stress: options
-            .max_root_stress
-            .zip(unmodified_peaks)
-            .map(|(l, (root, _))| l.resolve(root)),
+        max_root_stress: options.max_root_stress.map(|l| {
+            [0, 1].map(|g| l.resolve(peak_of(&|r: &LoadResponse| r.root_stress_peak_mpa()[g])))
+        }),
         max_contact_pressure: options
             .max_contact_pressure
-            .zip(unmodified_peaks)
-            .map(|(l, (_, pressure))| l.resolve(pressure)),
+            .map(|l| l.resolve(peak_of(&|r: &LoadResponse| r.contact_pressure_peak_mpa()))),
     };
     let settings = robust::Settings::default();
     let classic = |length: f64, shape: ReliefShape| ReliefDesign {
@@ -854,7 +855,7 @@ fn summarize(
         objective_classic: objective("classic-long").unwrap_or(f64::NAN),
         objective_classic_short: objective("classic-short").unwrap_or(f64::NAN),
         contact_ratio_optimum: optimum.response.contact_ratio.clone(),
-        max_root_stress_mpa: limits.max_root_stress.map(|l| l * 1e-6),
+        max_root_stress_mpa: limits.max_root_stress.map(|l| l.map(|l| l * 1e-6)),
         max_contact_pressure_mpa: limits.max_contact_pressure.map(|l| l * 1e-6),
         root_stress_none_mpa: max_of(unmodified.response.root_stress_peak_mpa()),
         root_stress_optimum_mpa: max_of(optimum.response.root_stress_peak_mpa()),

@@ -422,13 +422,12 @@ pub struct OptimizeArgs {
     /// Shortest relief, as a fraction of the double-contact zone (1 = long relief).
     #[arg(long, default_value_t = optimize::DEFAULT_MIN_LENGTH, value_name = "FRACTION")]
     pub min_relief_length: f64,
-    /// Largest tooth-root tension of either gear at any position and torque of the range: MPa
-    /// (e.g. 90), or a percentage of the unmodified pair's peak (e.g. 105%). Default: no limit
+    /// Largest tooth-root tension of each gear at any position and torque of the range: MPa
+    /// (e.g. 90), or a percentage of that gear's unmodified peak (e.g. 105%). Default: no limit
     #[arg(long, value_name = "MPA|PCT%", allow_hyphen_values = true)]
     pub max_root_stress_mpa: Option<optimize::StressLimit>,
-    /// Largest Hertz contact pressure away from the tips at any position and torque of the
-    /// range: MPa (e.g. 800), or a percentage of the unmodified pair's peak (e.g. 102%).
-    /// Default: no limit
+    /// Largest Hertz contact pressure at any position and torque of the range: MPa (e.g. 800),
+    /// or a percentage of the unmodified pair's peak (e.g. 102%). Default: no limit
     #[arg(long, value_name = "MPA|PCT%", allow_hyphen_values = true)]
     pub max_contact_pressure_mpa: Option<optimize::StressLimit>,
     /// Driver speeds of each candidate's lumped sweep, FROM:TO:N in rpm.

@@ -868,6 +868,7 @@ fn sections(
         plots: vec![
             ("Fillet tension of a loaded tooth along the path of contact".into(), "ltca/root_stress.png".into()),
             ("Hertz pressure along the path of contact".into(), "ltca/contact_pressure.png".into()),
+            ("The tooth with the largest fillet tension, where it peaks: max principal and von Mises (ParaView: ltca/stress_field.vtk)".into(), "ltca/stress_field.png".into()),
             ("Safety over speed".into(), "strength_over_speed.png".into()),
         ],
     });

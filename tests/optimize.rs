@@ -421,3 +421,75 @@ fn ltca_optimum_is_feasible_and_beats_the_unmodified_pair() {
         );
     }
 }
+
+/// A root-stress limit on an unequal, shifted pair (24/40, x = +0.3 / −0.3, case mesh, 32
+/// positions, three torques 50–150 %), per gear at 101 % of each gear's unmodified peak: the free
+/// optimum breaks it on a gear (so it binds), the limited optimum keeps both gears' limits and
+/// still beats the unmodified pair's robust objective.
+#[test]
+fn a_per_gear_root_limit_binds_and_holds_on_an_unequal_pair() {
+    use geardyn::case::{Case, Override};
+    let case = Case::load_with(
+        None,
+        &[
+            Override::set("gear1.teeth", 24),
+            Override::set("gear2.teeth", 40),
+            Override::set("gear1.profile_shift", 0.3),
+            Override::set("gear2.profile_shift", -0.3),
+        ],
+    )
+    .unwrap();
+    let torque = study::load_torque(&case).unwrap();
+    let model = study::ltca::model(&case, &[FlankModification::none(); 2]).unwrap();
+    let range = LoadRange::uniform(torque, 0.5, 1.5, 3).unwrap();
+    let positions = 32;
+    let respond =
+        |d: &ReliefDesign| robust::evaluate(&model, d, &range, positions).map(|e| e.response);
+    let unmodified = respond(&ReliefDesign::none(ReliefShape::Linear)).unwrap();
+    let rb2 = case.pair.gears[1].base_radius;
+    let deflection = model
+        .run(positions, torque, &|_| {})
+        .unwrap()
+        .iter()
+        .map(|r| rb2 * (r.ste - r.unloaded_te))
+        .fold(0.0, f64::max);
+    let peaks = unmodified.root_stress_peak_mpa();
+    let free = Limits {
+        max_amount: 40e-6,
+        min_length: 0.25,
+        min_contact_ratio: study::optimize::default_min_contact_ratio(&case.pair),
+        contact_deflection: deflection,
+        max_root_stress: None,
+        max_contact_pressure: None,
+    };
+    let limited = Limits {
+        max_root_stress: Some(peaks.map(|p| 1.01 * p * 1e6)),
+        ..free
+    };
+    let run = |limits: &Limits| {
+        robust::optimize(
+            &respond,
+            &ReliefDesign::none(ReliefShape::Linear),
+            &range,
+            limits,
+            &Settings::default(),
+            &|_| {},
+        )
+        .unwrap()
+    };
+    let free_optimum = run(&free);
+    let raised = free_optimum.best.response.root_stress_peak_mpa();
+    eprintln!("unmodified {peaks:?} MPa, free optimum {raised:?} MPa");
+    assert!(
+        (0..2).any(|g| raised[g] > 1.01 * peaks[g]),
+        "{raised:?} against {peaks:?}"
+    );
+    let optimum = run(&limited);
+    let kept = optimum.best.response.root_stress_peak_mpa();
+    eprintln!(
+        "limited optimum {kept:?} MPa, objective {:.3} against {:.3} um unmodified",
+        optimum.best.response.objective_um, unmodified.objective_um
+    );
+    assert!(robust::feasible(&optimum.best, &limited), "{kept:?}");
+    assert!(optimum.best.response.objective_um < unmodified.objective_um);
+}

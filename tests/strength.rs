@@ -11,6 +11,27 @@ use geardyn::study::ltca::{
 
 const POSITIONS: usize = 32;
 
+/// The paper pair, 24/40 (x = +0.3 / −0.3) and the same pair driven from the 40-tooth gear.
+fn unequal_and_inverse() -> Vec<(&'static str, Case)> {
+    let pair = |z1: i64, z2: i64, x1: f64, x2: f64| {
+        Case::load_with(
+            None,
+            &[
+                Override::set("gear1.teeth", z1),
+                Override::set("gear2.teeth", z2),
+                Override::set("gear1.profile_shift", x1),
+                Override::set("gear2.profile_shift", x2),
+            ],
+        )
+        .unwrap()
+    };
+    vec![
+        ("36/36", Case::load_with(None, &[]).unwrap()),
+        ("24/40", pair(24, 40, 0.3, -0.3)),
+        ("40/24", pair(40, 24, -0.3, 0.3)),
+    ]
+}
+
 /// The case with `overrides`; its unmodified pair's fillet peaks (tension per gear) at the
 /// case's torque on 0.4 mm flanks, and the torque on the driven gear.
 fn peaks(overrides: &[Override]) -> (Case, [RootStressPeak; 2]) {
@@ -310,65 +331,76 @@ fn fe_contact_of_two_cylinders_is_hertz() {
 /// a row for every loaded pair at every position, positive; the unmodified paper pair loads a
 /// tip corner or form point at the ends of its path (edge contact, which a plain Hertz formula
 /// cannot give), and the paper's 20 µm tip relief, more than the pair's deflection, clears
-/// every end (0.4 mm flanks, 32 positions).
+/// every end (0.4 mm flanks, 32 positions); likewise on 24/40 and its inverse 40/24.
 #[test]
 fn relief_clears_the_edge_contacts_of_the_unmodified_pair() {
     use geardyn::study::ltca::fe_pressure_cycle;
-    let case = Case::load_with(None, &[]).unwrap();
-    let coarse = case.file.mesh.coarse_element_mm * 1e-3;
-    let torque = case.operating_points[0].torque;
-    for (variant, edges) in [("none", true), ("tip20-root10", false)] {
-        let mods = case.relief_variant(variant).unwrap().modifications;
-        let model = model_with_sizes(&case, &mods, 0.4e-3, coarse).unwrap();
-        let results = model.run(POSITIONS, torque, &|_| {}).unwrap();
-        let loaded: usize = results
-            .iter()
-            .map(|r| r.pair_forces.iter().filter(|f| **f > 0.0).count())
-            .sum();
-        let rows = fe_pressure_cycle(&model, POSITIONS, torque).unwrap();
-        assert_eq!(rows.len(), loaded, "{variant}");
-        assert!(rows.iter().all(|r| r.pressure_mpa > 0.0), "{variant}");
-        assert_eq!(rows.iter().any(|r| r.at_tip_corner), edges, "{variant}");
+    for (name, case) in unequal_and_inverse() {
+        let coarse = case.file.mesh.coarse_element_mm * 1e-3;
+        let torque = case.operating_points[0].torque;
+        for (variant, edges) in [("none", true), ("tip20-root10", false)] {
+            let mods = case.relief_variant(variant).unwrap().modifications;
+            let model = model_with_sizes(&case, &mods, 0.4e-3, coarse).unwrap();
+            let results = model.run(POSITIONS, torque, &|_| {}).unwrap();
+            let loaded: usize = results
+                .iter()
+                .map(|r| r.pair_forces.iter().filter(|f| **f > 0.0).count())
+                .sum();
+            let rows = fe_pressure_cycle(&model, POSITIONS, torque).unwrap();
+            assert_eq!(rows.len(), loaded, "{name} {variant}");
+            assert!(
+                rows.iter().all(|r| r.pressure_mpa > 0.0),
+                "{name} {variant}"
+            );
+            assert_eq!(
+                rows.iter().any(|r| r.at_tip_corner),
+                edges,
+                "{name} {variant}"
+            );
+        }
     }
 }
 
 /// The field picture's stresses (`peak_field`: the body solved once more under the position's
 /// contact forces, every node recovered) at the peak tooth's loaded fillet give the cycle's
 /// peak tension (`root_stress_cycle`, through the influence rows of the same solves) to
-/// round-off; the field's window holds that tooth (0.4 mm flanks, paper pair).
+/// round-off, and its window holds the peak's node (0.4 mm flanks; the paper pair, 24/40 and
+/// 40/24).
 #[test]
 fn the_stress_field_holds_the_fillet_peak() {
     use geardyn::study::ltca::peak_field;
-    let case = Case::load_with(None, &[]).unwrap();
-    let mods = case.relief_variant("none").unwrap().modifications;
-    let coarse = case.file.mesh.coarse_element_mm * 1e-3;
-    let model = model_with_sizes(&case, &mods, 0.4e-3, coarse).unwrap();
-    let torque = case.operating_points[0].torque;
-    let rows = root_stress_cycle(&model, POSITIONS, torque).unwrap();
-    let peak = peak_field(&model, &rows, POSITIONS, torque)
-        .unwrap()
-        .unwrap();
-    let field = &peak.field;
-    let g = peak.peak.gear - 1;
-    let fillet: std::collections::HashSet<usize> = model.bodies[g]
-        .fillet
-        .nodes
-        .iter()
-        .filter(|f| f.tooth == peak.peak.tooth && f.loaded_side)
-        .map(|f| f.node)
-        .collect();
-    let principal = field.max_principal();
-    let at_fillet = field
-        .mesh_node
-        .iter()
-        .zip(&principal)
-        .filter(|(n, _)| fillet.contains(n))
-        .map(|(_, s)| *s * 1e-6)
-        .fold(f64::NEG_INFINITY, f64::max);
-    assert!(
-        (at_fillet / peak.peak.tension_mpa - 1.0).abs() < 1e-6,
-        "{at_fillet} against {}",
-        peak.peak.tension_mpa
-    );
-    assert!(field.elements.len() > 100 && field.von_mises().iter().all(|v| v.is_finite()));
+    for (name, case) in unequal_and_inverse() {
+        let mods = case.relief_variant("none").unwrap().modifications;
+        let coarse = case.file.mesh.coarse_element_mm * 1e-3;
+        let model = model_with_sizes(&case, &mods, 0.4e-3, coarse).unwrap();
+        let torque = case.operating_points[0].torque;
+        let rows = root_stress_cycle(&model, POSITIONS, torque).unwrap();
+        let peak = peak_field(&model, &rows, POSITIONS, torque)
+            .unwrap()
+            .unwrap();
+        let field = &peak.field;
+        let g = peak.peak.gear - 1;
+        let fillet: std::collections::HashSet<usize> = model.bodies[g]
+            .fillet
+            .nodes
+            .iter()
+            .filter(|f| f.tooth == peak.peak.tooth && f.loaded_side)
+            .map(|f| f.node)
+            .collect();
+        let principal = field.max_principal();
+        let at_fillet = field
+            .mesh_node
+            .iter()
+            .zip(&principal)
+            .filter(|(n, _)| fillet.contains(n))
+            .map(|(_, s)| *s * 1e-6)
+            .fold(f64::NEG_INFINITY, f64::max);
+        assert!(
+            (at_fillet / peak.peak.tension_mpa - 1.0).abs() < 1e-6,
+            "{name}: {at_fillet} against {}",
+            peak.peak.tension_mpa
+        );
+        assert!(field.mesh_node.contains(&peak.peak.tension_node), "{name}");
+        assert!(field.von_mises().iter().all(|v| v.is_finite()), "{name}");
+    }
 }

@@ -441,15 +441,31 @@ pub fn feasible(evaluation: &Evaluation, limits: &Limits) -> bool {
 
 /// Whether the response keeps the strength limits (to [`STRESS_LIMIT_TOLERANCE`]).
 pub fn stress_limits_hold(response: &LoadResponse, limits: &Limits) -> bool {
-    let below = |value_mpa: f64, limit: Option<f64>| {
-        limit.is_none_or(|l| value_mpa * 1e6 <= l * (1.0 + STRESS_LIMIT_TOLERANCE))
-    };
-    let root = response.root_stress_peak_mpa();
-    (0..2).all(|g| below(root[g], limits.max_root_stress.map(|l| l[g])))
-        && below(
-            response.contact_pressure_peak_mpa(),
-            limits.max_contact_pressure,
-        )
+    limited_strength(response, limits)
+        .iter()
+        .all(|(value, limit)| *value <= limit * (1.0 + STRESS_LIMIT_TOLERANCE))
+}
+
+/// Every strength value a given limit reads, with that limit, in MPa: each gear's root stress
+/// at every torque and position (with `max_root_stress`), then the Hertz pressure (with
+/// `max_contact_pressure`). The order depends on the limits and the response's shape only, so
+/// the lists of two responses over the same range line up.
+fn limited_strength(response: &LoadResponse, limits: &Limits) -> Vec<(f64, f64)> {
+    let root = limits.max_root_stress.into_iter().flat_map(|limit| {
+        response
+            .root_stress_mpa
+            .iter()
+            .flatten()
+            .flat_map(move |s| (0..2).map(move |g| (s[g], limit[g] * 1e-6)))
+    });
+    let pressure = limits.max_contact_pressure.into_iter().flat_map(|limit| {
+        response
+            .contact_pressure_mpa
+            .iter()
+            .flatten()
+            .map(move |p| (*p, limit * 1e-6))
+    });
+    root.chain(pressure).collect()
 }
 
 /// Combined relief at the end of recess (C_a1 + C_f2) and at the start of approach (C_a2 + C_f1).
@@ -525,7 +541,7 @@ pub fn optimize(
     for iteration in 1..=settings.max_iterations {
         let v0 = scaled(&current.design);
         if jacobian.is_none() {
-            match linearize(&evaluate, &current, settings, (&lo, &hi)) {
+            match linearize(&evaluate, &current, (settings, limits), (&lo, &hi)) {
                 Ok(linear) => jacobian = Some(linear),
                 Err(e) => {
                     failure = Some(format!("iteration {iteration}, linearizing: {e}"));
@@ -663,24 +679,23 @@ fn finite(design: &ReliefDesign, response: LoadResponse) -> Result<LoadResponse,
 }
 
 /// Forward-difference sensitivities of the STE ([torque][position][variable], µm per scaled
-/// unit) and of the contact ratio ([torque][variable]) about `current`. A step that would leave
+/// unit), of the contact ratio ([torque][variable]) and of the limited strength values (in the
+/// order of [`limited_strength`], MPa per scaled unit) about `current`. A step that would leave
 /// the bounds, or that the geometry rejects, is taken backwards.
 struct Jacobian {
     ste: Vec<Vec<[f64; VARIABLES]>>,
     contact_ratio: Vec<[f64; VARIABLES]>,
-    /// [torque][position][gear][variable], MPa per scaled unit.
-    root_stress: Vec<Vec<[[f64; VARIABLES]; 2]>>,
-    /// [torque][position][variable], MPa per scaled unit.
-    contact_pressure: Vec<Vec<[f64; VARIABLES]>>,
+    strength: Vec<[f64; VARIABLES]>,
 }
 
 fn linearize(
     evaluate: &dyn Fn(&ReliefDesign) -> Result<Evaluation, OptimizeError>,
     current: &Evaluation,
-    settings: &Settings,
+    (settings, limits): (&Settings, &Limits),
     (lo, hi): (&[f64; VARIABLES], &[f64; VARIABLES]),
 ) -> Result<Jacobian, OptimizeError> {
     let v0 = scaled(&current.design);
+    let strength = limited_strength(&current.response, limits);
     let mut jacobian = Jacobian {
         ste: current
             .response
@@ -689,18 +704,7 @@ fn linearize(
             .map(|s| vec![[0.0; VARIABLES]; s.len()])
             .collect(),
         contact_ratio: vec![[0.0; VARIABLES]; current.response.contact_ratio.len()],
-        root_stress: current
-            .response
-            .root_stress_mpa
-            .iter()
-            .map(|s| vec![[[0.0; VARIABLES]; 2]; s.len()])
-            .collect(),
-        contact_pressure: current
-            .response
-            .contact_pressure_mpa
-            .iter()
-            .map(|s| vec![[0.0; VARIABLES]; s.len()])
-            .collect(),
+        strength: vec![[0.0; VARIABLES]; strength.len()],
     };
     for k in 0..VARIABLES {
         let forward = v0[k] + settings.step <= hi[k];
@@ -739,28 +743,13 @@ fn linearize(
             jacobian.contact_ratio[j][k] =
                 (shifted.response.contact_ratio[j] - current.response.contact_ratio[j]) / h;
         }
-        let (after, before) = (&shifted.response, &current.response);
-        for (j, (a, b)) in after
-            .root_stress_mpa
-            .iter()
-            .zip(&before.root_stress_mpa)
-            .enumerate()
+        let after = limited_strength(&shifted.response, limits);
+        for (row, (a, b)) in jacobian
+            .strength
+            .iter_mut()
+            .zip(after.iter().zip(&strength))
         {
-            for (i, (a, b)) in a.iter().zip(b).enumerate() {
-                for g in 0..2 {
-                    jacobian.root_stress[j][i][g][k] = (a[g] - b[g]) / h;
-                }
-            }
-        }
-        for (j, (a, b)) in after
-            .contact_pressure_mpa
-            .iter()
-            .zip(&before.contact_pressure_mpa)
-            .enumerate()
-        {
-            for (i, (a, b)) in a.iter().zip(b).enumerate() {
-                jacobian.contact_pressure[j][i][k] = (a - b) / h;
-            }
+            row[k] = (a.0 - b.0) / h;
         }
     }
     Ok(jacobian)
@@ -812,29 +801,16 @@ fn step_problem(
     }
     // value + ∇value·Δv ≤ limit [MPa], where it can bind inside the trust region (the bound is
     // held at ≥ 0 so that a start a hair beyond the limit, within its tolerance, stays feasible).
-    let mut limit_row = |value: f64, grad: &[f64; VARIABLES], limit_mpa: f64| {
+    for ((value, limit), grad) in limited_strength(&current.response, limits)
+        .into_iter()
+        .zip(&jacobian.strength)
+    {
         let reach: f64 = grad.iter().map(|g| g.abs()).sum::<f64>() * radius;
-        if value.is_finite() && value + reach >= limit_mpa {
+        if value.is_finite() && value + reach >= limit {
             rows.push((
                 (0..VARIABLES).map(|k| (k, grad[k])).collect(),
-                (limit_mpa - value).max(0.0),
+                (limit - value).max(0.0),
             ));
-        }
-    };
-    if let Some(limit) = limits.max_root_stress {
-        for (j, stresses) in current.response.root_stress_mpa.iter().enumerate() {
-            for (i, s) in stresses.iter().enumerate() {
-                for ((value, grad), l) in s.iter().zip(&jacobian.root_stress[j][i]).zip(limit) {
-                    limit_row(*value, grad, l * 1e-6);
-                }
-            }
-        }
-    }
-    if let Some(limit) = limits.max_contact_pressure {
-        for (j, pressures) in current.response.contact_pressure_mpa.iter().enumerate() {
-            for (i, p) in pressures.iter().enumerate() {
-                limit_row(*p, &jacobian.contact_pressure[j][i], limit * 1e-6);
-            }
         }
     }
     for k in 0..VARIABLES {

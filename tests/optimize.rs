@@ -330,6 +330,34 @@ fn strength_limits_hold_and_give_the_known_constrained_optima() {
     }
 }
 
+/// The unmodified bodies of `case` (case mesh), the load range 50–150 % in three torques, 32
+/// positions, and the single-pair deflection (the largest approach at the design torque).
+struct LtcaSetup {
+    model: geardyn::ltca::LtcaModel,
+    range: LoadRange,
+    positions: usize,
+    deflection: f64,
+}
+
+fn ltca_setup(case: &geardyn::case::Case) -> LtcaSetup {
+    let torque = study::load_torque(case).unwrap();
+    let model = study::ltca::model(case, &[FlankModification::none(); 2]).unwrap();
+    let positions = 32;
+    let rb2 = case.pair.gears[1].base_radius;
+    let deflection = model
+        .run(positions, torque, &|_| {})
+        .unwrap()
+        .iter()
+        .map(|r| rb2 * (r.ste - r.unloaded_te))
+        .fold(0.0, f64::max);
+    LtcaSetup {
+        model,
+        range: LoadRange::uniform(torque, 0.5, 1.5, 3).unwrap(),
+        positions,
+        deflection,
+    }
+}
+
 /// On the paper pair's LTCA (case mesh, 32 positions, three torques 50–150 %): every accepted
 /// design keeps the limits and is a relief the geometry accepts; f falls monotonically over
 /// accepted steps; every QP is KKT-clean; the optimum's STE peak-to-peak at
@@ -339,20 +367,15 @@ fn strength_limits_hold_and_give_the_known_constrained_optima() {
 #[test]
 fn ltca_optimum_is_feasible_and_beats_the_unmodified_pair() {
     let case = samples::paper36_case();
-    let torque = study::load_torque(&case).unwrap();
-    let model = study::ltca::model(&case, &[FlankModification::none(); 2]).unwrap();
-    let range = LoadRange::uniform(torque, 0.5, 1.5, 3).unwrap();
-    let positions = 32;
+    let LtcaSetup {
+        model,
+        range,
+        positions,
+        deflection,
+    } = ltca_setup(&case);
     let respond =
         |d: &ReliefDesign| robust::evaluate(&model, d, &range, positions).map(|e| e.response);
     let unmodified = respond(&ReliefDesign::none(ReliefShape::Linear)).unwrap();
-    let rb2 = case.pair.gears[1].base_radius;
-    let deflection = model
-        .run(positions, torque, &|_| {})
-        .unwrap()
-        .iter()
-        .map(|r| rb2 * (r.ste - r.unloaded_te))
-        .fold(0.0, f64::max);
     let [root1, root2] = unmodified.root_stress_peak_mpa();
     for (max_um, min_ratio, root_percent) in [
         (40.0, 1.2, None),
@@ -439,20 +462,15 @@ fn a_per_gear_root_limit_binds_and_holds_on_an_unequal_pair() {
         ],
     )
     .unwrap();
-    let torque = study::load_torque(&case).unwrap();
-    let model = study::ltca::model(&case, &[FlankModification::none(); 2]).unwrap();
-    let range = LoadRange::uniform(torque, 0.5, 1.5, 3).unwrap();
-    let positions = 32;
+    let LtcaSetup {
+        model,
+        range,
+        positions,
+        deflection,
+    } = ltca_setup(&case);
     let respond =
         |d: &ReliefDesign| robust::evaluate(&model, d, &range, positions).map(|e| e.response);
     let unmodified = respond(&ReliefDesign::none(ReliefShape::Linear)).unwrap();
-    let rb2 = case.pair.gears[1].base_radius;
-    let deflection = model
-        .run(positions, torque, &|_| {})
-        .unwrap()
-        .iter()
-        .map(|r| rb2 * (r.ste - r.unloaded_te))
-        .fold(0.0, f64::max);
     let peaks = unmodified.root_stress_peak_mpa();
     let free = Limits {
         max_amount: 40e-6,

@@ -4,6 +4,7 @@
 //! the analysis of their DTE ([`scene`]).
 
 pub mod body;
+pub mod lockstep;
 pub mod pair;
 pub mod scene;
 pub mod solver;

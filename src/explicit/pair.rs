@@ -44,6 +44,7 @@ use nalgebra::{Point2, Rotation2, Vector2};
 
 use crate::contact::{project_on_quadratic_edge, ContactLaw, FrictionState};
 use crate::explicit::body::{ExplicitBody, ExplicitMaterial, ForceOutput};
+use crate::explicit::lockstep::Lockstep;
 use crate::fe::FeError;
 use crate::geometry::engagement::ToothPair;
 use crate::geometry::{GearPair, Placement, Side};
@@ -949,6 +950,8 @@ pub struct PairIntegrator<'a> {
     stamp_id: u64,
     /// Positions of the driver's bore DOFs at the start of the step.
     old_bore_x: Vec<f64>,
+    /// The two gears' phases side by side (a partner thread kept for the run) or in series.
+    lockstep: Lockstep,
 }
 
 /// A `Vector2` as `[x, y]` in a checkpoint.
@@ -1067,24 +1070,18 @@ impl<'a> PairIntegrator<'a> {
             ],
             stamp_id: 0,
             old_bore_x: vec![0.0; 2 * model.meshes[0].bore_nodes.len()],
+            lockstep: Lockstep::for_current_pool(),
         }
     }
 
     /// Phase A of a step, per gear and in parallel: the drift x += Δt v after the half kick
-    /// v += ½Δt a (skipped with `dt` = None), the hub motion of the bore nodes, and the body's
-    /// internal and damping forces into `self.force` (contact forces not yet added).
-    fn drift_and_body_forces(
-        &mut self,
-        state: &mut PairState,
-        dt: Option<f64>,
-        bore: [[f64; 3]; 2],
-    ) -> [ForceOutput; 2] {
-        let (model, beta) = (self.model, self.beta_k);
+    /// v += ½Δt a (skipped with `dt` = None) and the hub motion of the bore nodes.
+    fn drift(&mut self, state: &mut PairState, dt: Option<f64>, bore: [[f64; 3]; 2]) {
+        let model = self.model;
         let [x0, x1] = &mut state.x;
         let [v0, v1] = &mut state.v;
         let [a0, a1] = &mut state.a;
-        let [f0, f1] = &mut self.force;
-        let gear = |g: usize, x: &mut [f64], v: &mut [f64], a: &mut [f64], f: &mut [f64]| {
+        let gear = |g: usize, x: &mut [f64], v: &mut [f64], a: &mut [f64]| {
             if let Some(dt) = dt {
                 for ((x, v), a) in x.iter_mut().zip(v.iter_mut()).zip(a.iter()) {
                     *v += 0.5 * dt * a;
@@ -1092,41 +1089,78 @@ impl<'a> PairIntegrator<'a> {
                 }
             }
             model.place_bore(g, x, v, a, bore[g]);
-            // `f` is zero here: `accelerate` clears it as it reads it.
-            model.bodies[g].internal_forces(x, v, beta, f)
         };
-        let (o0, o1) = rayon::join(|| gear(0, x0, v0, a0, f0), || gear(1, x1, v1, a1, f1));
+        self.lockstep
+            .join(|| gear(0, x0, v0, a0), || gear(1, x1, v1, a1));
+    }
+
+    /// Phase B, on both threads at once: the contact forces (into `contact_force`, with their
+    /// bookkeeping) beside the bodies' internal and damping forces (into `force`, whose contact
+    /// forces are not yet added; `force` is zero here: `accelerate` clears it as it reads it).
+    /// The contact goes with the gear of fewer elements. Splitting a body between the threads
+    /// to balance them was slower (validation/performance): its nodes' cache lines then move
+    /// between the cores at every step.
+    fn contact_and_body_forces(&mut self, state: &PairState) -> [ForceOutput; 2] {
+        let PairIntegrator {
+            model,
+            dt,
+            beta_k,
+            force,
+            contact_force,
+            previous_contact,
+            history,
+            searched,
+            node_stamp,
+            stamp_id,
+            last_contact,
+            lockstep,
+            ..
+        } = self;
+        let (model, dt, beta) = (*model, *dt, *beta_k);
+        let [f0, f1] = force;
+        let forces = |g: usize, f: &mut [f64]| {
+            model.bodies[g].internal_forces(&state.x[g], &state.v[g], beta, f)
+        };
+        let mut contact = || {
+            // After the swap, `contact_force` holds the forces of two steps ago, on the flanks
+            // searched then.
+            for g in 0..2 {
+                std::mem::swap(&mut previous_contact[g], &mut contact_force[g]);
+                *stamp_id += 1;
+                let current = &mut contact_force[g];
+                model.for_flank_dofs(g, &[&searched[0]], &mut node_stamp[g], *stamp_id, |d| {
+                    current[d] = 0.0
+                });
+            }
+            model.contact_forces(state, dt, history, contact_force, last_contact);
+            searched.swap(0, 1);
+            searched[1].copy_from_slice(&last_contact.searched);
+        };
+        let (o0, o1) = if model.bodies[0].elements.len() <= model.bodies[1].elements.len() {
+            lockstep.join(
+                || {
+                    contact();
+                    forces(0, f0)
+                },
+                || forces(1, f1),
+            )
+        } else {
+            lockstep.join(
+                || forces(0, f0),
+                || {
+                    contact();
+                    forces(1, f1)
+                },
+            )
+        };
         [o0, o1]
     }
 
-    /// The serial middle of a step: contact forces added to the body forces, the driven hub's
-    /// angular acceleration and the driver's hub reactions. Returns the power dissipated on the
-    /// hub (mesh dashpot and mass damping).
+    /// The serial middle of a step: the contact forces added to the body forces, the driven
+    /// hub's angular acceleration and the driver's hub reactions. Returns the power dissipated
+    /// on the hub (mesh dashpot and mass damping).
     fn contact_and_hubs(&mut self, state: &mut PairState) -> f64 {
         let model = self.model;
-        // After the swap, `contact_force` holds the forces of two steps ago, on the flanks
-        // searched then.
-        for g in 0..2 {
-            std::mem::swap(&mut self.previous_contact[g], &mut self.contact_force[g]);
-            self.stamp_id += 1;
-            let current = &mut self.contact_force[g];
-            model.for_flank_dofs(
-                g,
-                &[&self.searched[0]],
-                &mut self.node_stamp[g],
-                self.stamp_id,
-                |d| current[d] = 0.0,
-            );
-        }
-        model.contact_forces(
-            state,
-            self.dt,
-            &mut self.history,
-            &mut self.contact_force,
-            &mut self.last_contact,
-        );
-        self.searched.swap(0, 1);
-        self.searched[1].copy_from_slice(&self.last_contact.searched);
         for g in 0..2 {
             self.stamp_id += 1;
             let (force, current) = (&mut self.force[g], &self.contact_force[g]);
@@ -1204,7 +1238,9 @@ impl<'a> PairIntegrator<'a> {
             model.place_bore(g, x, v, a, bore[g]);
             power
         };
-        let (p0, p1) = rayon::join(|| gear(0, x0, v0, a0, f0), || gear(1, x1, v1, a1, f1));
+        let (p0, p1) = self
+            .lockstep
+            .join(|| gear(0, x0, v0, a0, f0), || gear(1, x1, v1, a1, f1));
         p0 + p1
     }
 
@@ -1212,8 +1248,8 @@ impl<'a> PairIntegrator<'a> {
     pub fn initialize(&mut self, state: &mut PairState) {
         let (theta, rate, accel) = self.drive.driver_motion(state.time);
         let [phi, phi_rate, _] = state.hub;
-        let body =
-            self.drift_and_body_forces(state, None, [[theta, rate, accel], [phi, phi_rate, 0.0]]);
+        self.drift(state, None, [[theta, rate, accel], [phi, phi_rate, 0.0]]);
+        let body = self.contact_and_body_forces(state);
         self.contact_and_hubs(state);
         self.accelerate(state, None, [[theta, rate, accel], state.hub]);
         self.energy.strain = body[0].strain_energy + body[1].strain_energy;
@@ -1259,7 +1295,8 @@ impl<'a> PairIntegrator<'a> {
         state.hub[1] += 0.5 * dt * state.hub[2];
         state.hub[0] += dt * state.hub[1];
         // Half kick and drift on every DOF, then the hubs set the bore DOFs.
-        let body = self.drift_and_body_forces(state, Some(dt), [[theta, rate, accel], state.hub]);
+        self.drift(state, Some(dt), [[theta, rate, accel], state.hub]);
+        let body = self.contact_and_body_forces(state);
         let hub_power = self.contact_and_hubs(state);
         state.hub[1] += 0.5 * dt * state.hub[2];
         let node_power = self.accelerate(state, Some(dt), [[theta, rate, accel], state.hub]);

@@ -198,7 +198,7 @@ fn wait(state: &AtomicU8, ready: impl Fn(u8) -> bool, parked: Option<&AtomicBool
             return s;
         }
         round = round.wrapping_add(1);
-        if round % 64 != 0 {
+        if !round.is_multiple_of(64) {
             std::hint::spin_loop();
             continue;
         }

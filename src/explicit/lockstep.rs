@@ -1,13 +1,14 @@
-//! Two threads in lock-step for the explicit pair's per-gear phases.
+//! Two threads in lock-step for the explicit pair's phases.
 //!
-//! A pair step has two short parallel phases, one task per gear, around a serial contact
-//! phase: a few hundred microseconds a step, 1.5 million steps a run. With `rayon::join` the
-//! second gear's task goes to a pool worker that has fallen asleep during the serial phase
-//! (rayon's workers sleep after about 32 idle yields), and waking it is a system call at every
-//! join: 40 s of system time in a 116 s run (validation/performance, "The threads' wake-ups").
+//! A pair step hands work to a second thread three times: the two gears' drifts, the two
+//! gears' element forces with the contact beside them, and the two gears' accelerations;
+//! a few hundred microseconds a step, 1.5 million steps a run. With `rayon::join` the second
+//! task went to a pool worker that had fallen asleep in the step's serial middle (rayon's
+//! workers sleep after about 32 idle yields), and waking it was a system call at every join:
+//! 40 s of system time in a 116 s run (validation/performance, "The threads' wake-ups").
 //! [`Lockstep`] keeps one partner thread for the integrator's lifetime that waits for its next
 //! task by spinning, then yielding, and parks only after a pause far longer than a step, so a
-//! join in the time loop costs two cache-line hand-overs instead of a wake-up.
+//! hand-over in the time loop costs two cache-line transfers instead of a wake-up.
 //!
 //! The arithmetic of each task is the same whichever thread runs it, so results stay
 //! byte-identical across thread counts; with one thread ([`Lockstep::for_current_pool`] in a
@@ -21,8 +22,10 @@ use std::sync::Arc;
 use std::thread::{self, JoinHandle};
 use std::time::{Duration, Instant};
 
-/// Pure spinning before a waiting thread starts to yield its core: longer than the serial
-/// contact phase (37–70 µs), so the partner is awake when the next phase starts.
+/// Pure spinning before a waiting thread starts to yield its core. Yielding keeps the thread
+/// awake (no wake-up system call when the next task comes), and gives the core away where
+/// more threads than cores run (tests side by side): with 200 µs of pure spinning
+/// tests/explicit_pair.rs took 190 s against 140 s, and a run alone was no faster.
 const SPIN: Duration = Duration::from_micros(20);
 /// Yielding before the partner parks: a pause this long is not the time loop (a checkpoint,
 /// a history write, a stability check, the end of the run).
@@ -46,7 +49,9 @@ struct Shared {
     partner_parked: AtomicBool,
 }
 
-// SAFETY: the cells are accessed only under the hand-over protocol above (one side at a time).
+// SAFETY: the cells are accessed only under the hand-over protocol above (one side at a time),
+// and the task they carry is `Send` (checked where `join` makes it), so calling it on the
+// partner is allowed.
 unsafe impl Sync for Shared {}
 unsafe impl Send for Shared {}
 
@@ -221,26 +226,33 @@ fn wait(state: &AtomicU8, ready: impl Fn(u8) -> bool, parked: Option<&AtomicBool
 mod tests {
     use super::*;
 
-    /// Both tasks run, each once, their results come back, and the partner's writes to the
-    /// caller's data are seen after the join; many joins in a row with pauses long enough to
-    /// park the partner in between.
+    /// Both tasks run, each once, the second on the partner thread; their results come back,
+    /// and the partner's writes to the caller's data are seen after the join; many joins in a
+    /// row with pauses long enough to park the partner in between. Without a partner both run
+    /// here.
     #[test]
     fn joins_run_both_tasks_and_return_their_results() {
-        for mut lockstep in [Lockstep::with_partner(), Lockstep::serial()] {
+        for (mut lockstep, parallel) in [
+            (Lockstep::with_partner(), true),
+            (Lockstep::serial(), false),
+        ] {
+            assert_eq!(lockstep.is_parallel(), parallel);
+            let here = thread::current().id();
             let mut left = vec![0u64; 1000];
             let mut right = vec![0u64; 1000];
             for round in 0..2000u64 {
-                let (a, b) = lockstep.join(
+                let (a, (b, there)) = lockstep.join(
                     || {
                         left.iter_mut().for_each(|v| *v += round);
                         left[0]
                     },
                     || {
                         right.iter_mut().for_each(|v| *v += 2 * round);
-                        right[999]
+                        (right[999], thread::current().id())
                     },
                 );
                 assert_eq!((a, b), (left[0], right[999]));
+                assert_eq!(there != here, parallel, "round {round}");
                 if round % 500 == 0 {
                     thread::sleep(YIELD + Duration::from_millis(2));
                 }
@@ -251,10 +263,11 @@ mod tests {
         }
     }
 
-    /// A panic on the partner reaches the caller, after both tasks are done, and the partner
-    /// takes the next task.
+    /// A panic on either side reaches the caller only after both tasks are done (the partner's
+    /// slow task has finished writing the caller's data when the panic arrives), and the
+    /// partner takes the next task.
     #[test]
-    fn a_panic_on_the_partner_is_resumed_by_the_caller() {
+    fn a_panic_is_resumed_by_the_caller_after_both_tasks() {
         let mut lockstep = Lockstep::with_partner();
         let mut ran = false;
         let caught = catch_unwind(AssertUnwindSafe(|| {
@@ -263,6 +276,22 @@ mod tests {
         assert!(ran);
         let payload = caught.expect_err("the panic reaches the caller");
         assert_eq!(payload.downcast_ref::<&str>(), Some(&"partner task failed"));
+        let mut written = false;
+        let caught = catch_unwind(AssertUnwindSafe(|| {
+            lockstep.join(
+                || panic!("caller task failed"),
+                || {
+                    thread::sleep(Duration::from_millis(30));
+                    written = true;
+                },
+            )
+        }));
+        let payload = caught.expect_err("the panic reaches the caller");
+        assert_eq!(payload.downcast_ref::<&str>(), Some(&"caller task failed"));
+        assert!(
+            written,
+            "the join unwound before the partner's task was done"
+        );
         assert_eq!(lockstep.join(|| 1, || 2), (1, 2));
     }
 }

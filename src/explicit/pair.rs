@@ -1074,8 +1074,8 @@ impl<'a> PairIntegrator<'a> {
         }
     }
 
-    /// Phase A of a step, per gear and in parallel: the drift x += Δt v after the half kick
-    /// v += ½Δt a (skipped with `dt` = None) and the hub motion of the bore nodes.
+    /// The first phase of a step, per gear and in parallel: the drift x += Δt v after the half
+    /// kick v += ½Δt a (skipped with `dt` = None) and the hub motion of the bore nodes.
     fn drift(&mut self, state: &mut PairState, dt: Option<f64>, bore: [[f64; 3]; 2]) {
         let model = self.model;
         let [x0, x1] = &mut state.x;
@@ -1094,12 +1094,13 @@ impl<'a> PairIntegrator<'a> {
             .join(|| gear(0, x0, v0, a0), || gear(1, x1, v1, a1));
     }
 
-    /// Phase B, on both threads at once: the contact forces (into `contact_force`, with their
-    /// bookkeeping) beside the bodies' internal and damping forces (into `force`, whose contact
-    /// forces are not yet added; `force` is zero here: `accelerate` clears it as it reads it).
+    /// The middle phase, on both threads at once: the contact forces (into `contact_force`,
+    /// with their bookkeeping) beside the bodies' internal and damping forces (into `force`,
+    /// whose contact forces are not yet added; `force` is zero here: `accelerate` clears it as
+    /// it reads it).
     /// The contact goes with the gear of fewer elements. Splitting a body between the threads
-    /// to balance them was slower (validation/performance): its nodes' cache lines then move
-    /// between the cores at every step.
+    /// to balance them gained nothing (validation/performance): its nodes' cache lines then
+    /// move between the cores at every step.
     fn contact_and_body_forces(&mut self, state: &PairState) -> [ForceOutput; 2] {
         let PairIntegrator {
             model,
@@ -1202,9 +1203,9 @@ impl<'a> PairIntegrator<'a> {
         alpha * model.hub_inertia * state.hub[1] * state.hub[1] - mesh_torque * state.hub[1]
     }
 
-    /// Phase B, per gear and in parallel: accelerations a = f/m (− α v) of the free DOFs, the
-    /// closing half kick v += ½Δt a (skipped with `dt` = None) and the hub motion of the bore
-    /// nodes. Returns the mass-damping power of the free nodes.
+    /// The last phase, per gear and in parallel: accelerations a = f/m (− α v) of the free
+    /// DOFs, the closing half kick v += ½Δt a (skipped with `dt` = None) and the hub motion of
+    /// the bore nodes. Returns the mass-damping power of the free nodes.
     fn accelerate(&mut self, state: &mut PairState, dt: Option<f64>, bore: [[f64; 3]; 2]) -> f64 {
         let (model, alpha) = (self.model, self.mass_damping);
         let half = 0.5 * dt.unwrap_or(0.0);
@@ -1272,10 +1273,13 @@ impl<'a> PairIntegrator<'a> {
 
     /// One central-difference step (no allocation):
     /// ```text
-    /// v ← v + ½Δt a;  x ← x + Δt v;  hubs → bore DOFs;  f = −f_int(x) − f_damp(v)   per gear, parallel
-    /// f += f_contact(x, v);  driven hub: φ̈ = M/I_h;  driver reactions                serial
-    /// a = f/m;  v ← v + ½Δt a;  hubs → bore DOFs                                      per gear, parallel
+    /// v ← v + ½Δt a;  x ← x + Δt v;  hubs → bore DOFs            per gear, parallel
+    /// f = −f_int(x) − f_damp(v) per gear;  f_contact(x, v)          3 tasks on 2 threads
+    /// f += f_contact;  driven hub: φ̈ = M/I_h;  driver reactions     serial
+    /// a = f/m;  v ← v + ½Δt a;  hubs → bore DOFs                    per gear, parallel
     /// ```
+    /// The parallel phases go through [`Lockstep`]: with one thread they run one after the
+    /// other, with the same arithmetic.
     /// The energy account's kinetic and strain parts are state functions, updated by
     /// [`PairIntegrator::update_energy`] when asked; the work terms accumulate every step. A
     /// non-finite hub state is reported as divergence here; energy growth is checked in

@@ -11,6 +11,27 @@ pub fn paper36_case() -> Case {
     Case::embedded_default().expect("the embedded default case is valid")
 }
 
+/// The unequal, shifted pair the tests hold beside the paper's: 24/40 with profile shifts
+/// x = +0.3 / −0.3 on the paper's tool, load and mesh; with `inverse`, the same pair driven from
+/// the 40-tooth gear (40/24, x = −0.3 / +0.3).
+pub fn shifted_24_40(inverse: bool) -> Case {
+    let (mut teeth, mut shifts) = ([24_i64, 40], [0.3, -0.3]);
+    if inverse {
+        teeth.reverse();
+        shifts.reverse();
+    }
+    Case::load_with(
+        None,
+        &[
+            crate::case::Override::set("gear1.teeth", teeth[0]),
+            crate::case::Override::set("gear2.teeth", teeth[1]),
+            crate::case::Override::set("gear1.profile_shift", shifts[0]),
+            crate::case::Override::set("gear2.profile_shift", shifts[1]),
+        ],
+    )
+    .expect("the shifted 24/40 pair is a valid case")
+}
+
 /// The explicit bodies' material of the paper's pair (steel, plane strain, 25.4 mm face width,
 /// the case's mass lumping, corner-twelfth).
 pub fn paper36_explicit_material() -> crate::explicit::body::ExplicitMaterial {

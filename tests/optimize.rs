@@ -339,6 +339,13 @@ struct LtcaSetup {
     deflection: f64,
 }
 
+impl LtcaSetup {
+    /// A design's robust response over the load range on these bodies.
+    fn respond(&self, design: &ReliefDesign) -> Result<LoadResponse, OptimizeError> {
+        robust::evaluate(&self.model, design, &self.range, self.positions).map(|e| e.response)
+    }
+}
+
 fn ltca_setup(case: &geardyn::case::Case) -> LtcaSetup {
     let torque = study::load_torque(case).unwrap();
     let model = study::ltca::model(case, &[FlankModification::none(); 2]).unwrap();
@@ -367,14 +374,9 @@ fn ltca_setup(case: &geardyn::case::Case) -> LtcaSetup {
 #[test]
 fn ltca_optimum_is_feasible_and_beats_the_unmodified_pair() {
     let case = samples::paper36_case();
-    let LtcaSetup {
-        model,
-        range,
-        positions,
-        deflection,
-    } = ltca_setup(&case);
-    let respond =
-        |d: &ReliefDesign| robust::evaluate(&model, d, &range, positions).map(|e| e.response);
+    let setup = ltca_setup(&case);
+    let (range, deflection) = (&setup.range, setup.deflection);
+    let respond = |d: &ReliefDesign| setup.respond(d);
     let unmodified = respond(&ReliefDesign::none(ReliefShape::Linear)).unwrap();
     let [root1, root2] = unmodified.root_stress_peak_mpa();
     for (max_um, min_ratio, root_percent) in [
@@ -394,7 +396,7 @@ fn ltca_optimum_is_feasible_and_beats_the_unmodified_pair() {
         let optimum = robust::optimize(
             &respond,
             &ReliefDesign::none(ReliefShape::Linear),
-            &range,
+            range,
             &limits,
             &Settings::default(),
             &|r| {
@@ -451,25 +453,10 @@ fn ltca_optimum_is_feasible_and_beats_the_unmodified_pair() {
 /// still beats the unmodified pair's robust objective.
 #[test]
 fn a_per_gear_root_limit_binds_and_holds_on_an_unequal_pair() {
-    use geardyn::case::{Case, Override};
-    let case = Case::load_with(
-        None,
-        &[
-            Override::set("gear1.teeth", 24),
-            Override::set("gear2.teeth", 40),
-            Override::set("gear1.profile_shift", 0.3),
-            Override::set("gear2.profile_shift", -0.3),
-        ],
-    )
-    .unwrap();
-    let LtcaSetup {
-        model,
-        range,
-        positions,
-        deflection,
-    } = ltca_setup(&case);
-    let respond =
-        |d: &ReliefDesign| robust::evaluate(&model, d, &range, positions).map(|e| e.response);
+    let case = samples::shifted_24_40(false);
+    let setup = ltca_setup(&case);
+    let (range, deflection) = (&setup.range, setup.deflection);
+    let respond = |d: &ReliefDesign| setup.respond(d);
     let unmodified = respond(&ReliefDesign::none(ReliefShape::Linear)).unwrap();
     let peaks = unmodified.root_stress_peak_mpa();
     let free = Limits {
@@ -488,7 +475,7 @@ fn a_per_gear_root_limit_binds_and_holds_on_an_unequal_pair() {
         robust::optimize(
             &respond,
             &ReliefDesign::none(ReliefShape::Linear),
-            &range,
+            range,
             limits,
             &Settings::default(),
             &|_| {},

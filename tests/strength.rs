@@ -4,7 +4,8 @@
 //! the other gear, a symmetric pair, and ISO 6336-3 method B beside it; and Hertz between two
 //! cylinders from the FE's own contact solve.
 
-use geardyn::case::{Case, Override};
+use geardyn::case::Case;
+use geardyn::samples;
 use geardyn::study::ltca::{
     iso_strength, model_with_sizes, root_stress_cycle, root_stress_peaks, RootStressPeak,
 };
@@ -13,38 +14,23 @@ const POSITIONS: usize = 32;
 
 /// The paper pair, 24/40 (x = +0.3 / −0.3) and the same pair driven from the 40-tooth gear.
 fn unequal_and_inverse() -> Vec<(&'static str, Case)> {
-    let pair = |z1: i64, z2: i64, x1: f64, x2: f64| {
-        Case::load_with(
-            None,
-            &[
-                Override::set("gear1.teeth", z1),
-                Override::set("gear2.teeth", z2),
-                Override::set("gear1.profile_shift", x1),
-                Override::set("gear2.profile_shift", x2),
-            ],
-        )
-        .unwrap()
-    };
     vec![
-        ("36/36", Case::load_with(None, &[]).unwrap()),
-        ("24/40", pair(24, 40, 0.3, -0.3)),
-        ("40/24", pair(40, 24, -0.3, 0.3)),
+        ("36/36", samples::paper36_case()),
+        ("24/40", samples::shifted_24_40(false)),
+        ("40/24", samples::shifted_24_40(true)),
     ]
 }
 
-/// The case with `overrides`; its unmodified pair's fillet peaks (tension per gear) at the
-/// case's torque on 0.4 mm flanks, and the torque on the driven gear.
-fn peaks(overrides: &[Override]) -> (Case, [RootStressPeak; 2]) {
-    peaks_at(overrides, 0.4e-3)
+/// The unmodified pair's fillet peaks (tension per gear) at the case's torque on 0.4 mm flanks.
+fn peaks(case: &Case) -> [RootStressPeak; 2] {
+    peaks_at(case, 0.4e-3)
 }
 
 /// [`peaks`] with fillet and flank elements of `fine` [m].
-fn peaks_at(overrides: &[Override], fine: f64) -> (Case, [RootStressPeak; 2]) {
-    let sets = overrides.to_vec();
-    let case = Case::load_with(None, &sets).unwrap();
+fn peaks_at(case: &Case, fine: f64) -> [RootStressPeak; 2] {
     let mods = case.relief_variant("none").unwrap().modifications;
     let coarse = case.file.mesh.coarse_element_mm * 1e-3;
-    let model = model_with_sizes(&case, &mods, fine, coarse).unwrap();
+    let model = model_with_sizes(case, &mods, fine, coarse).unwrap();
     let torque = case.operating_points[0].torque;
     let rows = root_stress_cycle(&model, POSITIONS, torque).unwrap();
     assert!(
@@ -52,8 +38,8 @@ fn peaks_at(overrides: &[Override], fine: f64) -> (Case, [RootStressPeak; 2]) {
             .all(|r| r.tension_mpa.is_finite() && r.compression_mpa.is_finite()),
         "every loaded tooth has both fillets"
     );
-    let [a, b] = root_stress_peaks(&rows, &case);
-    (case, [a.unwrap(), b.unwrap()])
+    let [a, b] = root_stress_peaks(&rows, case);
+    [a.unwrap(), b.unwrap()]
 }
 
 /// 24/40 (x = +0.3 / −0.3) driven by the 24-tooth gear, and the same pair driven by the 40-tooth
@@ -66,18 +52,8 @@ fn peaks_at(overrides: &[Override], fine: f64) -> (Case, [RootStressPeak; 2]) {
 /// node within 0.5 mm (radius) of ISO's 30° tangent point.
 #[test]
 fn the_fillet_stress_scales_with_the_load_when_the_other_gear_drives() {
-    let (case_a, a) = peaks(&[
-        Override::set("gear1.teeth", 24),
-        Override::set("gear2.teeth", 40),
-        Override::set("gear1.profile_shift", 0.3),
-        Override::set("gear2.profile_shift", -0.3),
-    ]);
-    let (case_b, b) = peaks(&[
-        Override::set("gear1.teeth", 40),
-        Override::set("gear2.teeth", 24),
-        Override::set("gear1.profile_shift", -0.3),
-        Override::set("gear2.profile_shift", 0.3),
-    ]);
+    let (case_a, case_b) = (samples::shifted_24_40(false), samples::shifted_24_40(true));
+    let (a, b) = (peaks(&case_a), peaks(&case_b));
     let f_t = |case: &Case| case.operating_points[0].torque / case.pair.gears[1].reference_radius;
     let scale = f_t(&case_b) / f_t(&case_a);
     assert!((scale - 40.0 / 24.0).abs() < 1e-9);
@@ -123,7 +99,7 @@ fn the_fillet_stress_scales_with_the_load_when_the_other_gear_drives() {
 /// single contact at mirrored points, to round-off in the geometry).
 #[test]
 fn a_symmetric_pair_stresses_both_gears_alike() {
-    let (_, [g1, g2]) = peaks(&[]);
+    let [g1, g2] = peaks(&samples::paper36_case());
     eprintln!(
         "gear 1 {:.3} MPa, gear 2 {:.3} MPa",
         g1.tension_mpa, g2.tension_mpa
@@ -137,7 +113,8 @@ fn a_symmetric_pair_stresses_both_gears_alike() {
 /// 77.0 at 64, validation/strength), and the two finer meshes agree within 0.5 %.
 #[test]
 fn the_fillet_stress_converges_under_refinement() {
-    let peak = |fine: f64| peaks_at(&[], fine).1[0].tension_mpa;
+    let case = samples::paper36_case();
+    let peak = |fine: f64| peaks_at(&case, fine)[0].tension_mpa;
     let (coarse, middle, fine) = (peak(0.4e-3), peak(0.2e-3), peak(0.1e-3));
     eprintln!("0.4 mm {coarse:.3}, 0.2 mm {middle:.3}, 0.1 mm {fine:.3} MPa");
     assert!((fine - middle).abs() < (middle - coarse).abs());

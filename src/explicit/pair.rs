@@ -1074,6 +1074,11 @@ impl<'a> PairIntegrator<'a> {
         }
     }
 
+    /// Whether the integrator steps the two gears on two threads (a partner thread of its own).
+    pub fn is_parallel(&self) -> bool {
+        self.lockstep.is_parallel()
+    }
+
     /// The first phase of a step, per gear and in parallel: the drift x += Δt v after the half
     /// kick v += ½Δt a (skipped with `dt` = None) and the hub motion of the bore nodes.
     fn drift(&mut self, state: &mut PairState, dt: Option<f64>, bore: [[f64; 3]; 2]) {

@@ -10,15 +10,26 @@ use geardyn::study;
 
 /// The paper's pair with a coarse mesh.
 fn coarse_case() -> Case {
-    Case::load_with(
-        None,
-        &[
-            Override::set("mesh.fine_element_mm", 1.5),
-            Override::set("mesh.coarse_element_mm", 3.0),
-            Override::set("fe.explicit_fine_element_mm", 1.5),
-        ],
+    coarse(Vec::new())
+}
+
+/// The paper's case with `overrides` and a coarse mesh: 1.5 mm flank elements, 3 mm body.
+fn coarse(mut overrides: Vec<Override>) -> Case {
+    overrides.extend([
+        Override::set("mesh.fine_element_mm", 1.5),
+        Override::set("mesh.coarse_element_mm", 3.0),
+        Override::set("fe.explicit_fine_element_mm", 1.5),
+    ]);
+    Case::load_with(None, &overrides).unwrap()
+}
+
+/// The test matrix's pair `name` with a coarse mesh.
+fn coarse_matrix_pair(name: &str) -> Case {
+    coarse(
+        geardyn::samples::matrix_pair(name)
+            .unwrap()
+            .parsed_overrides(),
     )
-    .unwrap()
 }
 
 /// The low-speed scene at `rpm` for `duration` with a cosine ramp, no damping, and the contact
@@ -46,15 +57,7 @@ fn prepared(case: &Case, rpm: f64, duration: f64, ramp: f64, penalty: f64) -> Pr
 fn one_and_two_threads_step_the_pair_alike() {
     let mut layouts = [false; 2];
     for name in ["24-40", "40-24"] {
-        let mut overrides = geardyn::samples::matrix_pair(name)
-            .unwrap()
-            .parsed_overrides();
-        overrides.extend([
-            Override::set("mesh.fine_element_mm", 1.5),
-            Override::set("mesh.coarse_element_mm", 3.0),
-            Override::set("fe.explicit_fine_element_mm", 1.5),
-        ]);
-        let case = Case::load_with(None, &overrides).unwrap();
+        let case = coarse_matrix_pair(name);
         let p = prepared(&case, 300.0, 1e-3, 1e-4, 1.0);
         let [e0, e1] = [0, 1].map(|g| p.model.bodies[g].elements.len());
         layouts[usize::from(e0 > e1)] = true;
@@ -275,15 +278,7 @@ fn static_dte_matches_the_ltca_on_the_same_mesh() {
 /// entering pair unloaded (0.46 off) or loads a pair the LTCA does not.
 #[test]
 fn an_unequal_pair_shares_the_load_among_the_ltca_pairs() {
-    let mut overrides: Vec<Override> = geardyn::samples::matrix_pair("24-40")
-        .unwrap()
-        .parsed_overrides();
-    overrides.extend([
-        Override::set("mesh.fine_element_mm", 1.5),
-        Override::set("mesh.coarse_element_mm", 3.0),
-        Override::set("fe.explicit_fine_element_mm", 1.5),
-    ]);
-    let case = Case::load_with(None, &overrides).unwrap();
+    let case = coarse_matrix_pair("24-40");
     let ltca =
         study::ltca::model(&case, &case.relief_variant("none").unwrap().modifications).unwrap();
     let static_force = 143.6 / case.pair.gears[1].base_radius;
@@ -344,19 +339,7 @@ fn an_unequal_pair_shares_the_load_among_the_ltca_pairs() {
 #[test]
 fn back_flanks_pair_across_the_tooth_space() {
     use geardyn::geometry::Side;
-    for overrides in [
-        Vec::new(),
-        geardyn::samples::matrix_pair("24-40")
-            .unwrap()
-            .parsed_overrides(),
-    ] {
-        let mut overrides = overrides;
-        overrides.extend([
-            Override::set("mesh.fine_element_mm", 1.5),
-            Override::set("mesh.coarse_element_mm", 3.0),
-            Override::set("fe.explicit_fine_element_mm", 1.5),
-        ]);
-        let case = Case::load_with(None, &overrides).unwrap();
+    for case in [coarse_case(), coarse_matrix_pair("24-40")] {
         let z2 = case.pair.gears[1].teeth() as usize;
         // 0.1 s at 60 rpm: 0.63 rad of the driver, 3.6 pitches of 36 teeth, 2.4 of 24.
         let p = prepared(&case, 60.0, 0.1, 0.01, 1.0);

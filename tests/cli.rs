@@ -1652,15 +1652,22 @@ fn lumped_bodies_shafts_and_relief_choose_the_model() {
 /// undamped resonance at 5 000 rpm and ζ = 0.05 (peak at 5 000 √(1 − 2ζ²) = 4 987.5 rpm,
 /// amplitude a/(2ζ√(1 − ζ²))). The sweep must give that resonance and peak back from the five
 /// points (none on the peak), write its table, CSVs and plot, and set the lumped twin's curve
-/// beside it.
+/// beside it. Three more runs on a coarser mesh (1.5 mm flanks, their resonance at 5 200 rpm)
+/// form a second mesh level: the headline stays on the finer one, and each level's own fit and
+/// its fit over the three speeds both ran give its own resonance back.
 #[test]
 fn compare_fe_sweep_finds_a_known_resonance() {
     use std::f64::consts::TAU;
     let dir = tempfile::tempdir().unwrap();
     let (a, nr, zeta): (f64, f64, f64) = (2e-5, 5000.0, 0.05);
+    let coarse_nr = 5200.0;
     let mut args: Vec<std::ffi::OsString> = Vec::new();
-    for rpm in [4000.0, 4500.0, 5000.0, 5500.0, 6000.0] {
-        let run = dir.path().join(format!("fe-{rpm}"));
+    let runs = [4000.0, 4500.0, 5000.0, 5500.0, 6000.0]
+        .map(|rpm| (rpm, nr, 1.0))
+        .into_iter()
+        .chain([4500.0, 5000.0, 5500.0].map(|rpm| (rpm, coarse_nr, 1.5)));
+    for (rpm, nr, fine_mm) in runs {
+        let run = dir.path().join(format!("fe-{rpm}-{fine_mm}"));
         std::fs::create_dir_all(&run).unwrap();
         let r: f64 = rpm / nr;
         let amplitude = a / ((1.0 - r * r).powi(2) + (2.0 * zeta * r).powi(2)).sqrt();
@@ -1676,7 +1683,8 @@ fn compare_fe_sweep_finds_a_known_resonance() {
             run.join("summary.json"),
             format!(
                 r#"{{"scene": {{"driver_speed": {}, "torque": 143.6, "ramp_time": 0.01}},
-                    "statistics_start_s": 0.016, "total_wall_s": 1.0, "diverged": null}}"#,
+                    "statistics_start_s": 0.016, "total_wall_s": 1.0, "diverged": null,
+                    "fine_element_mm": {fine_mm}}}"#,
                 rpm * TAU / 60.0
             ),
         )
@@ -1741,5 +1749,41 @@ fn compare_fe_sweep_finds_a_known_resonance() {
         assert!(out.join(file).exists(), "{file}");
     }
     let md = std::fs::read_to_string(out.join("table.md")).unwrap();
-    assert!(md.contains("FE speed sweep (5 speeds"), "{md}");
+    assert!(md.contains("FE speed sweep (5 speeds, 1 mm flanks"), "{md}");
+    assert_eq!(sweep["fine_element_mm"].as_f64(), Some(1.0));
+    let levels = sweep["mesh_levels"].as_array().unwrap();
+    assert_eq!(levels.len(), 2);
+    let common: Vec<f64> = sweep["common_rpm"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(common.len(), 3, "{common:?}");
+    for (got, want) in common.iter().zip([4500.0, 5000.0, 5500.0]) {
+        assert!((got - want).abs() < 1e-6, "{common:?}");
+    }
+    // Coarsest first; three exact one-DOF points determine its curve.
+    for (level, (mm, speeds, nr)) in levels.iter().zip([(1.5, 3, coarse_nr), (1.0, 5, nr)]) {
+        assert_eq!(level["fine_element_mm"].as_f64(), Some(mm));
+        assert_eq!(level["fe"].as_array().unwrap().len(), speeds);
+        let peak_rpm = nr * (1.0 - 2.0 * zeta * zeta).sqrt();
+        for key in ["resonance_rpm", "common_resonance_rpm"] {
+            let got = level[key].as_f64().unwrap();
+            assert!(
+                (got / peak_rpm - 1.0).abs() < 1e-3,
+                "{mm} mm {key}: {got} vs {peak_rpm}"
+            );
+        }
+        for key in [
+            "case_model_resonance_rpm_rel_err",
+            "case_model_peak_rel_err",
+            "case_model_dte_rms_max_rel_err",
+        ] {
+            assert!(level[key].as_f64().unwrap().is_finite(), "{key}");
+        }
+    }
+    let levels_csv = std::fs::read_to_string(out.join("fe_sweep_levels.csv")).unwrap();
+    assert_eq!(levels_csv.lines().count(), 1 + 8, "{levels_csv}");
+    assert!(md.contains("The FE on 2 meshes"), "{md}");
 }

@@ -91,6 +91,7 @@ pub fn read_fe_run(dir: &Path) -> Result<FeDte, String> {
         source: shown.to_string(),
         speed_rpm: speed * 60.0 / std::f64::consts::TAU,
         torque_nm: number(&["scene", "torque"])?,
+        fine_element_mm: summary.get("fine_element_mm").and_then(|v| v.as_f64()),
         dt,
         dte,
         back_flank_force: back,
@@ -505,13 +506,30 @@ fn write_fe_sweep(
             series.push((format!("{}, rms", m.label), settled(|p| p.dte_rms_rad)));
         }
     }
-    let points = |pick: fn(&crate::study::fe_sweep::FeSpeed) -> f64| -> Vec<(f64, f64)> {
-        sweep
-            .fe
-            .iter()
-            .map(|s| (s.speed_rpm, um(pick(s))))
-            .collect()
-    };
+    let points =
+        |fe: &[crate::study::fe_sweep::FeSpeed],
+         pick: fn(&crate::study::fe_sweep::FeSpeed) -> f64|
+         -> Vec<(f64, f64)> { fe.iter().map(|s| (s.speed_rpm, um(pick(s)))).collect() };
+    let mesh = |size: Option<f64>| size.map_or(String::new(), |mm| format!(" {mm} mm"));
+    let mut markers = vec![
+        (
+            format!("FE{}, 1st mesh harmonic", mesh(sweep.fine_element_mm)),
+            points(&sweep.fe, |s| s.mesh_amplitude_rad),
+        ),
+        (
+            format!("FE{}, rms", mesh(sweep.fine_element_mm)),
+            points(&sweep.fe, |s| s.dte_rms_rad),
+        ),
+    ];
+    // The other meshes' first harmonics: how far the FE itself moves under refinement.
+    for level in &sweep.mesh_levels {
+        if !crate::study::fe_sweep::same_size(level.fine_element_mm, sweep.fine_element_mm) {
+            markers.push((
+                format!("FE{}, 1st mesh harmonic", mesh(level.fine_element_mm)),
+                points(&level.fe, |s| s.mesh_amplitude_rad),
+            ));
+        }
+    }
     dir.chart(
         "fe_sweep",
         &LinePlot {
@@ -523,18 +541,18 @@ fn write_fe_sweep(
             y_label: "DTE of the driven gear [urad]".into(),
             series,
             y_range: None,
-            markers: vec![
-                (
-                    "FE, 1st mesh harmonic".into(),
-                    points(|s| s.mesh_amplitude_rad),
-                ),
-                ("FE, rms".into(), points(|s| s.dte_rms_rad)),
-            ],
+            markers,
         },
     )?;
+    if sweep.mesh_levels.len() > 1 {
+        write_fe_sweep_levels(dir, sweep)?;
+    }
     let mut text = format!(
-        "\nFE speed sweep ({} speeds, scene {}): FE resonance {:.0} rpm (fitted ζ {:.3}), peak 1st mesh harmonic {:.3} urad. {}\n",
+        "\nFE speed sweep ({} speeds{}, scene {}): FE resonance {:.0} rpm (fitted ζ {:.3}), peak 1st mesh harmonic {:.3} urad. {}\n",
         sweep.fe.len(),
+        sweep
+            .fine_element_mm
+            .map_or(String::new(), |mm| format!(", {mm} mm flanks")),
         crate::study::compare::SPEED_SCENE,
         sweep.resonance_rpm_fe,
         sweep.fitted_damping_ratio_fe,
@@ -559,6 +577,30 @@ fn write_fe_sweep(
             )),
         );
     }
+    if sweep.mesh_levels.len() > 1 {
+        text += &format!(
+            "\n* The FE on {} meshes (fe_sweep_levels.csv); fitted over the {} speeds all ran ({:?} rpm):",
+            sweep.mesh_levels.len(),
+            sweep.common_rpm.len(),
+            sweep.common_rpm
+        );
+        for level in &sweep.mesh_levels {
+            text += &format!(
+                "\n  * {}: {} speeds, resonance {:.0} rpm, peak {:.3} urad (over the common speeds {:.0} rpm, {:.3} urad); the case's model against it: resonance {:+.2} %, peak {:+.1} %, DTE rms largest difference {:.1} %",
+                level
+                    .fine_element_mm
+                    .map_or("mesh not recorded".to_string(), |mm| format!("{mm} mm flanks")),
+                level.fe.len(),
+                level.resonance_rpm,
+                um(level.peak_dte_mesh_amplitude_rad),
+                level.common_resonance_rpm,
+                um(level.common_peak_dte_mesh_amplitude_rad),
+                100.0 * level.case_model_resonance_rpm_rel_err,
+                100.0 * level.case_model_peak_rel_err,
+                100.0 * level.case_model_dte_rms_max_rel_err,
+            );
+        }
+    }
     for b in &sweep.unstable_band_runs {
         text += &format!(
             "\n* FE at {:.0} rpm ({} the {} band {:.0}–{:.0} rpm): {}",
@@ -571,6 +613,40 @@ fn write_fe_sweep(
         );
     }
     Ok(text + "\n")
+}
+
+/// fe_sweep_levels.csv: every FE speed of every explicit mesh the sweep's runs came on.
+fn write_fe_sweep_levels(
+    dir: OutputDir,
+    sweep: &crate::study::fe_sweep::FeSweep,
+) -> Result<(), ReportError> {
+    let um = |rad: f64| rad * 1e6;
+    dir.csv(
+        "fe_sweep_levels.csv",
+        &[
+            "fine_element_mm",
+            "driver_rpm",
+            "fe_mesh_amplitude_urad",
+            "fe_dte_rms_urad",
+            "fe_growth",
+            "fe_back_flank_share",
+        ],
+        sweep.mesh_levels.iter().flat_map(|level| {
+            level.fe.iter().map(move |s| {
+                vec![
+                    level
+                        .fine_element_mm
+                        .map_or(String::new(), |mm| format!("{mm}")),
+                    format!("{:.2}", s.speed_rpm),
+                    format!("{:.5}", um(s.mesh_amplitude_rad)),
+                    format!("{:.5}", um(s.dte_rms_rad)),
+                    format!("{:.4}", s.growth),
+                    format!("{:.4}", s.back_flank_share),
+                ]
+            })
+        }),
+    )?;
+    Ok(())
 }
 
 /// Reads an explicit FE stiffness run (`geardyn fe --scene stiffness`): k(θ) from its

@@ -64,6 +64,8 @@ pub struct FeDte {
     pub source: String,
     pub speed_rpm: f64,
     pub torque_nm: f64,
+    /// The explicit mesh's flank element size [mm] (`None`: not recorded, e.g. a synthetic run).
+    pub fine_element_mm: Option<f64>,
     /// Uniform sampling interval [s] and the angular DTE of the driven gear [rad].
     pub dt: f64,
     pub dte: Vec<f64>,

@@ -31,6 +31,8 @@ use crate::signal::{amplitude_spectrum, harmonic_amplitudes, rms_about_mean};
 #[derive(Debug, Clone, Serialize)]
 pub struct FeSpeed {
     pub speed_rpm: f64,
+    /// The explicit mesh's flank element size [mm] (`None`: the run did not record it).
+    pub fine_element_mm: Option<f64>,
     /// First mesh-harmonic amplitude, rms about the mean and peak-to-peak of the DTE [rad].
     pub mesh_amplitude_rad: f64,
     pub dte_rms_rad: f64,
@@ -86,6 +88,7 @@ impl FeSpeed {
         let mesh_hz = run.speed_rpm / 60.0 * teeth;
         FeSpeed {
             speed_rpm: run.speed_rpm,
+            fine_element_mm: run.fine_element_mm,
             mesh_amplitude_rad: harmonic_amplitudes(window, run.dt, mesh_hz, 1)[0],
             dte_rms_rad: rms_about_mean(window),
             dte_peak_to_peak_rad: hi - lo,
@@ -183,7 +186,13 @@ pub struct BandRun {
 /// case's model (`models[0]`), every model in `models`.
 #[derive(Debug, Clone, Serialize)]
 pub struct FeSweep {
+    /// The headline level's FE speeds (the finest mesh with a fit) and its flank size [mm].
     pub fe: Vec<FeSpeed>,
+    pub fine_element_mm: Option<f64>,
+    /// Every explicit mesh the runs came on, coarsest first (one when all share a mesh).
+    pub mesh_levels: Vec<MeshLevel>,
+    /// The speeds every level ran [rpm].
+    pub common_rpm: Vec<f64>,
     pub models: Vec<ModelSweep>,
     /// The FE's fitted resonance (the response's peak) [rpm], the fit's ζ and its peak first
     /// mesh harmonic [rad].
@@ -302,29 +311,101 @@ pub fn undamped_resonance(points: &[(f64, f64)]) -> Option<f64> {
     resonance_fit(points).map(|(peak, zeta, _)| peak / (1.0 - 2.0 * zeta * zeta).max(1e-12).sqrt())
 }
 
-/// The FE sweep `fe` (ascending speeds) against `models` (key, label, model; the case's model
-/// first): each swept four times as densely from rest and continued up and down
-/// ([`ModelSweep`]). `rb2`: the driven gear's base radius; `decay_time_s`: the mesh mode's
-/// 1/(ζω_n), which each FE run's settling is measured against. `None` with fewer than three FE
-/// speeds that have a mesh-harmonic response, or a model without three settled points.
+/// The FE speeds of one explicit mesh, and the case's model against them.
+#[derive(Debug, Clone, Serialize)]
+pub struct MeshLevel {
+    /// Flank element size of the explicit mesh [mm] (`None`: the runs did not record it).
+    pub fine_element_mm: Option<f64>,
+    /// Its FE speeds, ascending.
+    pub fe: Vec<FeSpeed>,
+    /// [`resonance_fit`] over its speeds: the peak's speed [rpm], ζ and peak first mesh
+    /// harmonic [rad] (NaN with fewer than three).
+    pub resonance_rpm: f64,
+    pub fitted_damping_ratio: f64,
+    pub peak_dte_mesh_amplitude_rad: f64,
+    /// The same fit over [`FeSweep::common_rpm`] only, the speeds every level ran: the levels
+    /// compared on one footing (NaN with fewer than three common speeds).
+    pub common_resonance_rpm: f64,
+    pub common_peak_dte_mesh_amplitude_rad: f64,
+    /// The case's model (`models[0]`) against this level: lumped/FE − 1 of the fitted
+    /// resonance speed and peak, and the largest |lumped/FE − 1| of the DTE rms over its speeds
+    /// where the model settled.
+    pub case_model_resonance_rpm_rel_err: f64,
+    pub case_model_peak_rel_err: f64,
+    pub case_model_dte_rms_max_rel_err: f64,
+}
+
+/// Two flank sizes within this relative difference are one mesh level.
+const SAME_SIZE: f64 = 1e-6;
+
+/// `fe` split by the explicit mesh's flank size, coarsest first (runs without a recorded size
+/// first of all), each level's speeds ascending.
+fn mesh_levels(mut fe: Vec<FeSpeed>) -> Vec<Vec<FeSpeed>> {
+    let size = |s: &FeSpeed| s.fine_element_mm.unwrap_or(f64::INFINITY);
+    fe.sort_by(|a, b| {
+        size(b)
+            .total_cmp(&size(a))
+            .then(a.speed_rpm.total_cmp(&b.speed_rpm))
+    });
+    let mut levels: Vec<Vec<FeSpeed>> = Vec::new();
+    for s in fe {
+        match levels.last_mut() {
+            Some(level) if same_size(level[0].fine_element_mm, s.fine_element_mm) => level.push(s),
+            _ => levels.push(vec![s]),
+        }
+    }
+    levels
+}
+
+/// Whether two runs' flank sizes are one mesh level (both unrecorded, or within [`SAME_SIZE`]).
+pub fn same_size(a: Option<f64>, b: Option<f64>) -> bool {
+    match (a, b) {
+        (None, None) => true,
+        (Some(a), Some(b)) => (a - b).abs() <= SAME_SIZE * a.abs().max(b.abs()),
+        _ => false,
+    }
+}
+
+fn same_speed(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-6 * a.abs().max(b.abs())
+}
+
+fn amplitude_points(fe: &[FeSpeed]) -> Vec<(f64, f64)> {
+    fe.iter()
+        .map(|s| (s.speed_rpm, s.mesh_amplitude_rad))
+        .collect()
+}
+
+/// The FE sweep `fe` against `models` (key, label, model; the case's model first): each swept
+/// four times as densely from rest and continued up and down ([`ModelSweep`]). Runs on
+/// several explicit meshes form [`MeshLevel`]s; the headline numbers hold the models against
+/// the finest level that has three speeds with a mesh-harmonic response (the best estimate of
+/// the converged FE at hand), and every level is reported with the case's model against it.
+/// `rb2`: the driven gear's base radius; `decay_time_s`: the mesh mode's 1/(ζω_n), which each
+/// FE run's settling is measured against. `None` without such a level, or with a model
+/// without three settled points.
 pub fn run(
     fe: Vec<FeSpeed>,
     models: &[(&str, &str, &MeshModel)],
     rb2: f64,
     decay_time_s: f64,
 ) -> Option<FeSweep> {
-    let fe_points: Vec<(f64, f64)> = fe
+    let levels = mesh_levels(fe);
+    let headline = levels
         .iter()
-        .map(|s| (s.speed_rpm, s.mesh_amplitude_rad))
-        .collect();
+        .rposition(|level| resonance_fit(&amplitude_points(level)).is_some())?;
+    let fe = levels[headline].clone();
+    let fe_points = amplitude_points(&fe);
     let (fe_rpm, fe_zeta, fe_peak) = resonance_fit(&fe_points)?;
-    let (lo, hi) = fe.iter().fold((f64::INFINITY, 0.0f64), |(l, h), s| {
+    let every: Vec<FeSpeed> = levels.iter().flatten().cloned().collect();
+    let (lo, hi) = every.iter().fold((f64::INFINITY, 0.0f64), |(l, h), s| {
         (l.min(s.speed_rpm), h.max(s.speed_rpm))
     });
-    let n = 4 * fe.len();
+    let n = 4 * levels.iter().map(Vec::len).max().unwrap_or(0);
     let dense: Vec<f64> = (0..n)
         .map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64)
         .collect();
+    let case_model_in = models.first()?.2;
     let models: Vec<ModelSweep> = models
         .iter()
         .map(|(key, label, model)| {
@@ -335,6 +416,20 @@ pub fn run(
             })
         })
         .collect::<Option<_>>()?;
+    let common_rpm: Vec<f64> = levels[0]
+        .iter()
+        .map(|s| s.speed_rpm)
+        .filter(|rpm| {
+            levels
+                .iter()
+                .all(|level| level.iter().any(|s| same_speed(s.speed_rpm, *rpm)))
+        })
+        .collect();
+    let fine_element_mm = fe[0].fine_element_mm;
+    let mesh_levels = levels
+        .into_iter()
+        .map(|level| mesh_level(level, &common_rpm, (case_model_in, &models[0]), rb2))
+        .collect();
     let unstable_band_runs = models
         .iter()
         .filter_map(|m| m.unstable_band_rpm.map(|band| (m, band)))
@@ -342,7 +437,7 @@ pub fn run(
         .collect();
     // The shortest time from a run's start (ramp included) to its window: how many decay
     // times the response had to settle.
-    let settled = fe
+    let settled = every
         .iter()
         .map(|s| s.window_s.0 / decay_time_s)
         .fold(f64::INFINITY, f64::min);
@@ -360,13 +455,56 @@ pub fn run(
         dte_rms_max_rel_err: case_model.dte_rms_max_rel_err,
         settling_note: format!(
             "each FE run's statistics window starts at least {settled:.1} decay times 1/(ζω_n) of the mesh mode after its start (the ramp included): a start transient is down to e^-{settled:.1} of itself; growth (the window's last third over its first, rms) {:.3}–{:.3}",
-            fe.iter().map(|s| s.growth).fold(f64::INFINITY, f64::min),
-            fe.iter().map(|s| s.growth).fold(0.0, f64::max),
+            every.iter().map(|s| s.growth).fold(f64::INFINITY, f64::min),
+            every.iter().map(|s| s.growth).fold(0.0, f64::max),
         ),
         fe,
+        fine_element_mm,
+        mesh_levels,
+        common_rpm,
         models,
         unstable_band_runs,
     })
+}
+
+/// The FE speeds `fe` of one mesh level against the case's model (`model`, and its sweep).
+fn mesh_level(
+    fe: Vec<FeSpeed>,
+    common_rpm: &[f64],
+    (model, sweep): (&MeshModel, &ModelSweep),
+    rb2: f64,
+) -> MeshLevel {
+    use rayon::prelude::*;
+    let nan3 = (f64::NAN, f64::NAN, f64::NAN);
+    let (rpm, zeta, peak) = resonance_fit(&amplitude_points(&fe)).unwrap_or(nan3);
+    let common: Vec<FeSpeed> = fe
+        .iter()
+        .filter(|s| common_rpm.iter().any(|r| same_speed(*r, s.speed_rpm)))
+        .cloned()
+        .collect();
+    let (common_rpm, _, common_peak) = resonance_fit(&amplitude_points(&common)).unwrap_or(nan3);
+    let lumped: Vec<LumpedSpeed> = fe
+        .par_iter()
+        .map(|s| lumped_at(model, s.speed_rpm, rb2))
+        .collect();
+    let rms_err = lumped
+        .iter()
+        .zip(&fe)
+        .map(|(l, f)| l.dte_rms_rad / f.dte_rms_rad - 1.0)
+        .filter(|e| e.is_finite())
+        .fold(0.0, |m: f64, e| m.max(e.abs()));
+    MeshLevel {
+        fine_element_mm: fe[0].fine_element_mm,
+        fe,
+        resonance_rpm: rpm,
+        fitted_damping_ratio: zeta,
+        peak_dte_mesh_amplitude_rad: peak,
+        common_resonance_rpm: common_rpm,
+        common_peak_dte_mesh_amplitude_rad: common_peak,
+        case_model_resonance_rpm_rel_err: sweep.resonance_rpm / rpm - 1.0,
+        case_model_peak_rel_err: sweep.peak_dte_mesh_amplitude_rad / peak - 1.0,
+        case_model_dte_rms_max_rel_err: rms_err,
+    }
 }
 
 /// One model of [`run`]: `fe_fit` is the FE's fitted (resonance speed, peak amplitude).
@@ -532,6 +670,7 @@ mod tests {
             source: "synthetic".into(),
             speed_rpm: 5000.0,
             torque_nm: 1.0,
+            fine_element_mm: None,
             dt,
             dte: (0..30_000)
                 .map(|k| {

@@ -1786,4 +1786,9 @@ fn compare_fe_sweep_finds_a_known_resonance() {
     let levels_csv = std::fs::read_to_string(out.join("fe_sweep_levels.csv")).unwrap();
     assert_eq!(levels_csv.lines().count(), 1 + 8, "{levels_csv}");
     assert!(md.contains("The FE on 2 meshes"), "{md}");
+    // 4 987.5 rpm on 1.0 mm from 5 187.0 on 1.5 mm.
+    assert!(
+        md.contains("the FE's resonance moved -199 rpm (-4.00 %)"),
+        "{md}"
+    );
 }

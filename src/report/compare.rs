@@ -579,10 +579,15 @@ fn write_fe_sweep(
     }
     if sweep.mesh_levels.len() > 1 {
         text += &format!(
-            "\n* The FE on {} meshes (fe_sweep_levels.csv); fitted over the {} speeds all ran ({:?} rpm):",
+            "\n* The FE on {} meshes (fe_sweep_levels.csv); fitted over the {} speeds all ran ({} rpm):",
             sweep.mesh_levels.len(),
             sweep.common_rpm.len(),
-            sweep.common_rpm
+            sweep
+                .common_rpm
+                .iter()
+                .map(|r| format!("{r:.0}"))
+                .collect::<Vec<_>>()
+                .join(", ")
         );
         for level in &sweep.mesh_levels {
             text += &format!(
@@ -598,6 +603,12 @@ fn write_fe_sweep(
                 100.0 * level.case_model_resonance_rpm_rel_err,
                 100.0 * level.case_model_peak_rel_err,
                 100.0 * level.case_model_dte_rms_max_rel_err,
+            );
+        }
+        if let Some(shift) = crate::study::fe_sweep::refinement_shift_rpm(sweep) {
+            text += &format!(
+                "\n  * the FE's resonance moved {shift:+.0} rpm ({:+.2} %) from the next coarser mesh to the finest: the finest mesh's own discretization error is of that order",
+                100.0 * shift / sweep.resonance_rpm_fe
             );
         }
     }

@@ -734,14 +734,27 @@ pub fn resonance_reference(
 ) -> super::accuracy::ResonanceReference {
     let per_hz = 60.0 / case.pair.gears[0].teeth() as f64;
     match &summary.fe_sweep {
-        Some(sweep) => (
-            sweep.undamped_resonance_rpm_fe,
-            sweep.undamped_resonance_rpm_fe_uncertainty,
-            format!(
-                "explicit FE speed sweep ({} speeds), the fitted one-DOF response's undamped resonance; uncertainty: its leave-one-out jackknife",
-                sweep.fe.len()
-            ),
-        ),
+        Some(sweep) => {
+            let jackknife = sweep.undamped_resonance_rpm_fe_uncertainty;
+            match super::fe_sweep::refinement_shift_rpm(sweep) {
+                Some(shift) => (
+                    sweep.undamped_resonance_rpm_fe,
+                    jackknife.max(shift.abs()),
+                    format!(
+                        "explicit FE speed sweep ({} speeds) on its finest mesh, the fitted one-DOF response's undamped resonance; uncertainty: the larger of its leave-one-out jackknife ({jackknife:.1} rpm) and the resonance's shift from the next coarser mesh over the speeds both ran ({shift:+.1} rpm)",
+                        sweep.fe.len()
+                    ),
+                ),
+                None => (
+                    sweep.undamped_resonance_rpm_fe,
+                    jackknife,
+                    format!(
+                        "explicit FE speed sweep ({} speeds), the fitted one-DOF response's undamped resonance; uncertainty: its leave-one-out jackknife",
+                        sweep.fe.len()
+                    ),
+                ),
+            }
+        }
         None => {
             let held = &summary.driver_held;
             (

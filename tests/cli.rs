@@ -1652,25 +1652,32 @@ fn lumped_bodies_shafts_and_relief_choose_the_model() {
 /// undamped resonance at 5 000 rpm and ζ = 0.05 (peak at 5 000 √(1 − 2ζ²) = 4 987.5 rpm,
 /// amplitude a/(2ζ√(1 − ζ²))). The sweep must give that resonance and peak back from the five
 /// points (none on the peak), write its table, CSVs and plot, and set the lumped twin's curve
-/// beside it. Three more runs on a coarser mesh (1.5 mm flanks, their resonance at 5 200 rpm)
-/// form a second mesh level: the headline stays on the finer one, and each level's own fit and
-/// its fit over the three speeds both ran give its own resonance back.
+/// beside it. Runs on two more meshes form mesh levels: four on 1.5 mm flanks (resonance at
+/// 5 200 rpm, one point off the curve) and three on 0.7 mm (4 900 rpm). The headline stays on
+/// the finest level with four speeds (1.0 mm); each level's fit over the speeds the headline
+/// shares with the next coarser level gives its own resonance back.
 #[test]
 fn compare_fe_sweep_finds_a_known_resonance() {
     use std::f64::consts::TAU;
     let dir = tempfile::tempdir().unwrap();
     let (a, nr, zeta): (f64, f64, f64) = (2e-5, 5000.0, 0.05);
-    let coarse_nr = 5200.0;
+    let (coarse_nr, fine_nr) = (5200.0, 4900.0);
     let mut args: Vec<std::ffi::OsString> = Vec::new();
     let runs = [4000.0, 4500.0, 5000.0, 5500.0, 6000.0]
         .map(|rpm| (rpm, nr, 1.0))
         .into_iter()
-        .chain([4500.0, 5000.0, 5500.0].map(|rpm| (rpm, coarse_nr, 1.5)));
+        .chain([4250.0, 4500.0, 5000.0, 5500.0].map(|rpm| (rpm, coarse_nr, 1.5)))
+        .chain([4500.0, 5000.0, 5500.0].map(|rpm| (rpm, fine_nr, 0.7)));
     for (rpm, nr, fine_mm) in runs {
         let run = dir.path().join(format!("fe-{rpm}-{fine_mm}"));
         std::fs::create_dir_all(&run).unwrap();
         let r: f64 = rpm / nr;
-        let amplitude = a / ((1.0 - r * r).powi(2) + (2.0 * zeta * r).powi(2)).sqrt();
+        // The coarse mesh's 4 250 rpm point lies 30 % off its curve.
+        let off_curve = match (rpm, fine_mm) {
+            (4250.0, 1.5) => 1.3,
+            _ => 1.0,
+        };
+        let amplitude = off_curve * a / ((1.0 - r * r).powi(2) + (2.0 * zeta * r).powi(2)).sqrt();
         let (dt, fm) = (1e-5, rpm / 60.0 * 36.0);
         let mut history = String::from("time_s,driver_rotation_rad,dte_rad\n");
         for k in 0..3001 {
@@ -1749,10 +1756,17 @@ fn compare_fe_sweep_finds_a_known_resonance() {
         assert!(out.join(file).exists(), "{file}");
     }
     let md = std::fs::read_to_string(out.join("table.md")).unwrap();
-    assert!(md.contains("FE speed sweep (5 speeds, 1 mm flanks"), "{md}");
+    assert!(
+        md.contains("FE speed sweep (5 speeds, 1.00 mm flanks"),
+        "{md}"
+    );
+    // Three meshes, coarsest first; the headline is the finest with four speeds (1.0 mm),
+    // not the 0.7 mm level's three, which a fit only interpolates.
     assert_eq!(sweep["fine_element_mm"].as_f64(), Some(1.0));
+    assert_eq!(sweep["headline_level"].as_u64(), Some(1));
     let levels = sweep["mesh_levels"].as_array().unwrap();
-    assert_eq!(levels.len(), 2);
+    assert_eq!(levels.len(), 3);
+    // The speeds the headline shares with the next coarser level.
     let common: Vec<f64> = sweep["common_rpm"]
         .as_array()
         .unwrap()
@@ -1763,32 +1777,43 @@ fn compare_fe_sweep_finds_a_known_resonance() {
     for (got, want) in common.iter().zip([4500.0, 5000.0, 5500.0]) {
         assert!((got - want).abs() < 1e-6, "{common:?}");
     }
-    // Coarsest first; three exact one-DOF points determine its curve.
-    for (level, (mm, speeds, nr)) in levels.iter().zip([(1.5, 3, coarse_nr), (1.0, 5, nr)]) {
+    let peak_of = |nr: f64| nr * (1.0 - 2.0 * zeta * zeta).sqrt();
+    let close = |got: f64, want: f64, what: &str| {
+        assert!((got / want - 1.0).abs() < 1e-3, "{what}: {got} vs {want}")
+    };
+    let model = &models[0];
+    let model_rpm = model["resonance_rpm"].as_f64().unwrap();
+    for (level, (mm, speeds, nr)) in
+        levels
+            .iter()
+            .zip([(1.5, 4, coarse_nr), (1.0, 5, nr), (0.7, 3, fine_nr)])
+    {
         assert_eq!(level["fine_element_mm"].as_f64(), Some(mm));
         assert_eq!(level["fe"].as_array().unwrap().len(), speeds);
-        let peak_rpm = nr * (1.0 - 2.0 * zeta * zeta).sqrt();
-        for key in ["resonance_rpm", "common_resonance_rpm"] {
-            let got = level[key].as_f64().unwrap();
-            assert!(
-                (got / peak_rpm - 1.0).abs() < 1e-3,
-                "{mm} mm {key}: {got} vs {peak_rpm}"
-            );
-        }
-        for key in [
-            "case_model_resonance_rpm_rel_err",
-            "case_model_peak_rel_err",
-            "case_model_dte_rms_max_rel_err",
-        ] {
-            assert!(level[key].as_f64().unwrap().is_finite(), "{key}");
+        // Over the common speeds (exact one-DOF points) each level's own resonance.
+        let common_rpm = level["common_resonance_rpm"].as_f64().unwrap();
+        close(common_rpm, peak_of(nr), &format!("{mm} mm common fit"));
+        let own = level["resonance_rpm"].as_f64().unwrap();
+        let error = level["case_model_resonance_rpm_rel_err"].as_f64().unwrap();
+        assert!(
+            ((1.0 + error) * own / model_rpm - 1.0).abs() < 1e-9,
+            "{mm} mm"
+        );
+        match mm {
+            // Its 4 250 rpm point is off the curve: the full fit moves, the common one not.
+            1.5 => assert!((own - common_rpm).abs() > 5.0, "{own} vs {common_rpm}"),
+            _ => close(own, peak_of(nr), &format!("{mm} mm fit")),
         }
     }
-    let levels_csv = std::fs::read_to_string(out.join("fe_sweep_levels.csv")).unwrap();
-    assert_eq!(levels_csv.lines().count(), 1 + 8, "{levels_csv}");
-    assert!(md.contains("The FE on 2 meshes"), "{md}");
-    // 4 987.5 rpm on 1.0 mm from 5 187.0 on 1.5 mm.
-    assert!(
-        md.contains("the FE's resonance moved -199 rpm (-4.00 %)"),
-        "{md}"
+    // The headline level's rms errors are the case model's at the FE speeds.
+    assert_eq!(
+        levels[1]["case_model_dte_rms_max_rel_err"].as_f64(),
+        model["dte_rms_max_rel_err"].as_f64()
     );
+    let levels_csv = std::fs::read_to_string(out.join("fe_sweep_levels.csv")).unwrap();
+    assert_eq!(levels_csv.lines().count(), 1 + 12, "{levels_csv}");
+    assert!(md.contains("The FE on 3 meshes"), "{md}");
+    assert!(md.contains("1.00 mm flanks (the headline)"), "{md}");
+    // Down from 5 187.0 rpm on 1.5 mm to 4 987.5 on 1.0 mm (each level's fit checked above).
+    assert!(md.contains("the FE's resonance moved -"), "{md}");
 }

@@ -510,7 +510,7 @@ fn write_fe_sweep(
         |fe: &[crate::study::fe_sweep::FeSpeed],
          pick: fn(&crate::study::fe_sweep::FeSpeed) -> f64|
          -> Vec<(f64, f64)> { fe.iter().map(|s| (s.speed_rpm, um(pick(s)))).collect() };
-    let mesh = |size: Option<f64>| size.map_or(String::new(), |mm| format!(" {mm} mm"));
+    let mesh = |size: Option<f64>| size.map_or(String::new(), |mm| format!(" {mm:.2} mm"));
     let mut markers = vec![
         (
             format!("FE{}, 1st mesh harmonic", mesh(sweep.fine_element_mm)),
@@ -552,7 +552,7 @@ fn write_fe_sweep(
         sweep.fe.len(),
         sweep
             .fine_element_mm
-            .map_or(String::new(), |mm| format!(", {mm} mm flanks")),
+            .map_or(String::new(), |mm| format!(", {mm:.2} mm flanks")),
         crate::study::compare::SPEED_SCENE,
         sweep.resonance_rpm_fe,
         sweep.fitted_damping_ratio_fe,
@@ -579,7 +579,7 @@ fn write_fe_sweep(
     }
     if sweep.mesh_levels.len() > 1 {
         text += &format!(
-            "\n* The FE on {} meshes (fe_sweep_levels.csv); fitted over the {} speeds all ran ({} rpm):",
+            "\n* The FE on {} meshes (fe_sweep_levels.csv); the finest fitted one and the next coarser both ran {} speeds ({} rpm), fitted over those in parentheses:",
             sweep.mesh_levels.len(),
             sweep.common_rpm.len(),
             sweep
@@ -589,17 +589,27 @@ fn write_fe_sweep(
                 .collect::<Vec<_>>()
                 .join(", ")
         );
-        for level in &sweep.mesh_levels {
+        for (i, level) in sweep.mesh_levels.iter().enumerate() {
             text += &format!(
-                "\n  * {}: {} speeds, resonance {:.0} rpm, peak {:.3} urad (over the common speeds {:.0} rpm, {:.3} urad); the case's model against it: resonance {:+.2} %, peak {:+.1} %, DTE rms largest difference {:.1} %",
+                "\n  * {}{}: {} speeds, resonance {:.0} rpm, peak {:.3} urad{}; the case's model against it: resonance {:+.2} %, peak {:+.1} %, DTE rms largest difference {:.1} %",
                 level
                     .fine_element_mm
-                    .map_or("mesh not recorded".to_string(), |mm| format!("{mm} mm flanks")),
+                    .map_or("mesh not recorded".to_string(), |mm| format!("{mm:.2} mm flanks")),
+                match i == sweep.headline_level {
+                    true => " (the headline)",
+                    false => "",
+                },
                 level.fe.len(),
                 level.resonance_rpm,
                 um(level.peak_dte_mesh_amplitude_rad),
-                level.common_resonance_rpm,
-                um(level.common_peak_dte_mesh_amplitude_rad),
+                match level.common_resonance_rpm.is_finite() {
+                    true => format!(
+                        " ({:.0} rpm, {:.3} urad)",
+                        level.common_resonance_rpm,
+                        um(level.common_peak_dte_mesh_amplitude_rad)
+                    ),
+                    false => String::new(),
+                },
                 100.0 * level.case_model_resonance_rpm_rel_err,
                 100.0 * level.case_model_peak_rel_err,
                 100.0 * level.case_model_dte_rms_max_rel_err,
@@ -647,7 +657,7 @@ fn write_fe_sweep_levels(
                 vec![
                     level
                         .fine_element_mm
-                        .map_or(String::new(), |mm| format!("{mm}")),
+                        .map_or(String::new(), |mm| format!("{mm:.3}")),
                     format!("{:.2}", s.speed_rpm),
                     format!("{:.5}", um(s.mesh_amplitude_rad)),
                     format!("{:.5}", um(s.dte_rms_rad)),

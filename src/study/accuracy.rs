@@ -27,8 +27,9 @@
 //!   three flank sizes ([`REFERENCE_LEVELS`]), with the extrapolation's own size as its
 //!   uncertainty — or, where the three do not converge monotonically, the finest with the
 //!   spread of the three;
-//! * the resonance speed: the explicit FE's speed sweep (its fitted peak) when compare ran one,
-//!   else the FE modal analysis of the meshed pair on the case's mesh (driver held), with the
+//! * the resonance speed: the explicit FE's speed sweep (its fitted undamped resonance on its
+//!   finest mesh, uncertain by the larger of the fit's jackknife and the FE's shift under its
+//!   last refinement) when compare ran one, else the FE modal analysis of the meshed pair on the case's mesh (driver held), with the
 //!   difference to the modal analysis on the explicit FE's mesh as its uncertainty;
 //! * the DTE amplitude: the explicit FE at that speed, with the difference between the two
 //!   halves of its statistics window as its uncertainty.

@@ -91,7 +91,9 @@ impl FeDte {
 /// What the study needs beyond the case: FE runs and the FE's k(θ).
 pub struct CompareInput {
     pub fe_runs: Vec<FeDte>,
-    /// The speeds of `fe_runs` that form the FE speed sweep (`--fe-sweep`) [rpm]; empty: none.
+    /// The speeds of the FE speed sweep (`--fe-sweep`) [rpm]; empty: none. Every run of
+    /// `fe_runs` inside their range joins it (runs on other explicit meshes as mesh levels of
+    /// their own).
     pub fe_sweep_rpm: Vec<f64>,
     /// k(θ), e(θ) from the FE DTE (a stiffness scene), with its source.
     pub fe_stiffness: MeshStiffness,
@@ -266,6 +268,20 @@ pub fn speeds_to_run(speeds: &[f64], given_rpm: &[f64]) -> Vec<f64> {
         .collect()
 }
 
+/// The speeds [rpm] of the given `runs` made on the case's own explicit mesh (or not saying
+/// which): the speeds compare need not run again and that join the FE sweep's speeds. A run on
+/// another mesh does not stand in for the case's mesh: inside the sweep's range it joins the
+/// sweep as a mesh level of its own, without adding a speed to run.
+pub fn given_rpm_on_case_mesh(case: &Case, runs: &[FeDte]) -> Vec<f64> {
+    let case_mesh = Some(case.fe.fine_size * 1e3);
+    runs.iter()
+        .filter(|r| {
+            r.fine_element_mm.is_none() || super::fe_sweep::same_size(r.fine_element_mm, case_mesh)
+        })
+        .map(|r| r.speed_rpm)
+        .collect()
+}
+
 /// The case overrides that put [`SPEED_SCENE`] at `rpm`.
 pub fn speed_overrides(rpm: f64) -> Vec<crate::case::Override> {
     vec![crate::case::Override::set(
@@ -333,20 +349,34 @@ pub fn lumped_twin(
 
 /// The FE run the headline numbers, the paper-stiffness study and the chart use: the one
 /// nearest the speed of the case's `high-unmodified` scene (the seed paper's 3000 rpm), else
-/// the first.
+/// the first; of several runs at that speed, the one on the finest explicit mesh.
 pub fn primary_run(case: &Case, runs: &[FeDte]) -> Option<usize> {
     let target = case
         .scenes
         .iter()
         .find(|s| s.name == SPEED_SCENE)
         .map(|s| s.driver_speed * 60.0 / std::f64::consts::TAU);
-    match target {
+    // Among runs at one speed, the one on the finest explicit mesh.
+    let finer = |i: usize, j: usize| {
+        let size = |k: usize| runs[k].fine_element_mm.unwrap_or(f64::INFINITY);
+        match size(j) < size(i) {
+            true => j,
+            false => i,
+        }
+    };
+    let nearest = match target {
         Some(rpm) => {
             let speeds: Vec<f64> = runs.iter().map(|r| r.speed_rpm).collect();
-            crate::signal::nearest_index(&speeds, rpm)
+            crate::signal::nearest_index(&speeds, rpm)?
         }
-        None => (!runs.is_empty()).then_some(0),
-    }
+        None => (!runs.is_empty()).then_some(0)?,
+    };
+    let speed = runs[nearest].speed_rpm;
+    Some(
+        (0..runs.len())
+            .filter(|&k| (runs[k].speed_rpm - speed).abs() <= 1e-6 * speed)
+            .fold(nearest, finer),
+    )
 }
 
 /// Runs the comparison.
@@ -683,10 +713,15 @@ fn fe_sweep(
     let rb2 = case.pair.gears[1].base_radius;
     let back_contact = -case.pair.backlash_normal.max(0.0) / rb2;
     let teeth = case.pair.gears[0].teeth() as f64;
+    // Every run inside the sweep's range, on any mesh: runs on other explicit meshes form
+    // their own mesh levels.
+    let (lo, hi) = rpms
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(l, h), r| (l.min(*r), h.max(*r)));
     let mut fe: Vec<super::fe_sweep::FeSpeed> = input
         .fe_runs
         .iter()
-        .filter(|run| rpms.iter().any(|r| (r - run.speed_rpm).abs() < 1e-6 * r))
+        .filter(|run| run.speed_rpm >= lo * (1.0 - 1e-6) && run.speed_rpm <= hi * (1.0 + 1e-6))
         // A back-flank force above 1e-3 of the static mesh force counts as contact.
         .map(|run| {
             let threshold = 1e-3 * run.torque_nm / rb2;
@@ -725,7 +760,10 @@ pub fn fe_sweep_speeds(case: &Case) -> Result<Vec<f64>, StudyError> {
 }
 
 /// The first resonance speed's reference for the accuracy chart: the explicit FE's speed sweep
-/// (its fitted peak, with the fit's jackknife uncertainty) when compare ran one, else the FE
+/// on its headline (finest fitted) mesh, its fitted undamped resonance, with the larger of the
+/// fit's jackknife and the FE's shift under its last refinement
+/// ([`super::fe_sweep::refinement_shift_rpm`], where the sweep has two meshes) as the
+/// uncertainty, when compare ran one, else the FE
 /// modal analysis on the case's mesh, driver held (the explicit FE's boundary), with its
 /// difference to the modal analysis on the explicit FE's mesh as the uncertainty.
 pub fn resonance_reference(

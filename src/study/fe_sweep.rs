@@ -24,10 +24,11 @@
 //! The FE is itself a discretization: its resonance moves as its flanks are refined (the
 //! explicit mesh's k̄ falls by 0.8 % from 1.0 to 0.7 mm flanks, validation/accuracy-cost).
 //! FE runs given on several explicit meshes (their summary's `fine_element_mm`) form
-//! [`MeshLevel`]s. The headline numbers hold the models against the finest level with three
-//! speeds to fit, the best estimate of the converged FE at hand; every level is fitted on its
-//! own and over the speeds all levels ran, so the FE's own shift under refinement stands
-//! beside the model's difference to it.
+//! [`MeshLevel`]s. The headline numbers hold the models against the finest level with four
+//! speeds to fit (else three), the best estimate of the converged FE at hand; every level is
+//! fitted on its own, and the headline level and the next coarser one also over the speeds
+//! both ran, so the FE's own shift under its last refinement ([`refinement_shift_rpm`])
+//! stands beside the model's difference to it.
 
 use serde::Serialize;
 
@@ -155,7 +156,8 @@ pub struct ModelSweep {
     /// Short name (CSV columns) and what it is.
     pub key: String,
     pub label: String,
-    /// From rest at four times the FE's speeds over the same range (the fit's points).
+    /// From rest at four times the largest mesh level's FE speeds over every level's range
+    /// (the fit's points).
     pub dense: Vec<LumpedSpeed>,
     /// The continued sweeps (each speed from the one before), ascending speed: (rpm, first
     /// mesh-harmonic amplitude [rad], DTE rms [rad]); a direction that diverged ends there.
@@ -197,9 +199,12 @@ pub struct FeSweep {
     /// The headline level's FE speeds (the finest mesh with a fit) and its flank size [mm].
     pub fe: Vec<FeSpeed>,
     pub fine_element_mm: Option<f64>,
-    /// Every explicit mesh the runs came on, coarsest first (one when all share a mesh).
+    /// Every explicit mesh the runs came on, coarsest first (one when all share a mesh), and
+    /// which of them is the headline's.
     pub mesh_levels: Vec<MeshLevel>,
-    /// The speeds every level ran [rpm].
+    pub headline_level: usize,
+    /// The speeds the headline level shares with the next coarser level [rpm] (empty with one
+    /// level).
     pub common_rpm: Vec<f64>,
     pub models: Vec<ModelSweep>,
     /// The FE's fitted resonance (the response's peak) [rpm], the fit's ζ and its peak first
@@ -331,8 +336,8 @@ pub struct MeshLevel {
     pub resonance_rpm: f64,
     pub fitted_damping_ratio: f64,
     pub peak_dte_mesh_amplitude_rad: f64,
-    /// The same fit over [`FeSweep::common_rpm`] only, the speeds every level ran: the levels
-    /// compared on one footing (NaN with fewer than three common speeds).
+    /// The same fit over its speeds in [`FeSweep::common_rpm`] only: the headline level and
+    /// the next coarser one compared on one footing (NaN with fewer than three such speeds).
     pub common_resonance_rpm: f64,
     pub common_peak_dte_mesh_amplitude_rad: f64,
     /// The case's model (`models[0]`) against this level: lumped/FE − 1 of the fitted
@@ -385,10 +390,12 @@ fn amplitude_points(fe: &[FeSpeed]) -> Vec<(f64, f64)> {
 }
 
 /// The FE sweep `fe` against `models` (key, label, model; the case's model first): each swept
-/// four times as densely from rest and continued up and down ([`ModelSweep`]). Runs on
+/// four times as densely as the largest mesh level, over every level's range, from rest and
+/// continued up and down ([`ModelSweep`]). Runs on
 /// several explicit meshes form [`MeshLevel`]s; the headline numbers hold the models against
-/// the finest level that has three speeds with a mesh-harmonic response (the best estimate of
-/// the converged FE at hand), and every level is reported with the case's model against it.
+/// the finest level that has four speeds with a mesh-harmonic response, else three (the best
+/// estimate of the converged FE at hand), and every level is reported with the case's model
+/// against it.
 /// `rb2`: the driven gear's base radius; `decay_time_s`: the mesh mode's 1/(ζω_n), which each
 /// FE run's settling is measured against. `None` without such a level, or with a model
 /// without three settled points.
@@ -399,9 +406,13 @@ pub fn run(
     decay_time_s: f64,
 ) -> Option<FeSweep> {
     let levels = mesh_levels(fe);
+    // A fit through three speeds interpolates them (and has no jackknife): the finest level
+    // with four speeds to fit, else the finest with three.
+    let fits = |level: &Vec<FeSpeed>| resonance_fit(&amplitude_points(level)).is_some();
     let headline = levels
         .iter()
-        .rposition(|level| resonance_fit(&amplitude_points(level)).is_some())?;
+        .rposition(|level| level.len() >= 4 && fits(level))
+        .or_else(|| levels.iter().rposition(fits))?;
     let fe = levels[headline].clone();
     let fe_points = amplitude_points(&fe);
     let (fe_rpm, fe_zeta, fe_peak) = resonance_fit(&fe_points)?;
@@ -424,15 +435,20 @@ pub fn run(
             })
         })
         .collect::<Option<_>>()?;
-    let common_rpm: Vec<f64> = levels[0]
-        .iter()
-        .map(|s| s.speed_rpm)
-        .filter(|rpm| {
-            levels
-                .iter()
-                .all(|level| level.iter().any(|s| same_speed(s.speed_rpm, *rpm)))
-        })
-        .collect();
+    // The speeds the headline level shares with the next coarser one: the last refinement's
+    // footing.
+    let common_rpm: Vec<f64> = match headline.checked_sub(1) {
+        Some(coarser) => fe
+            .iter()
+            .map(|s| s.speed_rpm)
+            .filter(|rpm| {
+                levels[coarser]
+                    .iter()
+                    .any(|s| same_speed(s.speed_rpm, *rpm))
+            })
+            .collect(),
+        None => Vec::new(),
+    };
     let fine_element_mm = fe[0].fine_element_mm;
     let mesh_levels = levels
         .into_iter()
@@ -468,6 +484,7 @@ pub fn run(
         ),
         fe,
         fine_element_mm,
+        headline_level: headline,
         mesh_levels,
         common_rpm,
         models,
@@ -475,16 +492,18 @@ pub fn run(
     })
 }
 
-/// The FE's own resonance shift under its last refinement [rpm]: the finest level's fitted
-/// peak over the speeds all levels ran less the next coarser level's (`None` with one level or
-/// fewer than three common speeds). For a second-order convergence at the refinement ratio
-/// 1.0 → 0.7 mm the finest mesh's remaining error is about this shift (h₂²/(h₁² − h₂²) = 0.96
-/// of it), for a lower order more: a discretization uncertainty of the FE's resonance.
+/// The FE's own resonance shift under its last refinement [rpm]: the headline level's fitted
+/// peak over [`FeSweep::common_rpm`] less the next coarser level's (`None` with one level or
+/// fewer than three common speeds). Where the FE converges as hᵖ, the headline mesh's
+/// remaining error is h₂ᵖ/(h₁ᵖ − h₂ᵖ) times this shift: 0.96 × at second order from 1.0 to
+/// 0.7 mm flanks (0.8 × from 1.5 to 1.0), 2.3 × at first order; the shift is the
+/// discretization uncertainty's order of magnitude, not a bound.
 pub fn refinement_shift_rpm(sweep: &FeSweep) -> Option<f64> {
-    let [.., coarser, finest] = sweep.mesh_levels.as_slice() else {
-        return None;
-    };
-    let shift = finest.common_resonance_rpm - coarser.common_resonance_rpm;
+    let coarser = sweep
+        .mesh_levels
+        .get(sweep.headline_level.checked_sub(1)?)?;
+    let headline = sweep.mesh_levels.get(sweep.headline_level)?;
+    let shift = headline.common_resonance_rpm - coarser.common_resonance_rpm;
     shift.is_finite().then_some(shift)
 }
 

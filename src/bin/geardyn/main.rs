@@ -303,8 +303,8 @@ pub struct CompareAsk<'a> {
 }
 
 impl CompareAsk<'_> {
-    /// The sweep's speeds, with the given finished runs inside its range joining it (a point
-    /// added near the peak).
+    /// The sweep's speeds, with the given finished runs on the case's explicit mesh inside its
+    /// range joining it (a point added near the peak).
     fn sweep_speeds(&self, given_rpm: &[f64]) -> Vec<f64> {
         let mut fe_sweep = self.fe_sweep.clone();
         if let (Some(&from), Some(&to)) = (fe_sweep.first(), fe_sweep.last()) {
@@ -319,8 +319,9 @@ impl CompareAsk<'_> {
         fe_sweep
     }
 
-    /// The explicit runs compare makes into `dir` (the speeds not given as finished runs at
-    /// `given_rpm`, the stiffness scene unless given, the chart's four unless given).
+    /// The explicit runs compare makes into `dir` (the speeds not given as finished runs on
+    /// the case's explicit mesh at `given_rpm`, the stiffness scene unless given, the chart's
+    /// four unless given).
     fn requests(
         &self,
         args: &CommonArgs,
@@ -388,7 +389,7 @@ fn compare(args: &CommonArgs, ask: &CompareAsk) -> Result<()> {
     let case = load(args, Vec::new())?;
     let dir = output_dir(args, "compare", &case)?;
     let mut runs = given_fe_runs(ask.fe_runs)?;
-    let given_rpm: Vec<f64> = runs.iter().map(|r| r.speed_rpm).collect();
+    let given_rpm = cmp::given_rpm_on_case_mesh(&case, &runs);
     let fe_sweep = ask.sweep_speeds(&given_rpm);
     let requests = ask.requests(args, &case, &dir, &given_rpm)?;
     let outcomes = executor::execute(args, &requests, &dir.join("slurm"))?;

@@ -14,10 +14,8 @@ pub fn plan(words: Vec<String>) -> Result<()> {
             let case = load(common, Vec::new())?;
             let ask = options.ask();
             let dir = planned_dir(common, "compare");
-            let given_rpm: Vec<f64> = given_fe_runs(&options.fe_runs)?
-                .iter()
-                .map(|r| r.speed_rpm)
-                .collect();
+            let given_rpm =
+                study::compare::given_rpm_on_case_mesh(&case, &given_fe_runs(&options.fe_runs)?);
             ask.requests(common, &case, &dir, &given_rpm)?
         }
         Command::Optimize { common, options } => match options.fe_check_plan() {

@@ -530,6 +530,17 @@ fn write_fe_sweep(
             ));
         }
     }
+    // A model that diverges (the FE-stiffness twin in its unstable band) would set the scale
+    // and flatten every other curve: the FE's points and the case's model set it, a model
+    // beyond runs off the top (its numbers stay in the CSVs).
+    let top = markers
+        .iter()
+        .flat_map(|(_, points)| points)
+        .chain(series.iter().take(2).flat_map(|(_, points)| points))
+        .map(|p| p.1)
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
+    let y_range = (top > 0.0).then_some((0.0, 1.25 * top));
     dir.chart(
         "fe_sweep",
         &LinePlot {
@@ -540,7 +551,7 @@ fn write_fe_sweep(
             x_label: "driver speed [rpm]".into(),
             y_label: "DTE of the driven gear [urad]".into(),
             series,
-            y_range: None,
+            y_range,
             markers,
         },
     )?;

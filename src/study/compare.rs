@@ -264,7 +264,11 @@ pub fn speeds_to_run(speeds: &[f64], given_rpm: &[f64]) -> Vec<f64> {
     speeds
         .iter()
         .copied()
-        .filter(|rpm| !given_rpm.iter().any(|r| (r - rpm).abs() < 1e-6 * rpm))
+        .filter(|rpm| {
+            !given_rpm
+                .iter()
+                .any(|r| super::fe_sweep::same_speed(*r, *rpm))
+        })
         .collect()
 }
 
@@ -374,7 +378,7 @@ pub fn primary_run(case: &Case, runs: &[FeDte]) -> Option<usize> {
     let speed = runs[nearest].speed_rpm;
     Some(
         (0..runs.len())
-            .filter(|&k| (runs[k].speed_rpm - speed).abs() <= 1e-6 * speed)
+            .filter(|&k| super::fe_sweep::same_speed(runs[k].speed_rpm, speed))
             .fold(nearest, finer),
     )
 }

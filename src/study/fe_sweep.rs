@@ -379,7 +379,8 @@ pub fn same_size(a: Option<f64>, b: Option<f64>) -> bool {
     }
 }
 
-fn same_speed(a: f64, b: f64) -> bool {
+/// Whether two speeds are one (within 1e-6 of each other, relative).
+pub fn same_speed(a: f64, b: f64) -> bool {
     (a - b).abs() <= 1e-6 * a.abs().max(b.abs())
 }
 

@@ -372,7 +372,7 @@ impl CompareAsk<'_> {
 /// Speeds in ascending order, those within 1e-6 of each other once.
 fn distinct_speeds(mut rpm: Vec<f64>) -> Vec<f64> {
     rpm.sort_by(f64::total_cmp);
-    rpm.dedup_by(|a, b| (*a - *b).abs() < 1e-6 * b.abs());
+    rpm.dedup_by(|a, b| study::fe_sweep::same_speed(*a, *b));
     rpm
 }
 

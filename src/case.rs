@@ -13,7 +13,7 @@ use thiserror::Error;
 
 use crate::explicit::body::ExplicitMaterial;
 use crate::explicit::pair::{Ramp, Start};
-use crate::explicit::scene::{FeSettings, Scene, TimeStep};
+use crate::explicit::scene::{FeSettings, FineTeeth, Scene, TimeStep};
 use crate::fe::{MassLumping, PlaneState};
 use crate::geometry::{
     BasicRack, FlankModification, FlankReliefSpec, GearPair, GearSpec, GeometryError, PairSpec,
@@ -246,6 +246,11 @@ pub struct FeSection {
     /// every contact state, fixed). See [`crate::explicit::scene`].
     #[serde(default)]
     pub time_step: TimeStep,
+    /// Which teeth the explicit runs mesh fine: "window" (default: those that engage in the
+    /// current window of one driver pitch, remeshed as the gears turn) or "scene" (every tooth
+    /// that engages anywhere in the scene, for the whole run). See [`crate::explicit::scene`].
+    #[serde(default)]
+    pub fine_teeth: FineTeeth,
     /// Contact penalty k_n = penalty_factor · max diag K_e of the master element.
     #[serde(default = "default_penalty_factor")]
     pub penalty_factor: f64,
@@ -289,6 +294,7 @@ impl Default for FeSection {
             plane: default_plane(),
             step_factor: default_step_factor(),
             time_step: TimeStep::default(),
+            fine_teeth: FineTeeth::default(),
             penalty_factor: default_penalty_factor(),
             mass_lumping: MassLumping::default(),
             high_frequency_damping_ratio: default_high_frequency_damping(),
@@ -1182,6 +1188,7 @@ impl Case {
             mass_scaling_margin: fe.mass_scaling.then_some(fe.mass_scaling_margin),
             step_factor: fe.step_factor,
             time_step: fe.time_step,
+            fine_teeth: fe.fine_teeth,
             penalty_factor: fe.penalty_factor,
             mass_lumping: fe.mass_lumping,
             high_frequency_damping_ratio: fe.high_frequency_damping_ratio,

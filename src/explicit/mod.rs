@@ -7,5 +7,6 @@
 pub mod body;
 pub mod lockstep;
 pub mod pair;
+pub mod remesh;
 pub mod scene;
 pub mod solver;

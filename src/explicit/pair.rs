@@ -45,6 +45,7 @@ use nalgebra::{Point2, Rotation2, Vector2};
 use crate::contact::{project_on_quadratic_edge, ContactLaw, FrictionState};
 use crate::explicit::body::{ExplicitBody, ExplicitMaterial, ForceOutput};
 use crate::explicit::lockstep::Lockstep;
+use crate::explicit::remesh::NodeTransfer;
 use crate::fe::FeError;
 use crate::geometry::engagement::ToothPair;
 use crate::geometry::{GearPair, Placement, Side};
@@ -286,12 +287,20 @@ pub struct PairEnergy {
     /// inflate it). Under load the driver puts this much in and the load takes it out, while the
     /// net external work stays small; errors of the account are measured against it too.
     pub transmitted_work: f64,
+    /// Kinetic and strain energy the remeshing of a windowed run added at its switches (the
+    /// state carried to the next window's mesh, [`crate::explicit::remesh`]; negative: taken
+    /// out, the switched teeth's ringing the coarser mesh cannot hold).
+    #[serde(default)]
+    pub remeshing: f64,
 }
 
 impl PairEnergy {
-    /// kinetic + strain + damping + contact − external work: zero for an exact integrator.
+    /// kinetic + strain + damping + contact − external work − remeshing: zero for an exact
+    /// integrator.
     pub fn balance(&self) -> f64 {
-        self.kinetic + self.strain + self.damping + self.contact - self.external_work
+        self.kinetic + self.strain + self.damping + self.contact
+            - self.external_work
+            - self.remeshing
     }
 }
 
@@ -987,6 +996,151 @@ pub struct IntegratorCheckpoint {
     old_bore_x: Vec<f64>,
 }
 
+impl PairState {
+    /// This state of a run on `old` carried to `new`, a model of the same gears on other
+    /// meshes (`transfers`, one per gear, old nodes to new): positions and velocities
+    /// interpolated, accelerations zero until [`PairIntegrator::settle_remeshed`] sets them
+    /// from the forces; the hubs as they are.
+    ///
+    /// The new mesh lumps the switched sectors' mass at other points, so the interpolated
+    /// velocities would carry another momentum: each gear's free nodes get the rigid velocity
+    /// δu + δω ẑ × (x − c) that gives the gear its old linear momentum P = Σ m v and angular
+    /// momentum L = Σ m (x − c) × v about its centre c back (a 3 × 3 solve with the free
+    /// nodes' mass M, first moment S = Σ m (x − c) and polar moment I):
+    /// ```text
+    /// M δu + δω ẑ × S = ΔP,    S × δu + I δω = ΔL
+    /// ```
+    /// Without it every switch would kick the gears by ΔI ω, a torque impulse at the mesh
+    /// frequency (a switch per pitch).
+    pub fn remeshed(
+        &self,
+        old: &ExplicitPair,
+        new: &ExplicitPair,
+        transfers: &[NodeTransfer; 2],
+    ) -> PairState {
+        let x: [Vec<f64>; 2] = std::array::from_fn(|g| transfers[g].apply(&self.x[g], 2));
+        let mut v: [Vec<f64>; 2] = std::array::from_fn(|g| transfers[g].apply(&self.v[g], 2));
+        for g in 0..2 {
+            let c = new.placement[g].centre;
+            let momenta = |model: &ExplicitPair, x: &[f64], v: &[f64]| {
+                let (mut p, mut l) = (Vector2::zeros(), 0.0);
+                for (n, m) in model.bodies[g].mass.iter().enumerate() {
+                    let (rx, ry) = (x[2 * n] - c.x, x[2 * n + 1] - c.y);
+                    let (vx, vy) = (v[2 * n], v[2 * n + 1]);
+                    p += Vector2::new(m * vx, m * vy);
+                    l += m * (rx * vy - ry * vx);
+                }
+                (p, l)
+            };
+            let (p_old, l_old) = momenta(old, &self.x[g], &self.v[g]);
+            let (p_new, l_new) = momenta(new, &x[g], &v[g]);
+            let (mut mass, mut first, mut polar) = (0.0, Vector2::zeros(), 0.0);
+            for (n, m) in new.bodies[g].mass.iter().enumerate() {
+                if new.free[g][2 * n] {
+                    let r = Vector2::new(x[g][2 * n] - c.x, x[g][2 * n + 1] - c.y);
+                    mass += m;
+                    first += *m * r;
+                    polar += m * r.norm_squared();
+                }
+            }
+            let a = nalgebra::Matrix3::new(
+                mass, 0.0, -first.y, //
+                0.0, mass, first.x, //
+                -first.y, first.x, polar,
+            );
+            let dp = p_old - p_new;
+            let rhs = nalgebra::Vector3::new(dp.x, dp.y, l_old - l_new);
+            let Some(d) = a.lu().solve(&rhs) else {
+                continue;
+            };
+            for n in 0..new.bodies[g].mass.len() {
+                if new.free[g][2 * n] {
+                    let (rx, ry) = (x[g][2 * n] - c.x, x[g][2 * n + 1] - c.y);
+                    v[g][2 * n] += d[0] - d[2] * ry;
+                    v[g][2 * n + 1] += d[1] + d[2] * rx;
+                }
+            }
+        }
+        PairState {
+            time: self.time,
+            a: std::array::from_fn(|g| vec![0.0; x[g].len()]),
+            x,
+            v,
+            hub: self.hub,
+        }
+    }
+}
+
+impl IntegratorCheckpoint {
+    /// This checkpoint of a run on `old` carried to `new`, a model of the same pair on other
+    /// meshes (`transfers` from `old`'s nodes to `new`'s): the contact forces stay on the nodes
+    /// both meshes share (a tooth switches kind out of contact, so its new nodes carry none),
+    /// the friction history and search flags stay with the flank pairs both models hold (by
+    /// teeth and flank) and start afresh on the others, and the driver's hub reactions are
+    /// recomputed by [`PairIntegrator::settle_remeshed`].
+    pub fn remeshed(
+        self,
+        old: &ExplicitPair,
+        new: &ExplicitPair,
+        transfers: &[NodeTransfer; 2],
+    ) -> IntegratorCheckpoint {
+        let old_index = |fp: &FlankPair| {
+            old.flank_pairs
+                .iter()
+                .position(|o| o.teeth == fp.teeth && o.drive == fp.drive)
+        };
+        let map = new
+            .flank_pairs
+            .iter()
+            .map(old_index)
+            .collect::<Vec<Option<usize>>>();
+        let mut fresh = new.new_history();
+        for (h, m) in fresh.iter_mut().zip(&map) {
+            if let Some(&j) = m.as_ref() {
+                let kept = &self.history[j];
+                let fits = (0..2).all(|p| kept.passes[p].len() == h.passes[p].len());
+                if fits {
+                    *h = kept.clone();
+                }
+            }
+        }
+        let flags = |old_flags: &[bool]| -> Vec<bool> {
+            map.iter()
+                .map(|m| m.is_some_and(|j| old_flags.get(j).copied().unwrap_or(false)))
+                .collect()
+        };
+        let mut last_contact = self.last_contact;
+        last_contact.pair_forces = map
+            .iter()
+            .map(|m| {
+                m.map_or(0.0, |j| {
+                    last_contact.pair_forces.get(j).copied().unwrap_or(0.0)
+                })
+            })
+            .collect();
+        last_contact.searched = flags(&last_contact.searched);
+        last_contact.springs.clear();
+        last_contact.node_sums = Default::default();
+        let bore = 2 * new.meshes[0].bore_nodes.len();
+        IntegratorCheckpoint {
+            energy: self.energy,
+            steps: self.steps,
+            last_contact,
+            contact_force: std::array::from_fn(|g| {
+                transfers[g].copy_or_zero(&self.contact_force[g], 2)
+            }),
+            previous_contact: std::array::from_fn(|g| {
+                transfers[g].copy_or_zero(&self.previous_contact[g], 2)
+            }),
+            history: fresh,
+            driver_reaction: vec![0.0; bore],
+            old_reaction: vec![0.0; bore],
+            searched: [flags(&self.searched[0]), flags(&self.searched[1])],
+            old_bore_x: vec![0.0; bore],
+        }
+    }
+}
+
 impl<'a> PairIntegrator<'a> {
     /// What [`Self::restore`] needs to go on from here.
     pub fn checkpoint(&self) -> IntegratorCheckpoint {
@@ -1262,6 +1416,32 @@ impl<'a> PairIntegrator<'a> {
         self.energy.kinetic = self.kinetic(state);
         // A start at speed: the initial kinetic energy is work done on the pair before t = 0.
         self.energy.external_work = self.energy.kinetic + self.energy.strain;
+    }
+
+    /// After [`PairState::remeshed`] and [`IntegratorCheckpoint::remeshed`] restored on this
+    /// integrator (a model on the next window's meshes): the bore nodes placed by the hubs, the
+    /// accelerations from the internal forces at the carried state and the contact forces
+    /// carried with it (the contact is not evaluated again, so the friction history does not
+    /// see the same instant twice), the driven hub's acceleration and the driver's reactions.
+    /// The kinetic and strain energy on the new meshes less those the account held before is
+    /// booked as [`PairEnergy::remeshing`]; returns it [J].
+    pub fn settle_remeshed(&mut self, state: &mut PairState) -> f64 {
+        let before = self.energy.kinetic + self.energy.strain;
+        let (theta, rate, accel) = self.drive.driver_motion(state.time);
+        self.drift(state, None, [[theta, rate, accel], state.hub]);
+        let (model, beta) = (self.model, self.beta_k);
+        let [f0, f1] = &mut self.force;
+        let (o0, o1) = self.lockstep.join(
+            || model.bodies[0].internal_forces(&state.x[0], &state.v[0], beta, f0),
+            || model.bodies[1].internal_forces(&state.x[1], &state.v[1], beta, f1),
+        );
+        self.contact_and_hubs(state);
+        self.accelerate(state, None, [[theta, rate, accel], state.hub]);
+        self.energy.strain = o0.strain_energy + o1.strain_energy;
+        self.energy.kinetic = self.kinetic(state);
+        let added = self.energy.kinetic + self.energy.strain - before;
+        self.energy.remeshing += added;
+        added
     }
 
     fn kinetic(&self, state: &PairState) -> f64 {

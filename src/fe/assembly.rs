@@ -28,6 +28,9 @@ pub enum FeError {
     /// A checkpoint that does not belong to the scene it was to resume.
     #[error("cannot resume from the checkpoint: {0}")]
     Resume(String),
+    /// A run's state that could not be carried to the next window's mesh.
+    #[error("{0}")]
+    Remeshing(String),
 }
 
 /// The element's node coordinates.

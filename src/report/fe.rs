@@ -323,12 +323,21 @@ pub fn read_checkpoint(dir: &Path) -> Result<Option<(RunCheckpoint, History)>, R
 /// The prepared scene's line for the terminal: model size and time step.
 pub fn prepared_console(case: &Case, prepared: &PreparedScene, scene: &Scene) -> String {
     let settings = &case.fe;
+    let per_window = crate::explicit::scene::run_elements(prepared, scene.duration);
     format!(
-        "{} elements ({} tooth pairs, flank elements {:.2} mm, body {:.2} mm); dt_cr = {:.4e} s (bodies {:.4e} / {:.4e}, contact {:.4e}; paper's L/c {:.4e}), dt = {:.4e} s, {} steps{}\n",
+        "{} elements ({} tooth pairs, flank elements {:.2} mm, body {:.2} mm){}; dt_cr = {:.4e} s (bodies {:.4e} / {:.4e}, contact {:.4e}; paper's L/c {:.4e}), dt = {:.4e} s, {} steps{}\n",
         prepared.model.elements(),
         prepared.model.tooth_pairs.len(),
         settings.fine_size * 1e3,
         settings.coarse_size * 1e3,
+        if per_window != prepared.model.elements() {
+            format!(
+                " with every engaging tooth fine, stepped on windows of {} driver pitch with the teeth that engage in each fine: {per_window} elements in the first",
+                crate::explicit::scene::WINDOW_PITCHES
+            )
+        } else {
+            String::new()
+        },
         prepared.dt_critical,
         prepared.dt_bodies[0],
         prepared.dt_bodies[1],

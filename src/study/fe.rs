@@ -12,8 +12,8 @@ use crate::case::{Case, Override};
 use crate::explicit::pair::PairEnergy;
 use crate::explicit::scene::{
     analyse_dte, bin_difference, binned_stiffness, common_bins, paired_bins, static_te,
-    statistics_start, CoupledStep, DteAnalysis, FeSettings, History, LowpassDte, MassScaling,
-    PreparedScene, Scene, StaticTe, StepChange, TimeStep,
+    statistics_start, CoupledStep, DteAnalysis, FeSettings, FineTeeth, History, LowpassDte,
+    MassScaling, PreparedScene, Scene, StaticTe, StepChange, TimeStep,
 };
 use crate::fe::{MassLumping, PlaneState};
 use crate::geometry::GearPair;
@@ -210,10 +210,11 @@ pub struct CostEstimate {
 
 impl CostEstimate {
     /// Times [`CALIBRATION_STEPS`] steps of `prepared` and scales them to `duration` at the
-    /// step the run starts with (the bound of every contact state): a run on the pair's own
+    /// elements per step it starts with (a run on windows of fine teeth: its first window's) and
+    /// the step it starts with (the bound of every contact state): a run on the pair's own
     /// step ([`crate::explicit::scene::TimeStep::Coupled`]) takes fewer.
     pub fn of(prepared: &PreparedScene, duration: f64) -> Self {
-        let elements = prepared.model.elements();
+        let elements = crate::explicit::scene::run_elements(prepared, duration);
         let steps = (duration / prepared.dt).ceil() as usize;
         let measured =
             crate::explicit::scene::measure_step_cost(prepared, CALIBRATION_STEPS.min(steps)) * 1e9;
@@ -439,7 +440,17 @@ pub struct FeSummary {
     pub energy_error_rel: f64,
     pub energy_error_rel_transmitted: f64,
     pub steps: usize,
+    /// Wall time over Σ elements × steps of the run's meshes [ns].
     pub wall_ns_per_element_step: f64,
+    /// Which teeth the run meshed fine (`fe.fine_teeth`; `fine_teeth` holds the whole scene's
+    /// fine teeth), the windows it went through (0: the
+    /// scene's own mesh throughout), its elements per step on average against the whole
+    /// scene's fine teeth (`elements`), and the kinetic and strain energy its remeshing added
+    /// (negative: took out) over the transmitted work.
+    pub fe_fine_teeth: FineTeeth,
+    pub windows: usize,
+    pub elements_mean: f64,
+    pub remeshing_energy_rel_transmitted: f64,
     pub wall_s: f64,
     pub total_wall_s: f64,
     /// Threads the wall times were measured with.
@@ -675,8 +686,13 @@ pub fn run(
     } else {
         0.0
     };
-    let wall_ns_per_element_step =
-        outcome.wall_s * 1e9 / (outcome.steps.max(1) as f64 * prepared.model.elements() as f64);
+    let wall_ns_per_element_step = outcome.wall_s * 1e9 / outcome.element_steps.max(1.0);
+    let elements_mean = outcome.element_steps / outcome.steps.max(1) as f64;
+    let remeshing_energy_rel_transmitted = if transmitted > 0.0 {
+        outcome.final_energy.remeshing / transmitted
+    } else {
+        0.0
+    };
     let get = |f: &dyn Fn(&DteAnalysis) -> f64| analysis.as_ref().map(f);
     let fe_checks = self_checks(
         prepared.mass_scaling.scaled_mode_over_harmonic >= 1.0
@@ -684,6 +700,10 @@ pub fn run(
             && outcome.interrupted.is_none(),
         stiffness_same.as_ref().map(|c| &c.summary),
     );
+    let outcome_mesh = RunMesh {
+        windows: outcome.windows,
+        elements_mean,
+    };
     let summary = FeSummary {
         case: case.name().to_string(),
         scene: scene.clone(),
@@ -720,6 +740,10 @@ pub fn run(
         energy_error_rel_transmitted,
         steps: outcome.steps,
         wall_ns_per_element_step,
+        fe_fine_teeth: prepared.fine_teeth,
+        windows: outcome.windows,
+        elements_mean,
+        remeshing_energy_rel_transmitted,
         wall_s: outcome.wall_s,
         total_wall_s: started.elapsed().as_secs_f64() + prepared.setup_wall_s,
         wall_threads: rayon::current_num_threads(),
@@ -734,7 +758,7 @@ pub fn run(
         time_step: settings.time_step,
         dt_changes: outcome.step_changes,
         dt_fallback: outcome.fallback,
-        model: model_description(case, prepared),
+        model: model_description(case, prepared, &outcome_mesh),
         step: StepSummary::new(prepared),
         penalty_factor: settings.penalty_factor,
         step_factor: settings.step_factor,
@@ -763,7 +787,14 @@ pub fn run(
 }
 
 /// What the explicit model is and what it leaves out, in one sentence.
-fn model_description(case: &Case, prepared: &PreparedScene) -> String {
+/// How a run meshed its teeth, for [`model_description`]: windows gone through and elements
+/// per step on average.
+struct RunMesh {
+    windows: usize,
+    elements_mean: f64,
+}
+
+fn model_description(case: &Case, prepared: &PreparedScene, mesh: &RunMesh) -> String {
     let settings = &case.fe;
     let scaling = &prepared.mass_scaling;
     let mass_scaling = if scaling.factor > 1.0 {
@@ -783,7 +814,7 @@ fn model_description(case: &Case, prepared: &PreparedScene) -> String {
         )
     };
     format!(
-        "2D {} ({} plane), corotational 8-node quadrilaterals, lumped mass ({}); rigid hubs, rigid bearings; driver at prescribed speed, driven hub with load torque and a mesh dashpot (zeta {:.3}) on the DTE rate; segment-to-segment penalty contact (two-pass, 4 Gauss points per edge and the tip corner) with Coulomb friction on drive and back flanks of {} tooth pairs; fine flank elements {:.2} mm only on the teeth that engage during the scene, {:.2} mm elsewhere",
+        "2D {} ({} plane), corotational 8-node quadrilaterals, lumped mass ({}); rigid hubs, rigid bearings; driver at prescribed speed, driven hub with load torque and a mesh dashpot (zeta {:.3}) on the DTE rate; segment-to-segment penalty contact (two-pass, 4 Gauss points per edge and the tip corner) with Coulomb friction on drive and back flanks of {} tooth pairs; fine flank elements {:.2} mm only on the teeth that engage {}, {:.2} mm elsewhere",
         if case.plane == PlaneState::Strain {
             "plane strain"
         } else {
@@ -797,6 +828,17 @@ fn model_description(case: &Case, prepared: &PreparedScene) -> String {
         settings.mesh_damping_ratio,
         prepared.model.tooth_pairs.len(),
         settings.fine_size * 1e3,
+        if mesh.windows > 0 {
+            format!(
+                "in the current window of {} driver pitch (remeshed at a recorded sample as the gears turn, the state carried over: {} windows, {:.0} elements per step on average against {} with every engaging tooth fine)",
+                crate::explicit::scene::WINDOW_PITCHES,
+                mesh.windows,
+                mesh.elements_mean,
+                prepared.model.elements()
+            )
+        } else {
+            "during the scene".to_string()
+        },
         settings.coarse_size * 1e3
     ) + &mass_scaling
 }

@@ -22,10 +22,16 @@
 //! interpolation (exact for the rigid motion), the contact forces and friction history stay
 //! with the nodes and flank pairs both models hold, and the accelerations come from the new
 //! mesh's forces. The kinetic and strain energy the switch changes is booked as
-//! `remeshing` in the energy account. The teeth switch out of contact, so what a switch loses
-//! is the leaving teeth's free ringing at the element scale: on the 3000 rpm scene
-//! (45 windows) 1e-6 of the transmitted work, the DTE spectrum lines within 0.3 % of the run
-//! with every engaging tooth fine, at 0.54 of its elements per step (validation/performance).
+//! `remeshing` in the energy account, and each gear's linear and angular momentum is kept
+//! (the switched sectors lump their mass elsewhere). [`WINDOW_NEIGHBOURS`] teeth on either
+//! side are fine as well. The teeth switch out of contact, so what a switch drops is the
+//! leaving teeth's free ringing: on the 3000 rpm scene (45 windows, 0.59 of the elements per
+//! step, 0.68 of the wall time) 4e-8 of the transmitted work, the DTE mean within 3e-4 and its
+//! mesh lines within 1.2 % of the run with every engaging tooth fine. That ringing is nearly
+//! undamped (the element damping is ζ = 0.05 at ω_max, about 1e-4 at the teeth's 40 kHz), so
+//! on the scene's mesh it goes on for the whole run and grows as more teeth pass the mesh: the
+//! contact force's 38–45 kHz content there rises 3.3× over the run, on windows it stays level,
+//! and the level-1 impact measure reads 10 % lower (validation/performance).
 //! The history keeps the scene's flank pairs (a pair outside the current window reads zero);
 //! a checkpoint holds its window, so a resumed run rebuilds that window's mesh. Scenes that turn
 //! through fewer than [`MIN_WINDOWED_PITCHES`] pitches (the low-speed ones) run on one mesh.

@@ -787,11 +787,7 @@ fn a_run_on_windows_of_fine_teeth_follows_the_whole_scenes_mesh() {
     assert_eq!(whole.element_steps, whole.steps as f64 * scene_elements);
 
     let (a, b) = (&windowed.history, &whole.history);
-    assert_eq!(
-        a.time.len(),
-        b.time.len(),
-        "the samples at the same instants"
-    );
+    assert_eq!(a.time, b.time, "the samples at the same instants");
     let after_ramp = |h: &History| h.time.iter().position(|t| *t > 0.2e-3).unwrap();
     let from = after_ramp(b);
     let dte = &b.dte[from..];
@@ -909,6 +905,7 @@ fn a_run_resumed_in_a_later_window_ends_as_the_whole_run() {
         .unwrap();
     assert_eq!(resumed.windows, whole.windows);
     assert_eq!(resumed.steps, whole.steps);
+    assert_eq!(resumed.element_steps, whole.element_steps);
     assert!(
         resumed.history == whole.history,
         "the resumed history differs"

@@ -997,75 +997,22 @@ pub struct IntegratorCheckpoint {
 }
 
 impl PairState {
-    /// This state of a run on `old` carried to `new`, a model of the same gears on other
-    /// meshes (`transfers`, one per gear, old nodes to new): positions and velocities
-    /// interpolated, accelerations zero until [`PairIntegrator::settle_remeshed`] sets them
-    /// from the forces; the hubs as they are.
+    /// This state carried to another mesh of the same gears (`transfers`, one per gear, old
+    /// nodes to new): positions and velocities interpolated, accelerations zero until
+    /// [`PairIntegrator::settle_remeshed`] sets them from the forces; the hubs as they are.
     ///
-    /// The new mesh lumps the switched sectors' mass at other points, so the interpolated
-    /// velocities would carry another momentum: each gear's free nodes get the rigid velocity
-    /// δu + δω ẑ × (x − c) that gives the gear its old linear momentum P = Σ m v and angular
-    /// momentum L = Σ m (x − c) × v about its centre c back (a 3 × 3 solve with the free
-    /// nodes' mass M, first moment S = Σ m (x − c) and polar moment I):
-    /// ```text
-    /// M δu + δω ẑ × S = ΔP,    S × δu + I δω = ΔL
-    /// ```
-    /// Without it every switch would kick the gears by ΔI ω, a torque impulse at the mesh
-    /// frequency (a switch per pitch).
-    pub fn remeshed(
-        &self,
-        old: &ExplicitPair,
-        new: &ExplicitPair,
-        transfers: &[NodeTransfer; 2],
-    ) -> PairState {
-        let x: [Vec<f64>; 2] = std::array::from_fn(|g| transfers[g].apply(&self.x[g], 2));
-        let mut v: [Vec<f64>; 2] = std::array::from_fn(|g| transfers[g].apply(&self.v[g], 2));
-        for g in 0..2 {
-            let c = new.placement[g].centre;
-            let momenta = |model: &ExplicitPair, x: &[f64], v: &[f64]| {
-                let (mut p, mut l) = (Vector2::zeros(), 0.0);
-                for (n, m) in model.bodies[g].mass.iter().enumerate() {
-                    let (rx, ry) = (x[2 * n] - c.x, x[2 * n + 1] - c.y);
-                    let (vx, vy) = (v[2 * n], v[2 * n + 1]);
-                    p += Vector2::new(m * vx, m * vy);
-                    l += m * (rx * vy - ry * vx);
-                }
-                (p, l)
-            };
-            let (p_old, l_old) = momenta(old, &self.x[g], &self.v[g]);
-            let (p_new, l_new) = momenta(new, &x[g], &v[g]);
-            let (mut mass, mut first, mut polar) = (0.0, Vector2::zeros(), 0.0);
-            for (n, m) in new.bodies[g].mass.iter().enumerate() {
-                if new.free[g][2 * n] {
-                    let r = Vector2::new(x[g][2 * n] - c.x, x[g][2 * n + 1] - c.y);
-                    mass += m;
-                    first += *m * r;
-                    polar += m * r.norm_squared();
-                }
-            }
-            let a = nalgebra::Matrix3::new(
-                mass, 0.0, -first.y, //
-                0.0, mass, first.x, //
-                -first.y, first.x, polar,
-            );
-            let dp = p_old - p_new;
-            let rhs = nalgebra::Vector3::new(dp.x, dp.y, l_old - l_new);
-            let Some(d) = a.lu().solve(&rhs) else {
-                continue;
-            };
-            for n in 0..new.bodies[g].mass.len() {
-                if new.free[g][2 * n] {
-                    let (rx, ry) = (x[g][2 * n] - c.x, x[g][2 * n + 1] - c.y);
-                    v[g][2 * n] += d[0] - d[2] * ry;
-                    v[g][2 * n + 1] += d[1] + d[2] * rx;
-                }
-            }
-        }
+    /// The velocity field is carried as it is, so a rigid motion stays exactly rigid, bore
+    /// nodes and hub included. The new mesh lumps the switched sectors' mass at other points,
+    /// so each gear's momentum changes by the lumping's difference (ΔI ω about its centre):
+    /// no force acts, and the kinetic energy it changes is booked as remeshing. (Restoring the
+    /// old momentum by a rigid correction of the free nodes instead would set the rim turning
+    /// against the bore nodes, which follow the hub.)
+    pub fn remeshed(&self, transfers: &[NodeTransfer; 2]) -> PairState {
         PairState {
             time: self.time,
-            a: std::array::from_fn(|g| vec![0.0; x[g].len()]),
-            x,
-            v,
+            x: std::array::from_fn(|g| transfers[g].apply(&self.x[g], 2)),
+            v: std::array::from_fn(|g| transfers[g].apply(&self.v[g], 2)),
+            a: std::array::from_fn(|g| vec![0.0; transfers[g].sources.len() * 2]),
             hub: self.hub,
         }
     }
@@ -1078,12 +1025,15 @@ impl IntegratorCheckpoint {
     /// the friction history and search flags stay with the flank pairs both models hold (by
     /// teeth and flank) and start afresh on the others, and the driver's hub reactions are
     /// recomputed by [`PairIntegrator::settle_remeshed`].
+    ///
+    /// Fails where a flank of a pair that is searched (near contact or in it) is not on nodes
+    /// both meshes share: its contact forces would be lost.
     pub fn remeshed(
         self,
         old: &ExplicitPair,
         new: &ExplicitPair,
         transfers: &[NodeTransfer; 2],
-    ) -> IntegratorCheckpoint {
+    ) -> Result<IntegratorCheckpoint, String> {
         let old_index = |fp: &FlankPair| {
             old.flank_pairs
                 .iter()
@@ -1094,6 +1044,31 @@ impl IntegratorCheckpoint {
             .iter()
             .map(old_index)
             .collect::<Vec<Option<usize>>>();
+        for (k, m) in map.iter().enumerate() {
+            let searched = m.is_some_and(|j| {
+                self.searched
+                    .iter()
+                    .any(|f| f.get(j).copied().unwrap_or(false))
+            });
+            if !searched {
+                continue;
+            }
+            for &f in &new.flank_pairs[k].flanks {
+                let flank = &new.flanks[f];
+                if let Some(n) = flank
+                    .nodes
+                    .iter()
+                    .find(|&&n| transfers[flank.gear].copied_from(n).is_none())
+                {
+                    return Err(format!(
+                        "remeshing: node {n} of gear {}'s flank of tooth pair {:?}, near contact, \
+                         is not a node of the previous mesh",
+                        flank.gear + 1,
+                        new.flank_pairs[k].teeth
+                    ));
+                }
+            }
+        }
         let mut fresh = new.new_history();
         for (h, m) in fresh.iter_mut().zip(&map) {
             if let Some(&j) = m.as_ref() {
@@ -1122,7 +1097,7 @@ impl IntegratorCheckpoint {
         last_contact.springs.clear();
         last_contact.node_sums = Default::default();
         let bore = 2 * new.meshes[0].bore_nodes.len();
-        IntegratorCheckpoint {
+        Ok(IntegratorCheckpoint {
             energy: self.energy,
             steps: self.steps,
             last_contact,
@@ -1137,7 +1112,17 @@ impl IntegratorCheckpoint {
             old_reaction: vec![0.0; bore],
             searched: [flags(&self.searched[0]), flags(&self.searched[1])],
             old_bore_x: vec![0.0; bore],
-        }
+        })
+    }
+
+    /// Steps taken up to this checkpoint.
+    pub fn steps(&self) -> usize {
+        self.steps
+    }
+
+    /// The energy account at this checkpoint.
+    pub fn energy(&self) -> PairEnergy {
+        self.energy
     }
 }
 

@@ -1816,4 +1816,45 @@ fn compare_fe_sweep_finds_a_known_resonance() {
     assert!(md.contains("1.00 mm flanks (the headline)"), "{md}");
     // Down from 5 187.0 rpm on 1.5 mm to 4 987.5 on 1.0 mm (each level's fit checked above).
     assert!(md.contains("the FE's resonance moved -"), "{md}");
+    // The three meshes share 4 500, 5 000 and 5 500 rpm: each speed's values extrapolated to
+    // zero flank size, as richardson() gives them from that speed's three runs.
+    let x = &sweep["extrapolated"];
+    let sizes: Vec<f64> = x["fine_element_mm"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(sizes, [1.5, 1.0, 0.7]);
+    let speeds = x["speeds"].as_array().unwrap();
+    assert_eq!(speeds.len(), 3);
+    for (s, rpm) in speeds.iter().zip([4500.0, 5000.0, 5500.0]) {
+        assert!((s["speed_rpm"].as_f64().unwrap() - rpm).abs() < 1e-6);
+        let values: Vec<f64> = s["mesh_amplitudes_rad"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        for (v, nr) in values.iter().zip([coarse_nr, nr, fine_nr]) {
+            let r: f64 = rpm / nr;
+            let want = a / ((1.0 - r * r).powi(2) + (2.0 * zeta * r).powi(2)).sqrt();
+            assert!((v / want - 1.0).abs() < 1e-3, "{rpm}: {v} vs {want}");
+        }
+        let (value, uncertainty, _) = geardyn::study::accuracy::richardson(
+            [1.5, 1.0, 0.7],
+            [values[0], values[1], values[2]],
+        );
+        let got = &s["mesh_amplitude"];
+        assert!((got["value_rad"].as_f64().unwrap() / value - 1.0).abs() < 1e-12);
+        assert!((got["uncertainty_rad"].as_f64().unwrap() - uncertainty).abs() <= 1e-12 * value);
+    }
+    let x_csv = std::fs::read_to_string(out.join("fe_sweep_extrapolated.csv")).unwrap();
+    assert_eq!(x_csv.lines().count(), 1 + 3, "{x_csv}");
+    assert!(
+        md.contains(
+            "The FE extrapolated to zero flank size from 1.50 / 1.00 / 0.70 mm at 3 speeds"
+        ),
+        "{md}"
+    );
 }

@@ -530,6 +530,15 @@ fn write_fe_sweep(
             ));
         }
     }
+    if let Some(x) = &sweep.extrapolated {
+        markers.push((
+            "FE extrapolated to zero flank size, 1st mesh harmonic".into(),
+            x.speeds
+                .iter()
+                .map(|s| (s.speed_rpm, um(s.mesh_amplitude.value_rad)))
+                .collect(),
+        ));
+    }
     // A model that diverges (the FE-stiffness twin in its unstable band) would set the scale
     // and flatten every other curve: the FE's points and the case's model set it, a model
     // beyond runs off the top (its numbers stay in the CSVs).
@@ -633,6 +642,35 @@ fn write_fe_sweep(
             );
         }
     }
+    if let Some(x) = &sweep.extrapolated {
+        write_fe_sweep_extrapolated(dir, x)?;
+        let [h1, h2, h3] = x.fine_element_mm;
+        text += &format!(
+            "\n* The FE extrapolated to zero flank size from {h1:.2} / {h2:.2} / {h3:.2} mm at {} speeds (fe_sweep_extrapolated.csv): resonance {:.0} rpm, peak {:.3} urad; the case's model against it: resonance {:+.2} %, peak {:+.1} %, DTE rms largest difference {:.1} %",
+            x.speeds.len(),
+            x.resonance_rpm,
+            um(x.peak_dte_mesh_amplitude_rad),
+            100.0 * x.case_model_resonance_rpm_rel_err,
+            100.0 * x.case_model_peak_rel_err,
+            100.0 * x.case_model_dte_rms_max_rel_err,
+        );
+        for s in &x.speeds {
+            let order = |o: Option<f64>| {
+                o.map_or("not extrapolated".to_string(), |p| format!("order {p:.2}"))
+            };
+            text += &format!(
+                "\n  * {:.0} rpm: 1st harmonic {:.1} ± {:.1} urad ({}), rms {:.1} ± {:.1} urad ({}); the case's model's rms {:+.1} %",
+                s.speed_rpm,
+                um(s.mesh_amplitude.value_rad),
+                um(s.mesh_amplitude.uncertainty_rad),
+                order(s.mesh_amplitude.order),
+                um(s.dte_rms.value_rad),
+                um(s.dte_rms.uncertainty_rad),
+                order(s.dte_rms.order),
+                100.0 * s.case_model_dte_rms_rel_err,
+            );
+        }
+    }
     for b in &sweep.unstable_band_runs {
         text += &format!(
             "\n* FE at {:.0} rpm ({} the {} band {:.0}–{:.0} rpm): {}",
@@ -645,6 +683,47 @@ fn write_fe_sweep(
         );
     }
     Ok(text + "\n")
+}
+
+/// fe_sweep_extrapolated.csv: the FE extrapolated to zero flank size at each speed the three
+/// finest meshes ran, with the three meshes' values and the case's model's rms against it.
+fn write_fe_sweep_extrapolated(
+    dir: OutputDir,
+    x: &crate::study::fe_sweep::ExtrapolatedFe,
+) -> Result<(), ReportError> {
+    let um = |rad: f64| format!("{:.5}", rad * 1e6);
+    let order = |o: Option<f64>| o.map_or(String::new(), |p| format!("{p:.3}"));
+    let [h1, h2, h3] = x.fine_element_mm;
+    let mut header = vec!["driver_rpm".to_string()];
+    for what in ["mesh_amplitude", "dte_rms"] {
+        for h in [h1, h2, h3] {
+            header.push(format!("fe_{what}_{h:.2}mm_urad"));
+        }
+        header.extend([
+            format!("fe_{what}_extrapolated_urad"),
+            format!("fe_{what}_uncertainty_urad"),
+            format!("fe_{what}_order"),
+        ]);
+    }
+    header.push("case_model_dte_rms_rel_err".into());
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
+    dir.csv(
+        "fe_sweep_extrapolated.csv",
+        &header,
+        x.speeds.iter().map(|s| {
+            let mut row = vec![format!("{:.2}", s.speed_rpm)];
+            for (values, e) in [
+                (s.mesh_amplitudes_rad, s.mesh_amplitude),
+                (s.dte_rms_values_rad, s.dte_rms),
+            ] {
+                row.extend(values.map(um));
+                row.extend([um(e.value_rad), um(e.uncertainty_rad), order(e.order)]);
+            }
+            row.push(format!("{:.4}", s.case_model_dte_rms_rel_err));
+            row
+        }),
+    )?;
+    Ok(())
 }
 
 /// fe_sweep_levels.csv: every FE speed of every explicit mesh the sweep's runs came on.

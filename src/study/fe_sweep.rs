@@ -222,6 +222,8 @@ pub struct FeSweep {
     pub peak_dte_mesh_amplitude_lumped_rad: f64,
     pub peak_dte_mesh_amplitude_rel_err: f64,
     pub dte_rms_max_rel_err: f64,
+    /// The FE extrapolated to zero flank size, where three meshes ran common speeds.
+    pub extrapolated: Option<ExtrapolatedFe>,
     /// The FE runs in each model's unstable band, as measured.
     pub unstable_band_runs: Vec<BandRun>,
     /// How each FE run settled: its statistics window against the mesh mode's decay time.
@@ -322,6 +324,148 @@ pub fn jackknife<T: Copy>(points: &[T], estimate: impl Fn(&[T]) -> Option<f64>) 
 /// natural frequency predicts (the peak of the displacement lies ζ² lower).
 pub fn undamped_resonance(points: &[(f64, f64)]) -> Option<f64> {
     resonance_fit(points).map(|(peak, zeta, _)| peak / (1.0 - 2.0 * zeta * zeta).max(1e-12).sqrt())
+}
+
+/// One quantity of the FE extrapolated to zero flank size ([`super::accuracy::richardson`]).
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Extrapolated {
+    /// The estimate [rad]: f₀ of f(h) = f₀ + c hᵖ through the three meshes' values, or the
+    /// finest mesh's value where they do not converge monotonically at an order in [0.5, 6].
+    pub value_rad: f64,
+    /// Its uncertainty [rad]: how far the extrapolation moved from the finest mesh (else the
+    /// three values' spread about the finest).
+    pub uncertainty_rad: f64,
+    /// The observed order p (`None`: not extrapolated).
+    pub order: Option<f64>,
+}
+
+impl Extrapolated {
+    fn of(h: [f64; 3], f: [f64; 3]) -> Self {
+        let (value_rad, uncertainty_rad, order) = super::accuracy::richardson(h, f);
+        Self {
+            value_rad,
+            uncertainty_rad,
+            order,
+        }
+    }
+}
+
+/// The FE at one speed that the three finest meshes all ran, extrapolated to zero flank size.
+#[derive(Debug, Clone, Serialize)]
+pub struct ExtrapolatedSpeed {
+    pub speed_rpm: f64,
+    /// The three meshes' first mesh-harmonic amplitudes and DTE rms [rad], coarsest first.
+    pub mesh_amplitudes_rad: [f64; 3],
+    pub dte_rms_values_rad: [f64; 3],
+    pub mesh_amplitude: Extrapolated,
+    pub dte_rms: Extrapolated,
+    /// The case's model from rest at this speed: lumped/extrapolated − 1 of the DTE rms.
+    pub case_model_dte_rms_rel_err: f64,
+}
+
+/// The FE sweep extrapolated to zero flank size from the three finest meshes with a recorded
+/// size, at the speeds all three ran: the best estimate of the converged FE, against which
+/// the case's model is held beside the finest mesh (the finest run at hand is not converged:
+/// validation/lumped-twin).
+#[derive(Debug, Clone, Serialize)]
+pub struct ExtrapolatedFe {
+    /// The three meshes' flank sizes [mm], coarsest first.
+    pub fine_element_mm: [f64; 3],
+    pub speeds: Vec<ExtrapolatedSpeed>,
+    /// [`resonance_fit`] over the extrapolated first harmonics: the peak's speed [rpm] and
+    /// height [rad] (NaN with fewer than three speeds), and the case's model against them
+    /// (lumped/FE − 1).
+    pub resonance_rpm: f64,
+    pub peak_dte_mesh_amplitude_rad: f64,
+    pub case_model_resonance_rpm_rel_err: f64,
+    pub case_model_peak_rel_err: f64,
+    /// The largest |lumped/extrapolated − 1| of the DTE rms over the speeds where the model
+    /// settled.
+    pub case_model_dte_rms_max_rel_err: f64,
+}
+
+/// The three finest levels of `levels` (coarsest first) that recorded their flank size, each
+/// quantity extrapolated at every speed all three ran ([`Extrapolated`]), without a model:
+/// (sizes [mm], per speed (rpm, amplitudes, rms values, amplitude, rms)). `None` with fewer
+/// than three such levels or no shared speed.
+#[allow(clippy::type_complexity)]
+pub fn extrapolate_levels(
+    levels: &[Vec<FeSpeed>],
+) -> Option<(
+    [f64; 3],
+    Vec<(f64, [f64; 3], [f64; 3], Extrapolated, Extrapolated)>,
+)> {
+    let sized: Vec<&Vec<FeSpeed>> = levels
+        .iter()
+        .filter(|level| level.first().and_then(|s| s.fine_element_mm).is_some())
+        .collect();
+    let [a, b, c] = sized.get(sized.len().checked_sub(3)?..)? else {
+        return None;
+    };
+    let finest = [*a, *b, *c];
+    let h = finest.map(|level| level[0].fine_element_mm.expect("sized levels"));
+    let at = |level: &Vec<FeSpeed>, rpm: f64| -> Option<FeSpeed> {
+        level.iter().find(|s| same_speed(s.speed_rpm, rpm)).cloned()
+    };
+    let speeds: Vec<_> = c
+        .iter()
+        .filter_map(|s| {
+            let runs = [at(a, s.speed_rpm)?, at(b, s.speed_rpm)?, s.clone()];
+            let amplitudes = runs.each_ref().map(|r| r.mesh_amplitude_rad);
+            let rms = runs.each_ref().map(|r| r.dte_rms_rad);
+            Some((
+                s.speed_rpm,
+                amplitudes,
+                rms,
+                Extrapolated::of(h, amplitudes),
+                Extrapolated::of(h, rms),
+            ))
+        })
+        .collect();
+    (!speeds.is_empty()).then_some((h, speeds))
+}
+
+/// [`extrapolate_levels`] with the case's `model` (and its sweep) held against it.
+fn extrapolated_fe(
+    levels: &[Vec<FeSpeed>],
+    (model, sweep): (&MeshModel, &ModelSweep),
+    rb2: f64,
+) -> Option<ExtrapolatedFe> {
+    use rayon::prelude::*;
+    let (h, speeds) = extrapolate_levels(levels)?;
+    let speeds: Vec<ExtrapolatedSpeed> = speeds
+        .into_par_iter()
+        .map(|(rpm, amplitudes, rms, mesh_amplitude, dte_rms)| {
+            let lumped = lumped_at(model, rpm, rb2);
+            ExtrapolatedSpeed {
+                speed_rpm: rpm,
+                mesh_amplitudes_rad: amplitudes,
+                dte_rms_values_rad: rms,
+                mesh_amplitude,
+                dte_rms,
+                case_model_dte_rms_rel_err: lumped.dte_rms_rad / dte_rms.value_rad - 1.0,
+            }
+        })
+        .collect();
+    let points: Vec<(f64, f64)> = speeds
+        .iter()
+        .map(|s| (s.speed_rpm, s.mesh_amplitude.value_rad))
+        .collect();
+    let (rpm, _, peak) = resonance_fit(&points).unwrap_or((f64::NAN, f64::NAN, f64::NAN));
+    let rms_err = speeds
+        .iter()
+        .map(|s| s.case_model_dte_rms_rel_err)
+        .filter(|e| e.is_finite())
+        .fold(0.0, |m: f64, e| m.max(e.abs()));
+    Some(ExtrapolatedFe {
+        fine_element_mm: h,
+        speeds,
+        resonance_rpm: rpm,
+        peak_dte_mesh_amplitude_rad: peak,
+        case_model_resonance_rpm_rel_err: sweep.resonance_rpm / rpm - 1.0,
+        case_model_peak_rel_err: sweep.peak_dte_mesh_amplitude_rad / peak - 1.0,
+        case_model_dte_rms_max_rel_err: rms_err,
+    })
 }
 
 /// The FE speeds of one explicit mesh, and the case's model against them.
@@ -451,6 +595,7 @@ pub fn run(
         None => Vec::new(),
     };
     let fine_element_mm = fe[0].fine_element_mm;
+    let extrapolated = extrapolated_fe(&levels, (case_model_in, &models[0]), rb2);
     let mesh_levels = levels
         .into_iter()
         .map(|level| mesh_level(level, &common_rpm, (case_model_in, &models[0]), rb2))
@@ -478,6 +623,7 @@ pub fn run(
         peak_dte_mesh_amplitude_lumped_rad: case_model.peak_dte_mesh_amplitude_rad,
         peak_dte_mesh_amplitude_rel_err: case_model.peak_dte_mesh_amplitude_rel_err,
         dte_rms_max_rel_err: case_model.dte_rms_max_rel_err,
+        extrapolated,
         settling_note: format!(
             "each FE run's statistics window starts at least {settled:.1} decay times 1/(ζω_n) of the mesh mode after its start (the ramp included): a start transient is down to e^-{settled:.1} of itself; growth (the window's last third over its first, rms) {:.3}–{:.3}",
             every.iter().map(|s| s.growth).fold(f64::INFINITY, f64::min),
@@ -767,6 +913,82 @@ mod tests {
         );
         assert!(growing.growth > GROWTH_LIMIT);
         assert!(outcome(&growing).starts_with("growing"));
+    }
+
+    /// FE speeds whose first harmonic and rms converge as f₀ + c hᵖ on three meshes (a
+    /// coarser one with other speeds beside them, and a level without a recorded size first):
+    /// the extrapolation returns f₀ and p at the speeds the three finest share, and the fit
+    /// over the extrapolated harmonics the one-DOF resonance f₀ was made with.
+    #[test]
+    fn the_extrapolation_recovers_the_converged_response() {
+        let (a, nr, zeta, p) = (2.0e-5, 5200.0, 0.04, 2.0);
+        let f0 = |n: f64| {
+            let r = n / nr;
+            a / ((1.0 - r * r).powi(2) + (2.0 * zeta * r).powi(2)).sqrt()
+        };
+        // The discretization error grows above the resonance (as the FE's did).
+        let c = |n: f64| 4.0e-5 * (n / nr - 0.9);
+        let speed = |n: f64, h: Option<f64>| FeSpeed {
+            speed_rpm: n,
+            fine_element_mm: h,
+            mesh_amplitude_rad: f0(n) + c(n) * h.unwrap_or(2.0).powf(p),
+            dte_rms_rad: (f0(n) + 0.5 * c(n) * h.unwrap_or(2.0).powf(p)) / 2f64.sqrt(),
+            dte_peak_to_peak_rad: f64::NAN,
+            dte_mean_rad: 1.2e-4,
+            window_s: (0.016, 0.03),
+            growth: 1.0,
+            back_flank_share: 0.0,
+            back_flank_force_max_n: f64::NAN,
+        };
+        let shared = [4900.0, 5050.0, 5200.0, 5350.0, 5500.0];
+        let level = |h: Option<f64>, extra: &[f64]| -> Vec<FeSpeed> {
+            let mut v: Vec<FeSpeed> = shared.iter().chain(extra).map(|n| speed(*n, h)).collect();
+            v.sort_by(|x, y| x.speed_rpm.total_cmp(&y.speed_rpm));
+            v
+        };
+        let levels = super::mesh_levels(
+            [
+                level(None, &[]),
+                level(Some(1.5), &[]),
+                level(Some(1.0), &[4700.0]),
+                level(Some(0.7), &[]),
+                level(Some(0.5), &[5700.0]),
+            ]
+            .concat(),
+        );
+        assert_eq!(levels.len(), 5);
+        let (h, speeds) = super::extrapolate_levels(&levels).unwrap();
+        assert_eq!(h, [1.0, 0.7, 0.5]);
+        assert_eq!(speeds.len(), shared.len());
+        for (n, amplitudes, _, amplitude, rms) in &speeds {
+            assert!(shared.contains(n), "{n}");
+            assert_eq!(amplitudes[2], speed(*n, Some(0.5)).mesh_amplitude_rad);
+            assert!((amplitude.value_rad / f0(*n) - 1.0).abs() < 1e-9, "{n}");
+            assert!((amplitude.order.unwrap() - p).abs() < 1e-6);
+            let want = f0(*n) / 2f64.sqrt();
+            assert!((rms.value_rad / want - 1.0).abs() < 1e-9, "{n}");
+            // The uncertainty is how far the extrapolation moved from the finest mesh.
+            let moved = (speed(*n, Some(0.5)).dte_rms_rad - want).abs();
+            assert!((rms.uncertainty_rad / moved - 1.0).abs() < 1e-6, "{n}");
+        }
+        let points: Vec<(f64, f64)> = speeds
+            .iter()
+            .map(|(n, _, _, amplitude, _)| (*n, amplitude.value_rad))
+            .collect();
+        let (peak_rpm, _, _) = resonance_fit(&points).unwrap();
+        let want = nr * (1.0 - 2.0 * zeta * zeta).sqrt();
+        assert!((peak_rpm / want - 1.0).abs() < 1e-3, "{peak_rpm} vs {want}");
+        // Two sized meshes are not enough; no speed shared by the three is no answer.
+        assert!(super::extrapolate_levels(&levels[..3]).is_none());
+        let apart = super::mesh_levels(
+            [
+                level(Some(1.0), &[]),
+                level(Some(0.7), &[]),
+                vec![speed(6000.0, Some(0.5))],
+            ]
+            .concat(),
+        );
+        assert!(super::extrapolate_levels(&apart).is_none());
     }
 
     /// A synthetic one-degree-of-freedom response sampled at eight speeds from 0.8 to 1.2 × its

@@ -78,6 +78,10 @@ pub struct PairModes {
     /// Tangent mesh stiffness of the modal model along the line of action, from its static hub
     /// rotation under a torque on the driven hub [N/m] (driver held).
     pub static_mesh_stiffness: f64,
+    /// The mesh mode's driven-hub rotation in its mass-normalized shape (φᵀMφ = 1) [rad/√(kg·m²)]:
+    /// a torsional dashpot c on the driven hub gives the mode the first-order damping ratio
+    /// c φ²/(2ω) (the explicit FE's mesh dashpot with the driver held).
+    pub mesh_mode_driven_hub_shape: f64,
     /// The LTCA's secant and tangent mesh stiffness at the position [N/m].
     pub ltca_mesh_stiffness: f64,
     pub ltca_tangent_stiffness: f64,
@@ -275,6 +279,7 @@ pub fn pair_modes(
     let mesh_mode = (0..modes.len())
         .max_by(|&a, &b| compliance[a].total_cmp(&compliance[b]))
         .unwrap_or(0);
+    let mesh_mode_driven_hub_shape = modes.get(mesh_mode).map_or(f64::NAN, |m| m.shape[driven]);
     let modes = modes
         .iter()
         .zip(&compliance)
@@ -297,6 +302,7 @@ pub fn pair_modes(
         modes,
         mesh_mode,
         static_mesh_stiffness,
+        mesh_mode_driven_hub_shape,
         ltca_mesh_stiffness: contacts.result.mesh_stiffness,
         ltca_tangent_stiffness: contacts.result.tangent_stiffness,
         inertias: system.inertias,

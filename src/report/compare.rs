@@ -387,6 +387,12 @@ pub fn write(dir: OutputDir, case: &Case, summary: &CompareSummary) -> Result<St
             peaks_text(&p.early_peaks)
         );
     }
+    table += &format!(
+        "\nThe mesh dashpot ({:.4e} N s/m on the line of action, on the driven hub's DTE rate) damps the mesh mode (driver held) by ζ = {:.4} in the lumped twin and {:.4} in the FE modal analysis (first order, c φ²/2ω of each one's mode shape)\n",
+        summary.mesh_damping_n_s_per_m,
+        summary.mesh_mode_damping_ratio_fe_twin,
+        summary.mesh_mode_damping_ratio_fe_modal,
+    );
     if let Some(sweep) = &summary.fe_sweep {
         table += &write_fe_sweep(dir, case, sweep)?;
     }

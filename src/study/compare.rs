@@ -246,6 +246,10 @@ pub struct CompareSummary {
     /// (driver at speed; [`MeshModel::mesh_mode_damping_ratio`]): about fe.mesh_damping_ratio,
     /// the dashpot being sized on the hub-to-hub stiffness and acting on the hub.
     pub mesh_mode_damping_ratio_fe_twin: f64,
+    /// The same dashpot's first-order damping of the FE modal analysis's mesh mode, driver
+    /// held (c r_b2² φ²/(2ω), φ the driven hub's rotation in the mass-normalized shape), mean
+    /// over the positions: whether the twin's mode shares the FE's damping.
+    pub mesh_mode_damping_ratio_fe_modal: f64,
     /// Only with `--paper-stiffness`.
     pub paper_stiffness: Option<PaperStiffness>,
     /// Only with `--fe-sweep`: the FE speed sweep through the resonance against the lumped
@@ -432,6 +436,16 @@ pub fn run(
     let zeta = case.fe.mesh_damping_ratio;
     let damping_of =
         |drive: Drive| 2.0 * zeta * (k_secant * drive.effective_mass(inertias, rb)).sqrt();
+    // That dashpot on the FE modal analysis's mesh mode (driver held), first order: the
+    // torsional c r_b2² on the driven hub's rotation.
+    let mesh_mode_damping_ratio_fe_modal = mean(
+        &|m| {
+            let omega = std::f64::consts::TAU * m.modes[m.mesh_mode].frequency_hz;
+            damping_of(Drive::Speed) * rb[1] * rb[1] * m.mesh_mode_driven_hub_shape.powi(2)
+                / (2.0 * omega)
+        },
+        Hubs::DriverHeld,
+    );
     let twin = |drive: Drive, elastic: bool, mesh: MeshStiffness| {
         lumped_twin(
             case,
@@ -607,6 +621,7 @@ pub fn run(
         modal,
         mesh_damping_n_s_per_m: damping_of(Drive::Speed),
         mesh_mode_damping_ratio_fe_twin: rim_model.mesh_mode_damping_ratio(),
+        mesh_mode_damping_ratio_fe_modal,
         paper_stiffness: paper,
         fe_sweep,
         model_note: format!(

@@ -28,7 +28,10 @@
 //! speeds to fit (else three), the best estimate of the converged FE at hand; every level is
 //! fitted on its own, and the headline level and the next coarser one also over the speeds
 //! both ran, so the FE's own shift under its last refinement ([`refinement_shift_rpm`])
-//! stands beside the model's difference to it.
+//! stands beside the model's difference to it. With three meshes at common speeds, each
+//! speed's first harmonic and rms are extrapolated to zero flank size
+//! ([`super::accuracy::richardson`]: f(h) = f₀ + c hᵖ, the observed order from the three
+//! values; [`ExtrapolatedFe`]) and the case's model is held against that estimate too.
 
 use serde::Serialize;
 

@@ -1828,6 +1828,7 @@ fn compare_fe_sweep_finds_a_known_resonance() {
     assert_eq!(sizes, [1.5, 1.0, 0.7]);
     let speeds = x["speeds"].as_array().unwrap();
     assert_eq!(speeds.len(), 3);
+    let mut extrapolated = 0;
     for (s, rpm) in speeds.iter().zip([4500.0, 5000.0, 5500.0]) {
         assert!((s["speed_rpm"].as_f64().unwrap() - rpm).abs() < 1e-6);
         let values: Vec<f64> = s["mesh_amplitudes_rad"]
@@ -1841,20 +1842,90 @@ fn compare_fe_sweep_finds_a_known_resonance() {
             let want = a / ((1.0 - r * r).powi(2) + (2.0 * zeta * r).powi(2)).sqrt();
             assert!((v / want - 1.0).abs() < 1e-3, "{rpm}: {v} vs {want}");
         }
-        let (value, uncertainty, _) = geardyn::study::accuracy::richardson(
+        let (value, uncertainty, order) = geardyn::study::accuracy::richardson(
             [1.5, 1.0, 0.7],
             [values[0], values[1], values[2]],
         );
         let got = &s["mesh_amplitude"];
-        assert!((got["value_rad"].as_f64().unwrap() / value - 1.0).abs() < 1e-12);
-        assert!((got["uncertainty_rad"].as_f64().unwrap() - uncertainty).abs() <= 1e-12 * value);
+        assert!((got["value"].as_f64().unwrap() / value - 1.0).abs() < 1e-12);
+        assert!((got["uncertainty"].as_f64().unwrap() - uncertainty).abs() <= 1e-12 * value);
+        assert_eq!(got["order"].as_f64(), order, "{rpm}");
+        // The resonance moves over 4 900 to 5 200 rpm as the flanks are refined: at 5 000 rpm
+        // the harmonic rises, then falls, and is not extrapolated.
+        if rpm == 5000.0 {
+            assert!(values[1] > values[0] && values[1] > values[2], "{values:?}");
+            assert!(order.is_none());
+        }
+        extrapolated += usize::from(order.is_some() && s["dte_rms"]["order"].as_f64().is_some());
     }
+    assert_eq!(x["speeds_extrapolated"].as_u64(), Some(extrapolated as u64));
+    assert!(extrapolated < 3);
+    // Fit, then extrapolate: each mesh's fit over the three shared speeds (interpolating
+    // them) is its own resonance, and those three are extrapolated.
+    assert_eq!(x["fits_interpolate"].as_bool(), Some(true));
+    let fits: Vec<f64> = x["mesh_resonance_rpm"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    for (got, nr) in fits.iter().zip([coarse_nr, nr, fine_nr]) {
+        close(*got, peak_of(nr), "a mesh's fit over the shared speeds");
+    }
+    let (value, uncertainty, order) =
+        geardyn::study::accuracy::richardson([1.5, 1.0, 0.7], [fits[0], fits[1], fits[2]]);
+    let resonance = &x["resonance_rpm"];
+    assert!((resonance["value"].as_f64().unwrap() / value - 1.0).abs() < 1e-12);
+    assert!((resonance["uncertainty"].as_f64().unwrap() - uncertainty).abs() < 1e-9 * value);
+    assert_eq!(resonance["order"].as_f64(), order);
+    // 5 200 -> 5 000 -> 4 900 rpm converges (order about 1.3) below the finest mesh's.
+    assert!(order.is_some() && value < fits[2], "{value} vs {fits:?}");
+    let error = x["case_model_resonance_rpm_rel_err"].as_f64().unwrap();
+    assert!(((1.0 + error) * value / model_rpm - 1.0).abs() < 1e-9);
+    // Three speeds only interpolate a fit over the extrapolated harmonics: none is given.
+    assert!(x["pointwise_resonance_rpm"].is_null());
     let x_csv = std::fs::read_to_string(out.join("fe_sweep_extrapolated.csv")).unwrap();
     assert_eq!(x_csv.lines().count(), 1 + 3, "{x_csv}");
     assert!(
         md.contains(
-            "The FE extrapolated to zero flank size from 1.50 / 1.00 / 0.70 mm at 3 speeds"
+            "The FE extrapolated to zero flank size from 1.50 / 1.00 / 0.70 mm on the 3 speeds all three ran"
         ),
         "{md}"
+    );
+    assert!(
+        md.contains(&format!(
+            "{extrapolated} of the 3 speeds converged monotonically"
+        )),
+        "{md}"
+    );
+    // A second run at a speed and mesh the sweep already has is refused before any work,
+    // naming both.
+    let again = dir.path().join("fe-5000-1.0-again");
+    std::fs::create_dir_all(&again).unwrap();
+    for file in ["history.csv", "summary.json"] {
+        std::fs::copy(dir.path().join("fe-5000-1").join(file), again.join(file)).unwrap();
+    }
+    let refused = geardyn()
+        .args(["compare", "--speed-rpm", "5000", "--positions", "2"])
+        .args([
+            "--set",
+            "mesh.fine_element_mm=1.0",
+            "--fe-sweep",
+            "4000:6000:5",
+        ])
+        .args(&args)
+        .arg("--fe-run")
+        .arg(&again)
+        .arg("--fe-stiffness")
+        .arg(&stiffness)
+        .arg("--out")
+        .arg(dir.path().join("cmp-again"))
+        .output()
+        .unwrap();
+    assert!(!refused.status.success());
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        stderr.contains("fe-5000-1.0-again") && stderr.contains("one run per speed and flank size"),
+        "{stderr}"
     );
 }

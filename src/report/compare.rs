@@ -538,12 +538,18 @@ fn write_fe_sweep(
     }
     if let Some(x) = &sweep.extrapolated {
         markers.push((
-            "FE extrapolated to zero flank size, 1st mesh harmonic".into(),
+            "FE extrapolated to zero flank size per speed, 1st mesh harmonic".into(),
             x.speeds
                 .iter()
-                .map(|s| (s.speed_rpm, um(s.mesh_amplitude.value_rad)))
+                .map(|s| (s.speed_rpm, um(s.mesh_amplitude.value)))
                 .collect(),
         ));
+        if x.resonance_rpm.value.is_finite() && x.peak_dte_mesh_amplitude.value.is_finite() {
+            markers.push((
+                "FE's fitted peak extrapolated to zero flank size".into(),
+                vec![(x.resonance_rpm.value, um(x.peak_dte_mesh_amplitude.value))],
+            ));
+        }
     }
     // A model that diverges (the FE-stiffness twin in its unstable band) would set the scale
     // and flatten every other curve: the FE's points and the case's model set it, a model
@@ -651,27 +657,50 @@ fn write_fe_sweep(
     if let Some(x) = &sweep.extrapolated {
         write_fe_sweep_extrapolated(dir, x)?;
         let [h1, h2, h3] = x.fine_element_mm;
+        let order = |o: Option<f64>| {
+            o.map_or(
+                "not extrapolated: the finest mesh's value".to_string(),
+                |p| format!("order {p:.2}"),
+            )
+        };
+        let [r1, r2, r3] = x.mesh_resonance_rpm;
+        let [p1, p2, p3] = x.mesh_peak_dte_mesh_amplitude_rad.map(um);
         text += &format!(
-            "\n* The FE extrapolated to zero flank size from {h1:.2} / {h2:.2} / {h3:.2} mm at {} speeds (fe_sweep_extrapolated.csv): resonance {:.0} rpm, peak {:.3} urad; the case's model against it: resonance {:+.2} %, peak {:+.1} %, DTE rms largest difference {:.1} %",
+            "\n* The FE extrapolated to zero flank size from {h1:.2} / {h2:.2} / {h3:.2} mm on the {} speeds all three ran (fe_sweep_extrapolated.csv). Each mesh's fitted resonance {r1:.0} / {r2:.0} / {r3:.0} rpm and peak {p1:.3} / {p2:.3} / {p3:.3} urad{}, extrapolated: resonance {:.0} ± {:.0} rpm ({}), peak {:.3} ± {:.3} urad ({}); the case's model against it: resonance {:+.2} %, peak {:+.1} %, DTE rms largest difference {:.1} %. Extrapolated speed by speed, {} of the {} speeds converged monotonically (the others carry the finest mesh's value){}",
             x.speeds.len(),
-            x.resonance_rpm,
-            um(x.peak_dte_mesh_amplitude_rad),
+            match x.fits_interpolate {
+                true => " (three speeds: each fit interpolates them)",
+                false => "",
+            },
+            x.resonance_rpm.value,
+            x.resonance_rpm.uncertainty,
+            order(x.resonance_rpm.order),
+            um(x.peak_dte_mesh_amplitude.value),
+            um(x.peak_dte_mesh_amplitude.uncertainty),
+            order(x.peak_dte_mesh_amplitude.order),
             100.0 * x.case_model_resonance_rpm_rel_err,
             100.0 * x.case_model_peak_rel_err,
             100.0 * x.case_model_dte_rms_max_rel_err,
+            x.speeds_extrapolated,
+            x.speeds.len(),
+            match x.pointwise_resonance_rpm.is_finite() {
+                true => format!(
+                    "; fitted over them: resonance {:.0} rpm, peak {:.3} urad",
+                    x.pointwise_resonance_rpm,
+                    um(x.pointwise_peak_dte_mesh_amplitude_rad)
+                ),
+                false => String::new(),
+            },
         );
         for s in &x.speeds {
-            let order = |o: Option<f64>| {
-                o.map_or("not extrapolated".to_string(), |p| format!("order {p:.2}"))
-            };
             text += &format!(
                 "\n  * {:.0} rpm: 1st harmonic {:.1} ± {:.1} urad ({}), rms {:.1} ± {:.1} urad ({}); the case's model's rms {:+.1} %",
                 s.speed_rpm,
-                um(s.mesh_amplitude.value_rad),
-                um(s.mesh_amplitude.uncertainty_rad),
+                um(s.mesh_amplitude.value),
+                um(s.mesh_amplitude.uncertainty),
                 order(s.mesh_amplitude.order),
-                um(s.dte_rms.value_rad),
-                um(s.dte_rms.uncertainty_rad),
+                um(s.dte_rms.value),
+                um(s.dte_rms.uncertainty),
                 order(s.dte_rms.order),
                 100.0 * s.case_model_dte_rms_rel_err,
             );
@@ -723,7 +752,7 @@ fn write_fe_sweep_extrapolated(
                 (s.dte_rms_values_rad, s.dte_rms),
             ] {
                 row.extend(values.map(um));
-                row.extend([um(e.value_rad), um(e.uncertainty_rad), order(e.order)]);
+                row.extend([um(e.value), um(e.uncertainty), order(e.order)]);
             }
             row.push(format!("{:.4}", s.case_model_dte_rms_rel_err));
             row

@@ -399,6 +399,9 @@ pub fn run(
     if positions == 0 {
         return Err(StudyError::Input("--positions must be at least 1".into()));
     }
+    if !input.fe_sweep_rpm.is_empty() {
+        fe_sweep_runs(&input.fe_runs, &input.fe_sweep_rpm)?;
+    }
     let pair = &case.pair;
     let rb = [pair.gears[0].base_radius, pair.gears[1].base_radius];
     let inertias = gear_inertias(case);
@@ -721,6 +724,36 @@ fn compare_speed(
     })
 }
 
+/// The runs of `fe_runs` that join the FE speed sweep over `rpms`: every run inside the sweep's
+/// range, on any mesh (runs on other explicit meshes form their own mesh levels). Two runs at
+/// one speed on one mesh are refused: they would weigh that speed twice in the fits and leave
+/// the extrapolation to pick one of them silently. Checked before any FE run is made.
+pub fn fe_sweep_runs<'a>(fe_runs: &'a [FeDte], rpms: &[f64]) -> Result<Vec<&'a FeDte>, StudyError> {
+    let (lo, hi) = rpms
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(l, h), r| (l.min(*r), h.max(*r)));
+    let inside: Vec<&FeDte> = fe_runs
+        .iter()
+        .filter(|run| run.speed_rpm >= lo * (1.0 - 1e-6) && run.speed_rpm <= hi * (1.0 + 1e-6))
+        .collect();
+    for (i, a) in inside.iter().enumerate() {
+        if let Some(b) = inside[i + 1..].iter().find(|b| {
+            super::fe_sweep::same_speed(a.speed_rpm, b.speed_rpm)
+                && super::fe_sweep::same_size(a.fine_element_mm, b.fine_element_mm)
+        }) {
+            return Err(StudyError::Input(format!(
+                "--fe-sweep: {} and {} are both FE runs at {:.1} rpm on the same mesh ({}): give one run per speed and flank size",
+                a.source,
+                b.source,
+                a.speed_rpm,
+                a.fine_element_mm
+                    .map_or("flank size not recorded".to_string(), |mm| format!("{mm} mm flanks")),
+            )));
+        }
+    }
+    Ok(inside)
+}
+
 /// The FE runs of `input` at `rpms` against `models`, the case's
 /// model first ([`super::fe_sweep::run`]).
 fn fe_sweep(
@@ -732,15 +765,9 @@ fn fe_sweep(
     let rb2 = case.pair.gears[1].base_radius;
     let back_contact = -case.pair.backlash_normal.max(0.0) / rb2;
     let teeth = case.pair.gears[0].teeth() as f64;
-    // Every run inside the sweep's range, on any mesh: runs on other explicit meshes form
-    // their own mesh levels.
-    let (lo, hi) = rpms
-        .iter()
-        .fold((f64::INFINITY, 0.0f64), |(l, h), r| (l.min(*r), h.max(*r)));
-    let mut fe: Vec<super::fe_sweep::FeSpeed> = input
-        .fe_runs
-        .iter()
-        .filter(|run| run.speed_rpm >= lo * (1.0 - 1e-6) && run.speed_rpm <= hi * (1.0 + 1e-6))
+    let inside = fe_sweep_runs(&input.fe_runs, rpms)?;
+    let mut fe: Vec<super::fe_sweep::FeSpeed> = inside
+        .into_iter()
         // A back-flank force above 1e-3 of the static mesh force counts as contact.
         .map(|run| {
             let threshold = 1e-3 * run.torque_nm / rb2;

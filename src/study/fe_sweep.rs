@@ -25,13 +25,14 @@
 //! explicit mesh's k̄ falls by 0.8 % from 1.0 to 0.7 mm flanks, validation/accuracy-cost).
 //! FE runs given on several explicit meshes (their summary's `fine_element_mm`) form
 //! [`MeshLevel`]s. The headline numbers hold the models against the finest level with four
-//! speeds to fit (else three), the best estimate of the converged FE at hand; every level is
+//! speeds to fit (else three): the finest FE at hand, not a converged one; every level is
 //! fitted on its own, and the headline level and the next coarser one also over the speeds
 //! both ran, so the FE's own shift under its last refinement ([`refinement_shift_rpm`])
-//! stands beside the model's difference to it. With three meshes at common speeds, each
-//! speed's first harmonic and rms are extrapolated to zero flank size
-//! ([`super::accuracy::richardson`]: f(h) = f₀ + c hᵖ, the observed order from the three
-//! values; [`ExtrapolatedFe`]) and the case's model is held against that estimate too.
+//! stands beside the model's difference to it. With three meshes at common speeds the FE is
+//! extrapolated to zero flank size ([`super::accuracy::richardson`]: f(h) = f₀ + c hᵖ, the
+//! observed order from the three values; [`ExtrapolatedFe`]): each mesh's fitted resonance
+//! and peak, and each speed's first harmonic and rms, with how many speeds really
+//! extrapolated; the case's model is held against that estimate too.
 
 use serde::Serialize;
 
@@ -329,25 +330,27 @@ pub fn undamped_resonance(points: &[(f64, f64)]) -> Option<f64> {
     resonance_fit(points).map(|(peak, zeta, _)| peak / (1.0 - 2.0 * zeta * zeta).max(1e-12).sqrt())
 }
 
-/// One quantity of the FE extrapolated to zero flank size ([`super::accuracy::richardson`]).
+/// One quantity of the FE extrapolated to zero flank size ([`super::accuracy::richardson`]), in
+/// the quantity's own unit (rad for the DTE, rpm for a resonance speed).
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct Extrapolated {
-    /// The estimate [rad]: f₀ of f(h) = f₀ + c hᵖ through the three meshes' values, or the
-    /// finest mesh's value where they do not converge monotonically at an order in [0.5, 6].
-    pub value_rad: f64,
-    /// Its uncertainty [rad]: how far the extrapolation moved from the finest mesh (else the
-    /// three values' spread about the finest).
-    pub uncertainty_rad: f64,
+    /// The estimate: f₀ of f(h) = f₀ + c hᵖ through the three meshes' values, or the finest
+    /// mesh's value where they do not converge monotonically at an order in [0.5, 6].
+    pub value: f64,
+    /// Its uncertainty: how far the extrapolation moved from the finest mesh; where it did not
+    /// extrapolate, the largest distance of the coarser meshes' values from the finest (NaN
+    /// when a value is not finite).
+    pub uncertainty: f64,
     /// The observed order p (`None`: not extrapolated).
     pub order: Option<f64>,
 }
 
 impl Extrapolated {
     fn of(h: [f64; 3], f: [f64; 3]) -> Self {
-        let (value_rad, uncertainty_rad, order) = super::accuracy::richardson(h, f);
+        let (value, uncertainty, order) = super::accuracy::richardson(h, f);
         Self {
-            value_rad,
-            uncertainty_rad,
+            value,
+            uncertainty,
             order,
         }
     }
@@ -362,42 +365,58 @@ pub struct ExtrapolatedSpeed {
     pub dte_rms_values_rad: [f64; 3],
     pub mesh_amplitude: Extrapolated,
     pub dte_rms: Extrapolated,
-    /// The case's model from rest at this speed: lumped/extrapolated − 1 of the DTE rms.
+    /// The case's model from rest at this speed: lumped/extrapolated − 1 of the DTE rms (NaN
+    /// until [`run`] holds the model against it).
     pub case_model_dte_rms_rel_err: f64,
 }
 
 /// The FE sweep extrapolated to zero flank size from the three finest meshes with a recorded
-/// size, at the speeds all three ran: the best estimate of the converged FE, against which
-/// the case's model is held beside the finest mesh (the finest run at hand is not converged:
-/// validation/lumped-twin).
+/// size, on the speeds all three ran: an estimate of the converged FE with its uncertainty
+/// (the finest run at hand is not converged: validation/lumped-twin). Two ways, which agree
+/// only where the response converges smoothly at every speed:
+/// * **fit, then extrapolate** (the headline): each mesh's [`resonance_fit`] over the shared
+///   speeds, its peak's speed and height extrapolated. The resonance moves as the flanks are
+///   refined, so at a fixed speed near it the three values need not converge monotonically; the
+///   fitted peak moves smoothly.
+/// * **extrapolate, then fit**: each shared speed's values extrapolated, then one fit. Where a
+///   speed does not extrapolate it carries its finest value ([`Extrapolated`]), so the fit mixes
+///   both; `speeds_extrapolated` counts the speeds that did.
 #[derive(Debug, Clone, Serialize)]
 pub struct ExtrapolatedFe {
     /// The three meshes' flank sizes [mm], coarsest first.
     pub fine_element_mm: [f64; 3],
     pub speeds: Vec<ExtrapolatedSpeed>,
-    /// [`resonance_fit`] over the extrapolated first harmonics: the peak's speed [rpm] and
-    /// height [rad] (NaN with fewer than three speeds), and the case's model against them
-    /// (lumped/FE − 1).
-    pub resonance_rpm: f64,
-    pub peak_dte_mesh_amplitude_rad: f64,
+    /// How many of `speeds` extrapolated both their first harmonic and their rms (an order in
+    /// [0.5, 6] with monotone differences).
+    pub speeds_extrapolated: usize,
+    /// Each mesh's [`resonance_fit`] over `speeds`, coarsest first: the peak's speed [rpm] and
+    /// height [rad] (NaN with fewer than three speeds).
+    pub mesh_resonance_rpm: [f64; 3],
+    pub mesh_peak_dte_mesh_amplitude_rad: [f64; 3],
+    /// Whether those fits only interpolate: three speeds for the fit's three parameters, so
+    /// nothing checks the one-DOF shape.
+    pub fits_interpolate: bool,
+    /// Fit, then extrapolate: the peak's speed [rpm] and height [rad] at zero flank size.
+    pub resonance_rpm: Extrapolated,
+    pub peak_dte_mesh_amplitude: Extrapolated,
+    /// Extrapolate, then fit: [`resonance_fit`] over the speeds' extrapolated first harmonics,
+    /// peak speed [rpm] and height [rad]; NaN with fewer than four speeds (three only
+    /// interpolate).
+    pub pointwise_resonance_rpm: f64,
+    pub pointwise_peak_dte_mesh_amplitude_rad: f64,
+    /// The case's model against the fit-then-extrapolate estimate: lumped/FE − 1 of the
+    /// resonance speed and peak, and the largest |lumped/extrapolated − 1| of the DTE rms over
+    /// the speeds where the model settled (NaN until [`run`] holds the model against it, or
+    /// where no error is finite).
     pub case_model_resonance_rpm_rel_err: f64,
     pub case_model_peak_rel_err: f64,
-    /// The largest |lumped/extrapolated − 1| of the DTE rms over the speeds where the model
-    /// settled.
     pub case_model_dte_rms_max_rel_err: f64,
 }
 
-/// The three finest levels of `levels` (coarsest first) that recorded their flank size, each
-/// quantity extrapolated at every speed all three ran ([`Extrapolated`]), without a model:
-/// (sizes [mm], per speed (rpm, amplitudes, rms values, amplitude, rms)). `None` with fewer
-/// than three such levels or no shared speed.
-#[allow(clippy::type_complexity)]
-pub fn extrapolate_levels(
-    levels: &[Vec<FeSpeed>],
-) -> Option<(
-    [f64; 3],
-    Vec<(f64, [f64; 3], [f64; 3], Extrapolated, Extrapolated)>,
-)> {
+/// The three finest levels of `levels` (coarsest first) that recorded their flank size,
+/// extrapolated to zero flank size on the speeds all three ran ([`ExtrapolatedFe`], without a
+/// model). `None` with fewer than three such levels or no shared speed.
+pub fn extrapolate_levels(levels: &[Vec<FeSpeed>]) -> Option<ExtrapolatedFe> {
     let sized: Vec<&Vec<FeSpeed>> = levels
         .iter()
         .filter(|level| level.first().and_then(|s| s.fine_element_mm).is_some())
@@ -410,65 +429,106 @@ pub fn extrapolate_levels(
     let at = |level: &Vec<FeSpeed>, rpm: f64| -> Option<FeSpeed> {
         level.iter().find(|s| same_speed(s.speed_rpm, rpm)).cloned()
     };
-    let speeds: Vec<_> = c
+    let shared: Vec<[FeSpeed; 3]> = c
         .iter()
-        .filter_map(|s| {
-            let runs = [at(a, s.speed_rpm)?, at(b, s.speed_rpm)?, s.clone()];
+        .filter_map(|s| Some([at(a, s.speed_rpm)?, at(b, s.speed_rpm)?, s.clone()]))
+        .collect();
+    if shared.is_empty() {
+        return None;
+    }
+    let speeds: Vec<ExtrapolatedSpeed> = shared
+        .iter()
+        .map(|runs| {
             let amplitudes = runs.each_ref().map(|r| r.mesh_amplitude_rad);
             let rms = runs.each_ref().map(|r| r.dte_rms_rad);
-            Some((
-                s.speed_rpm,
-                amplitudes,
-                rms,
-                Extrapolated::of(h, amplitudes),
-                Extrapolated::of(h, rms),
-            ))
+            ExtrapolatedSpeed {
+                speed_rpm: runs[2].speed_rpm,
+                mesh_amplitudes_rad: amplitudes,
+                dte_rms_values_rad: rms,
+                mesh_amplitude: Extrapolated::of(h, amplitudes),
+                dte_rms: Extrapolated::of(h, rms),
+                case_model_dte_rms_rel_err: f64::NAN,
+            }
         })
         .collect();
-    (!speeds.is_empty()).then_some((h, speeds))
+    let nan3 = (f64::NAN, f64::NAN, f64::NAN);
+    let fits = [0, 1, 2].map(|i| {
+        let points: Vec<(f64, f64)> = shared
+            .iter()
+            .map(|runs| (runs[i].speed_rpm, runs[i].mesh_amplitude_rad))
+            .collect();
+        resonance_fit(&points).unwrap_or(nan3)
+    });
+    let mesh_resonance_rpm = fits.map(|f| f.0);
+    let mesh_peak = fits.map(|f| f.2);
+    let pointwise: Vec<(f64, f64)> = speeds
+        .iter()
+        .map(|s| (s.speed_rpm, s.mesh_amplitude.value))
+        .collect();
+    let (pointwise_rpm, _, pointwise_peak) = match pointwise.len() >= 4 {
+        true => resonance_fit(&pointwise).unwrap_or(nan3),
+        false => nan3,
+    };
+    Some(ExtrapolatedFe {
+        fine_element_mm: h,
+        speeds_extrapolated: speeds
+            .iter()
+            .filter(|s| s.mesh_amplitude.order.is_some() && s.dte_rms.order.is_some())
+            .count(),
+        fits_interpolate: shared.len() == 3,
+        resonance_rpm: Extrapolated::of(h, mesh_resonance_rpm),
+        peak_dte_mesh_amplitude: Extrapolated::of(h, mesh_peak),
+        mesh_resonance_rpm,
+        mesh_peak_dte_mesh_amplitude_rad: mesh_peak,
+        pointwise_resonance_rpm: pointwise_rpm,
+        pointwise_peak_dte_mesh_amplitude_rad: pointwise_peak,
+        speeds,
+        case_model_resonance_rpm_rel_err: f64::NAN,
+        case_model_peak_rel_err: f64::NAN,
+        case_model_dte_rms_max_rel_err: f64::NAN,
+    })
 }
 
-/// [`extrapolate_levels`] with the case's `model` (and its sweep) held against it.
+/// [`extrapolate_levels`] with the case's `model` (and its `sweep`) held against it: the
+/// model's response from rest at each shared speed ([`case_model_at`]).
 fn extrapolated_fe(
     levels: &[Vec<FeSpeed>],
     (model, sweep): (&MeshModel, &ModelSweep),
     rb2: f64,
 ) -> Option<ExtrapolatedFe> {
     use rayon::prelude::*;
-    let (h, speeds) = extrapolate_levels(levels)?;
-    let speeds: Vec<ExtrapolatedSpeed> = speeds
-        .into_par_iter()
-        .map(|(rpm, amplitudes, rms, mesh_amplitude, dte_rms)| {
-            let lumped = lumped_at(model, rpm, rb2);
-            ExtrapolatedSpeed {
-                speed_rpm: rpm,
-                mesh_amplitudes_rad: amplitudes,
-                dte_rms_values_rad: rms,
-                mesh_amplitude,
-                dte_rms,
-                case_model_dte_rms_rel_err: lumped.dte_rms_rad / dte_rms.value_rad - 1.0,
-            }
-        })
-        .collect();
-    let points: Vec<(f64, f64)> = speeds
+    let mut x = extrapolate_levels(levels)?;
+    x.speeds.par_iter_mut().for_each(|s| {
+        let lumped = case_model_at(model, sweep, s.speed_rpm, rb2);
+        s.case_model_dte_rms_rel_err = lumped.dte_rms_rad / s.dte_rms.value - 1.0;
+    });
+    x.case_model_resonance_rpm_rel_err = sweep.resonance_rpm / x.resonance_rpm.value - 1.0;
+    x.case_model_peak_rel_err =
+        sweep.peak_dte_mesh_amplitude_rad / x.peak_dte_mesh_amplitude.value - 1.0;
+    x.case_model_dte_rms_max_rel_err =
+        largest_abs(x.speeds.iter().map(|s| s.case_model_dte_rms_rel_err));
+    Some(x)
+}
+
+/// [`lumped_at`] of the case's `model` at `rpm`, taken from its `sweep` where that ran the
+/// speed already (the headline level's speeds).
+fn case_model_at(model: &MeshModel, sweep: &ModelSweep, rpm: f64, rb2: f64) -> LumpedSpeed {
+    sweep
+        .at_fe_speeds
         .iter()
-        .map(|s| (s.speed_rpm, s.mesh_amplitude.value_rad))
-        .collect();
-    let (rpm, _, peak) = resonance_fit(&points).unwrap_or((f64::NAN, f64::NAN, f64::NAN));
-    let rms_err = speeds
-        .iter()
-        .map(|s| s.case_model_dte_rms_rel_err)
+        .find(|l| same_speed(l.speed_rpm, rpm))
+        .cloned()
+        .unwrap_or_else(|| lumped_at(model, rpm, rb2))
+}
+
+/// The largest |e| of the finite `errors`; NaN when none is finite (no comparison, not a
+/// perfect one).
+fn largest_abs(errors: impl Iterator<Item = f64>) -> f64 {
+    errors
         .filter(|e| e.is_finite())
-        .fold(0.0, |m: f64, e| m.max(e.abs()));
-    Some(ExtrapolatedFe {
-        fine_element_mm: h,
-        speeds,
-        resonance_rpm: rpm,
-        peak_dte_mesh_amplitude_rad: peak,
-        case_model_resonance_rpm_rel_err: sweep.resonance_rpm / rpm - 1.0,
-        case_model_peak_rel_err: sweep.peak_dte_mesh_amplitude_rad / peak - 1.0,
-        case_model_dte_rms_max_rel_err: rms_err,
-    })
+        .map(f64::abs)
+        .reduce(f64::max)
+        .unwrap_or(f64::NAN)
 }
 
 /// The FE speeds of one explicit mesh, and the case's model against them.
@@ -541,8 +601,8 @@ fn amplitude_points(fe: &[FeSpeed]) -> Vec<(f64, f64)> {
 /// four times as densely as the largest mesh level, over every level's range, from rest and
 /// continued up and down ([`ModelSweep`]). Runs on
 /// several explicit meshes form [`MeshLevel`]s; the headline numbers hold the models against
-/// the finest level that has four speeds with a mesh-harmonic response, else three (the best
-/// estimate of the converged FE at hand), and every level is reported with the case's model
+/// the finest level that has four speeds with a mesh-harmonic response, else three (the
+/// finest FE at hand), and every level is reported with the case's model
 /// against it.
 /// `rb2`: the driven gear's base radius; `decay_time_s`: the mesh mode's 1/(ζω_n), which each
 /// FE run's settling is measured against. `None` without such a level, or with a model
@@ -675,14 +735,14 @@ fn mesh_level(
     let (common_rpm, _, common_peak) = resonance_fit(&amplitude_points(&common)).unwrap_or(nan3);
     let lumped: Vec<LumpedSpeed> = fe
         .par_iter()
-        .map(|s| lumped_at(model, s.speed_rpm, rb2))
+        .map(|s| case_model_at(model, sweep, s.speed_rpm, rb2))
         .collect();
-    let rms_err = lumped
-        .iter()
-        .zip(&fe)
-        .map(|(l, f)| l.dte_rms_rad / f.dte_rms_rad - 1.0)
-        .filter(|e| e.is_finite())
-        .fold(0.0, |m: f64, e| m.max(e.abs()));
+    let rms_err = largest_abs(
+        lumped
+            .iter()
+            .zip(&fe)
+            .map(|(l, f)| l.dte_rms_rad / f.dte_rms_rad - 1.0),
+    );
     MeshLevel {
         fine_element_mm: fe[0].fine_element_mm,
         fe,
@@ -752,10 +812,7 @@ fn model_sweep(
         .zip(fe)
         .map(|(l, f)| l.dte_rms_rad / f.dte_rms_rad - 1.0)
         .collect();
-    let dte_rms_max_rel_err = dte_rms_rel_err
-        .iter()
-        .filter(|e| e.is_finite())
-        .fold(0.0, |m, e| e.abs().max(m));
+    let dte_rms_max_rel_err = largest_abs(dte_rms_rel_err.iter().copied());
     Some(ModelSweep {
         key: String::new(),
         label: label.to_string(),
@@ -960,27 +1017,33 @@ mod tests {
             .concat(),
         );
         assert_eq!(levels.len(), 5);
-        let (h, speeds) = super::extrapolate_levels(&levels).unwrap();
-        assert_eq!(h, [1.0, 0.7, 0.5]);
-        assert_eq!(speeds.len(), shared.len());
-        for (n, amplitudes, _, amplitude, rms) in &speeds {
-            assert!(shared.contains(n), "{n}");
-            assert_eq!(amplitudes[2], speed(*n, Some(0.5)).mesh_amplitude_rad);
-            assert!((amplitude.value_rad / f0(*n) - 1.0).abs() < 1e-9, "{n}");
-            assert!((amplitude.order.unwrap() - p).abs() < 1e-6);
-            let want = f0(*n) / 2f64.sqrt();
-            assert!((rms.value_rad / want - 1.0).abs() < 1e-9, "{n}");
+        let x = super::extrapolate_levels(&levels).unwrap();
+        assert_eq!(x.fine_element_mm, [1.0, 0.7, 0.5]);
+        assert_eq!(x.speeds.len(), shared.len());
+        assert_eq!(x.speeds_extrapolated, shared.len());
+        assert!(!x.fits_interpolate);
+        for s in &x.speeds {
+            let n = s.speed_rpm;
+            assert!(shared.contains(&n), "{n}");
+            for (i, h) in [1.0, 0.7, 0.5].into_iter().enumerate() {
+                let run = speed(n, Some(h));
+                assert_eq!(s.mesh_amplitudes_rad[i], run.mesh_amplitude_rad);
+                assert_eq!(s.dte_rms_values_rad[i], run.dte_rms_rad);
+            }
+            assert!((s.mesh_amplitude.value / f0(n) - 1.0).abs() < 1e-9, "{n}");
+            assert!((s.mesh_amplitude.order.unwrap() - p).abs() < 1e-6);
+            let want = f0(n) / 2f64.sqrt();
+            assert!((s.dte_rms.value / want - 1.0).abs() < 1e-9, "{n}");
             // The uncertainty is how far the extrapolation moved from the finest mesh.
-            let moved = (speed(*n, Some(0.5)).dte_rms_rad - want).abs();
-            assert!((rms.uncertainty_rad / moved - 1.0).abs() < 1e-6, "{n}");
+            let moved = (speed(n, Some(0.5)).dte_rms_rad - want).abs();
+            assert!((s.dte_rms.uncertainty / moved - 1.0).abs() < 1e-6, "{n}");
+            // No model held against it yet.
+            assert!(s.case_model_dte_rms_rel_err.is_nan());
         }
-        let points: Vec<(f64, f64)> = speeds
-            .iter()
-            .map(|(n, _, _, amplitude, _)| (*n, amplitude.value_rad))
-            .collect();
-        let (peak_rpm, _, _) = resonance_fit(&points).unwrap();
+        // Extrapolate, then fit: the one-DOF response f₀ was made with.
         let want = nr * (1.0 - 2.0 * zeta * zeta).sqrt();
-        assert!((peak_rpm / want - 1.0).abs() < 1e-3, "{peak_rpm} vs {want}");
+        let got = x.pointwise_resonance_rpm;
+        assert!((got / want - 1.0).abs() < 1e-3, "{got} vs {want}");
         // Two sized meshes are not enough; no speed shared by the three is no answer.
         assert!(super::extrapolate_levels(&levels[..3]).is_none());
         let apart = super::mesh_levels(
@@ -992,6 +1055,68 @@ mod tests {
             .concat(),
         );
         assert!(super::extrapolate_levels(&apart).is_none());
+    }
+
+    /// A one-DOF response whose resonance and height move with the flank size as
+    /// n_r(h) = n₀ + d hᵖ, A(h) = A₀(1 + e hᵖ) (as the FE's did, validation/lumped-twin): fit,
+    /// then extrapolate returns n₀'s peak and A₀'s height, where the finest mesh is 2 % off.
+    /// A speed the moving resonance passes over rises, then falls, under refinement: it does
+    /// not extrapolate and is not counted as extrapolated.
+    #[test]
+    fn a_moving_resonance_extrapolates_through_the_meshes_fits() {
+        let (a0, n0, zeta, p, d, e): (f64, f64, f64, f64, f64, f64) =
+            (2.0e-5, 5200.0, 0.05, 2.0, 400.0, 0.2);
+        let peak_of = |nr: f64| nr * (1.0 - 2.0 * zeta * zeta).sqrt();
+        let speed = |n: f64, h: f64| {
+            let (nr, a) = (n0 + d * h.powf(p), a0 * (1.0 + e * h.powf(p)));
+            let r = n / nr;
+            let amplitude = a / ((1.0 - r * r).powi(2) + (2.0 * zeta * r).powi(2)).sqrt();
+            FeSpeed {
+                speed_rpm: n,
+                fine_element_mm: Some(h),
+                mesh_amplitude_rad: amplitude,
+                dte_rms_rad: amplitude / 2f64.sqrt(),
+                dte_peak_to_peak_rad: f64::NAN,
+                dte_mean_rad: 1.2e-4,
+                window_s: (0.016, 0.03),
+                growth: 1.0,
+                back_flank_share: 0.0,
+                back_flank_force_max_n: f64::NAN,
+            }
+        };
+        let shared = [4800.0, 5000.0, 5200.0, 5400.0, 5600.0];
+        let levels: Vec<Vec<FeSpeed>> = [1.0, 0.7, 0.5]
+            .map(|h| shared.iter().map(|n| speed(*n, h)).collect())
+            .into();
+        let x = super::extrapolate_levels(&levels).unwrap();
+        // Each mesh's fit over five exact one-DOF points is its own resonance.
+        for (got, h) in x.mesh_resonance_rpm.iter().zip([1.0f64, 0.7, 0.5]) {
+            let want = peak_of(n0 + d * h.powf(p));
+            assert!((got / want - 1.0).abs() < 1e-5, "{h} mm: {got} vs {want}");
+        }
+        let want = peak_of(n0);
+        let finest_off = x.mesh_resonance_rpm[2] / want - 1.0;
+        assert!(finest_off > 0.015, "{finest_off}");
+        let got = x.resonance_rpm.value;
+        assert!((got / want - 1.0).abs() < 1e-4, "{got} vs {want}");
+        assert!((x.resonance_rpm.order.unwrap() - p).abs() < 0.05);
+        let peak = a0 / (2.0 * zeta * (1.0 - zeta * zeta).sqrt());
+        let got = x.peak_dte_mesh_amplitude.value;
+        assert!((got / peak - 1.0).abs() < 1e-3, "{got} vs {peak}");
+        // 5 400 rpm lies between the 0.7 mm mesh's undamped resonance (5 396 rpm) and the
+        // 1.0 mm mesh's (5 600): its harmonic rises, then falls.
+        let at = x.speeds.iter().find(|s| s.speed_rpm == 5400.0).unwrap();
+        let [f1, f2, f3] = at.mesh_amplitudes_rad;
+        assert!(f2 > f1 && f2 > f3, "{:?}", at.mesh_amplitudes_rad);
+        assert!(at.mesh_amplitude.order.is_none());
+        assert_eq!(at.mesh_amplitude.value, f3);
+        let counted = x
+            .speeds
+            .iter()
+            .filter(|s| s.mesh_amplitude.order.is_some() && s.dte_rms.order.is_some())
+            .count();
+        assert_eq!(x.speeds_extrapolated, counted);
+        assert!(counted < shared.len());
     }
 
     /// A synthetic one-degree-of-freedom response sampled at eight speeds from 0.8 to 1.2 × its

@@ -391,6 +391,10 @@ fn compare(args: &CommonArgs, ask: &CompareAsk) -> Result<()> {
     let mut runs = given_fe_runs(ask.fe_runs)?;
     let given_rpm = cmp::given_rpm_on_case_mesh(&case, &runs);
     let fe_sweep = ask.sweep_speeds(&given_rpm);
+    // A bad set of given runs is refused before any FE run is made for it.
+    if !fe_sweep.is_empty() {
+        cmp::fe_sweep_runs(&runs, &fe_sweep)?;
+    }
     let requests = ask.requests(args, &case, &dir, &given_rpm)?;
     let outcomes = executor::execute(args, &requests, &dir.join("slurm"))?;
     for (request, outcome) in requests.iter().zip(outcomes) {

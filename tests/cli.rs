@@ -1733,7 +1733,12 @@ fn compare_fe_sweep_finds_a_known_resonance() {
     for s in fe {
         let growth = s["growth"].as_f64().unwrap();
         assert!((growth - 1.0).abs() < 0.05, "{growth}");
+        // A steady cosine has settled.
+        assert_eq!(s["settled"].as_bool(), Some(true));
     }
+    assert_eq!(sweep["runs"].as_u64(), Some(12));
+    assert_eq!(sweep["runs_settled"].as_u64(), Some(12));
+    assert!(sweep["unsettled_runs"].as_array().unwrap().is_empty());
     let models = sweep["models"].as_array().unwrap();
     assert_eq!(models.len(), 2);
     for m in models {

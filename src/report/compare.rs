@@ -416,6 +416,8 @@ fn write_fe_sweep(
         "fe_dte_rms_urad",
         "fe_dte_peak_to_peak_urad",
         "fe_growth",
+        "fe_settling_drift",
+        "fe_settled",
         "fe_back_flank_share",
         "fe_back_flank_force_max_n",
     ]
@@ -442,6 +444,8 @@ fn write_fe_sweep(
                 format!("{:.5}", um(s.dte_rms_rad)),
                 format!("{:.5}", um(s.dte_peak_to_peak_rad)),
                 format!("{:.4}", s.growth),
+                format!("{:.4}", s.settling_drift),
+                s.settled.to_string(),
                 format!("{:.4}", s.back_flank_share),
                 format!("{:.1}", s.back_flank_force_max_n),
             ];
@@ -775,6 +779,7 @@ fn write_fe_sweep_levels(
             "fe_mesh_amplitude_urad",
             "fe_dte_rms_urad",
             "fe_growth",
+            "fe_settling_drift",
             "fe_back_flank_share",
         ],
         sweep.mesh_levels.iter().flat_map(|level| {
@@ -787,6 +792,7 @@ fn write_fe_sweep_levels(
                     format!("{:.5}", um(s.mesh_amplitude_rad)),
                     format!("{:.5}", um(s.dte_rms_rad)),
                     format!("{:.4}", s.growth),
+                    format!("{:.4}", s.settling_drift),
                     format!("{:.4}", s.back_flank_share),
                 ]
             })

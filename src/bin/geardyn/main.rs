@@ -330,18 +330,22 @@ impl CompareAsk<'_> {
         given_rpm: &[f64],
     ) -> Result<Vec<executor::FeRunRequest>> {
         use study::compare as cmp;
-        let all_speeds = distinct_speeds(
-            self.speeds
-                .iter()
-                .chain(&self.sweep_speeds(given_rpm))
-                .copied()
-                .collect(),
-        );
+        let sweep_speeds = self.sweep_speeds(given_rpm);
+        let all_speeds =
+            distinct_speeds(self.speeds.iter().chain(&sweep_speeds).copied().collect());
         let mut requests = Vec::new();
         for rpm in cmp::speeds_to_run(&all_speeds, given_rpm) {
+            // A sweep speed runs long enough for the response near resonance to settle.
+            let overrides = match sweep_speeds
+                .iter()
+                .any(|r| study::fe_sweep::same_speed(*r, rpm))
+            {
+                true => cmp::sweep_speed_overrides(case, rpm),
+                false => cmp::speed_overrides(rpm),
+            };
             requests.push(executor::FeRunRequest {
                 label: format!("compare {rpm:.0} rpm"),
-                case: load(args, cmp::speed_overrides(rpm))?,
+                case: load(args, overrides)?,
                 scene: cmp::SPEED_SCENE.to_string(),
                 dir: dir.join(format!("fe-{rpm:.0}")),
             });

@@ -256,8 +256,9 @@ pub fn amplitude_spectrum(record: &[f64]) -> Vec<f64> {
 /// first. A record shorter than one period gives zeros.
 pub fn harmonic_amplitudes(x: &[f64], dt: f64, f: f64, count: usize) -> Vec<f64> {
     let per_period = 1.0 / (f * dt);
-    let periods = (x.len() as f64 / per_period).floor();
-    let n = (periods * per_period).round() as usize;
+    // Half a sample of tolerance: a record cut to k periods to the nearest sample keeps k.
+    let periods = ((x.len() as f64 + 0.5) / per_period).floor();
+    let n = ((periods * per_period).round() as usize).min(x.len());
     if periods < 1.0 || n == 0 {
         return vec![0.0; count];
     }

@@ -1700,6 +1700,15 @@ fn compare_fe_sweep_finds_a_known_resonance() {
         args.push(run.into_os_string());
     }
     let stiffness = write_cosine_stiffness(dir.path());
+    // A stiffness run folder for the accuracy chart, whose resonance reference is the sweep's.
+    let stiffness_run = dir.path().join("stiffness-run");
+    std::fs::create_dir_all(&stiffness_run).unwrap();
+    std::fs::copy(&stiffness, stiffness_run.join("stiffness.csv")).unwrap();
+    std::fs::write(
+        stiffness_run.join("summary.json"),
+        r#"{"fine_element_mm": 0.5, "total_wall_s": 100.0, "mass_scaling": {"factor": 1.0}}"#,
+    )
+    .unwrap();
     let out = dir.path().join("cmp");
     run_ok(
         geardyn()
@@ -1709,6 +1718,9 @@ fn compare_fe_sweep_finds_a_known_resonance() {
             .args(&args)
             .arg("--fe-stiffness")
             .arg(&stiffness)
+            .arg("--chart")
+            .arg("--chart-fe-run")
+            .arg(&stiffness_run)
             .arg("--out")
             .arg(&out),
     );
@@ -1861,7 +1873,14 @@ fn compare_fe_sweep_finds_a_known_resonance() {
             assert!(values[1] > values[0] && values[1] > values[2], "{values:?}");
             assert!(order.is_none());
         }
-        extrapolated += usize::from(order.is_some() && s["dte_rms"]["order"].as_f64().is_some());
+        // The rms of a pure cosine is its amplitude over √2: it extrapolates where the
+        // harmonic does.
+        assert_eq!(
+            s["dte_rms"]["order"].as_f64().is_some(),
+            order.is_some(),
+            "{rpm}"
+        );
+        extrapolated += usize::from(order.is_some());
     }
     assert_eq!(x["speeds_extrapolated"].as_u64(), Some(extrapolated as u64));
     assert!(extrapolated < 3);
@@ -1883,10 +1902,37 @@ fn compare_fe_sweep_finds_a_known_resonance() {
     assert!((resonance["value"].as_f64().unwrap() / value - 1.0).abs() < 1e-12);
     assert!((resonance["uncertainty"].as_f64().unwrap() - uncertainty).abs() < 1e-9 * value);
     assert_eq!(resonance["order"].as_f64(), order);
-    // 5 200 -> 5 000 -> 4 900 rpm converges (order about 1.3) below the finest mesh's.
+    // 5 200 -> 5 000 -> 4 900 rpm converges (order about 1.47) below the finest mesh's.
     assert!(order.is_some() && value < fits[2], "{value} vs {fits:?}");
     let error = x["case_model_resonance_rpm_rel_err"].as_f64().unwrap();
     assert!(((1.0 + error) * value / model_rpm - 1.0).abs() < 1e-9);
+    // The accuracy chart's resonance reference is that extrapolation, made undamped with the
+    // headline fit's ζ (0.05 here: n_n = n_peak/√(1 − 2ζ²)), as uncertain as the larger of it
+    // and the headline fit's jackknife.
+    let chart: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("accuracy_cost.json")).unwrap()).unwrap();
+    let reference = &chart["references"]["resonance_rpm"];
+    let fitted_zeta = sweep["fitted_damping_ratio_fe"].as_f64().unwrap();
+    assert!((fitted_zeta / zeta - 1.0).abs() < 2e-2, "{fitted_zeta}");
+    let undamped = value / (1.0 - 2.0 * fitted_zeta * fitted_zeta).sqrt();
+    assert!(
+        (reference["value"].as_f64().unwrap() / undamped - 1.0).abs() < 1e-12,
+        "{reference}"
+    );
+    let jackknife = sweep["undamped_resonance_rpm_fe_uncertainty"]
+        .as_f64()
+        .unwrap();
+    assert!(
+        (reference["uncertainty"].as_f64().unwrap() - jackknife.max(uncertainty)).abs()
+            < 1e-9 * value,
+        "{reference}"
+    );
+    let source = reference["source"].as_str().unwrap();
+    assert!(source.contains("extrapolated"), "{reference}");
+    assert!(
+        source.contains("headline (1.00 mm) mesh's fitted"),
+        "{reference}"
+    );
     // Three speeds only interpolate a fit over the extrapolated harmonics: none is given.
     assert!(x["pointwise_resonance_rpm"].is_null());
     let x_csv = std::fs::read_to_string(out.join("fe_sweep_extrapolated.csv")).unwrap();

@@ -1753,9 +1753,19 @@ fn compare_fe_sweep_finds_a_known_resonance() {
     assert!(sweep["unsettled_runs"].as_array().unwrap().is_empty());
     let models = sweep["models"].as_array().unwrap();
     assert_eq!(models.len(), 2);
+    // Each model's mesh mode carries the damping ratio the FE's dashpot gives the FE modal
+    // analysis's mesh mode.
+    let fe_modal_zeta = summary["mesh_mode_damping_ratio_fe_modal"]
+        .as_f64()
+        .unwrap();
     for m in models {
         assert_eq!(m["dense"].as_array().unwrap().len(), 20);
         assert_eq!(m["at_fe_speeds"].as_array().unwrap().len(), 5);
+        let zeta = m["mesh_mode_damping_ratio"].as_f64().unwrap();
+        assert!(
+            (zeta / fe_modal_zeta - 1.0).abs() < 1e-9,
+            "{zeta} vs {fe_modal_zeta}"
+        );
     }
     for key in [
         "resonance_rpm_lumped",

@@ -597,8 +597,10 @@ fn write_fe_sweep(
     );
     for m in &sweep.models {
         text += &format!(
-            "\n* {}: resonance {:.0} rpm ({:+.2} %), peak 1st mesh harmonic {:.3} urad ({:+.1} %), DTE rms largest difference {:.1} % where it settled{}{}",
+            "\n* {} (dashpot {:.0} N·s/m: its mesh mode's ζ {:.4}, the FE modal's): resonance {:.0} rpm ({:+.2} %), peak 1st mesh harmonic {:.3} urad ({:+.1} %), DTE rms largest difference {:.1} % where it settled{}{}",
             m.label,
+            m.mesh_damping_n_s_per_m,
+            m.mesh_mode_damping_ratio,
             m.resonance_rpm,
             100.0 * m.resonance_rpm_rel_err,
             um(m.peak_dte_mesh_amplitude_rad),

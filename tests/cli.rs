@@ -1753,18 +1753,21 @@ fn compare_fe_sweep_finds_a_known_resonance() {
     assert!(sweep["unsettled_runs"].as_array().unwrap().is_empty());
     let models = sweep["models"].as_array().unwrap();
     assert_eq!(models.len(), 2);
-    // Each model's mesh mode carries the damping ratio the FE's dashpot gives the FE modal
-    // analysis's mesh mode.
-    let fe_modal_zeta = summary["mesh_mode_damping_ratio_fe_modal"]
-        .as_f64()
-        .unwrap();
+    // Each model's dashpot acts on its mesh mode as the FE's on the FE modal analysis's: the
+    // same modal damping coefficient c g.
+    let fe_modal = summary["mesh_damping_n_s_per_m"].as_f64().unwrap()
+        * summary["mesh_mode_dashpot_share_fe_modal_per_kg"]
+            .as_f64()
+            .unwrap();
+    assert!(fe_modal > 0.0);
     for m in models {
         assert_eq!(m["dense"].as_array().unwrap().len(), 20);
         assert_eq!(m["at_fe_speeds"].as_array().unwrap().len(), 5);
-        let zeta = m["mesh_mode_damping_ratio"].as_f64().unwrap();
+        let modal = m["mesh_damping_n_s_per_m"].as_f64().unwrap()
+            * m["mesh_mode_dashpot_share_per_kg"].as_f64().unwrap();
         assert!(
-            (zeta / fe_modal_zeta - 1.0).abs() < 1e-9,
-            "{zeta} vs {fe_modal_zeta}"
+            (modal / fe_modal - 1.0).abs() < 1e-9,
+            "{modal} vs {fe_modal}"
         );
     }
     for key in [

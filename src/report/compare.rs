@@ -597,7 +597,7 @@ fn write_fe_sweep(
     );
     for m in &sweep.models {
         text += &format!(
-            "\n* {} (dashpot {:.0} N·s/m: its mesh mode's ζ {:.4}, the FE modal's): resonance {:.0} rpm ({:+.2} %), peak 1st mesh harmonic {:.3} urad ({:+.1} %), DTE rms largest difference {:.1} % where it settled{}{}",
+            "\n* {} (dashpot {:.0} N·s/m, acting on its mesh mode as the FE's on the FE modal's: ζ {:.4}): resonance {:.0} rpm ({:+.2} %), peak 1st mesh harmonic {:.3} urad ({:+.1} %), DTE rms largest difference {:.1} % where it settled{}{}",
             m.label,
             m.mesh_damping_n_s_per_m,
             m.mesh_mode_damping_ratio,

@@ -1223,6 +1223,20 @@ fn set_overrides_the_case_and_case_toml_is_the_effective_case() {
 
 /// A stiffness file over the paper pair's mesh period: k = 4e8 (1 + 0.1 cos) N/m, no TE, at
 /// 143.6 N·m (the synthetic FE k(θ) of the compare tests).
+/// A `geardyn fe --scene stiffness` folder for the accuracy chart holding `stiffness` (k(θ)),
+/// unscaled, on 0.5 mm flanks.
+fn write_stiffness_run(dir: &Path, stiffness: &Path) -> std::path::PathBuf {
+    let run = dir.join("stiffness-run");
+    std::fs::create_dir_all(&run).unwrap();
+    std::fs::copy(stiffness, run.join("stiffness.csv")).unwrap();
+    std::fs::write(
+        run.join("summary.json"),
+        r#"{"fine_element_mm": 0.5, "total_wall_s": 100.0, "mass_scaling": {"factor": 1.0}}"#,
+    )
+    .unwrap();
+    run
+}
+
 fn write_cosine_stiffness(dir: &Path) -> std::path::PathBuf {
     use std::f64::consts::TAU;
     let mut table =
@@ -1273,14 +1287,7 @@ fn compare_reads_a_known_fe_run_and_names_its_lines() {
     .unwrap();
     let stiffness = write_cosine_stiffness(dir.path());
     // A stiffness run folder for the chart: the same cosine k(θ), unscaled, 0.5 mm.
-    let stiffness_run = dir.path().join("stiffness-run");
-    std::fs::create_dir_all(&stiffness_run).unwrap();
-    std::fs::copy(&stiffness, stiffness_run.join("stiffness.csv")).unwrap();
-    std::fs::write(
-        stiffness_run.join("summary.json"),
-        r#"{"fine_element_mm": 0.5, "total_wall_s": 100.0, "mass_scaling": {"factor": 1.0}}"#,
-    )
-    .unwrap();
+    let stiffness_run = write_stiffness_run(dir.path(), &stiffness);
     let out = dir.path().join("cmp");
     run_ok(
         geardyn()
@@ -1701,14 +1708,7 @@ fn compare_fe_sweep_finds_a_known_resonance() {
     }
     let stiffness = write_cosine_stiffness(dir.path());
     // A stiffness run folder for the accuracy chart, whose resonance reference is the sweep's.
-    let stiffness_run = dir.path().join("stiffness-run");
-    std::fs::create_dir_all(&stiffness_run).unwrap();
-    std::fs::copy(&stiffness, stiffness_run.join("stiffness.csv")).unwrap();
-    std::fs::write(
-        stiffness_run.join("summary.json"),
-        r#"{"fine_element_mm": 0.5, "total_wall_s": 100.0, "mass_scaling": {"factor": 1.0}}"#,
-    )
-    .unwrap();
+    let stiffness_run = write_stiffness_run(dir.path(), &stiffness);
     let out = dir.path().join("cmp");
     run_ok(
         geardyn()

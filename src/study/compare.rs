@@ -248,7 +248,9 @@ pub struct CompareSummary {
     pub mesh_mode_damping_ratio_fe_twin: f64,
     /// The same dashpot's first-order damping of the FE modal analysis's mesh mode, driver
     /// held (c r_b2² φ²/(2ω), φ the driven hub's rotation in the mass-normalized shape), mean
-    /// over the positions: whether the twin's mode shares the FE's damping.
+    /// over the positions; at the modal analysis's tied contact, whose mesh mode lies 4–5 %
+    /// above the explicit FE's penalty contact (paper pair), so the twin's damping is compared
+    /// through the dashpot's share below, not through this ratio.
     pub mesh_mode_damping_ratio_fe_modal: f64,
     /// A unit mesh dashpot's share in the mesh mode, g = (d·φ)²/(φᵀMφ) [1/kg] (ζ = c g/(2ω)):
     /// of the FE modal analysis (driver held, r_b2² φ_hub², mean over the positions; its
@@ -309,8 +311,9 @@ pub fn speed_overrides(rpm: f64) -> Vec<crate::case::Override> {
 /// up long after the mesh mode's linear decay time (the double-sided contact's slow approach):
 /// at 5 275 rpm on 0.7 mm flanks (paper pair) its rms over 16–30 ms is 277.5 µrad, over 30–40
 /// ms 302.3, over 40–50 ms 304.7 (validation/lumped-twin). A 0.05 s run's last third thus reads
-/// about 10 % above the 0.03 s run's whole window (277.6), but is not shown settled: 40–45 ms read about 303.3 and
-/// 45–50 ms 306.1, still about 1 % up per 5 ms. Whether each run settled is measured
+/// about 10 % above the 0.03 s run's whole window (277.6), but is not shown settled: 40–45 ms
+/// read about 303.3 and 45–50 ms 306.1, still about 1 % up per 5 ms (on 1.0 mm flanks the
+/// same speed settles by 30 ms, 2026-11-29). Whether each run settled is measured
 /// ([`super::fe_sweep::FeSpeed::settled`]) and a run that did not is named in the summary; a
 /// longer duration is a case setting (`scene[high-unmodified].duration_s`), not raised here to
 /// keep a sweep of ≥ 8 speeds within a working day on 2 cores.

@@ -1072,6 +1072,30 @@ mod tests {
     }
     use crate::study::compare::FeDte;
 
+    /// A settled FE speed with the given first harmonic and rms (a 0.016–0.03 s window).
+    fn steady_speed(
+        speed_rpm: f64,
+        fine_element_mm: Option<f64>,
+        amplitude: f64,
+        rms: f64,
+    ) -> FeSpeed {
+        FeSpeed {
+            speed_rpm,
+            fine_element_mm,
+            mesh_amplitude_rad: amplitude,
+            dte_rms_rad: rms,
+            measured_s: (0.024, 0.03),
+            settling_drift: 0.0,
+            settled: true,
+            dte_peak_to_peak_rad: f64::NAN,
+            dte_mean_rad: 1.2e-4,
+            window_s: (0.016, 0.03),
+            growth: 1.0,
+            back_flank_share: 0.0,
+            back_flank_force_max_n: f64::NAN,
+        }
+    }
+
     /// A synthetic FE record: DTE = mean + A e^{λt} cos(2π f_mesh t) at 5 000 rpm, 36 teeth.
     fn record(mean: f64, amplitude: f64, lambda: f64) -> FeDte {
         enveloped(mean, |t| amplitude * (lambda * t).exp())
@@ -1248,20 +1272,13 @@ mod tests {
         };
         // The discretization error grows above the resonance (as the FE's did).
         let c = |n: f64| 4.0e-5 * (n / nr - 0.9);
-        let speed = |n: f64, h: Option<f64>| FeSpeed {
-            speed_rpm: n,
-            fine_element_mm: h,
-            mesh_amplitude_rad: f0(n) + c(n) * h.unwrap_or(2.0).powf(p),
-            dte_rms_rad: (f0(n) + 0.5 * c(n) * h.unwrap_or(2.0).powf(p)) / 2f64.sqrt(),
-            measured_s: (0.024, 0.03),
-            settling_drift: 0.0,
-            settled: true,
-            dte_peak_to_peak_rad: f64::NAN,
-            dte_mean_rad: 1.2e-4,
-            window_s: (0.016, 0.03),
-            growth: 1.0,
-            back_flank_share: 0.0,
-            back_flank_force_max_n: f64::NAN,
+        let speed = |n: f64, h: Option<f64>| {
+            steady_speed(
+                n,
+                h,
+                f0(n) + c(n) * h.unwrap_or(2.0).powf(p),
+                (f0(n) + 0.5 * c(n) * h.unwrap_or(2.0).powf(p)) / 2f64.sqrt(),
+            )
         };
         let shared = [4900.0, 5050.0, 5200.0, 5350.0, 5500.0];
         let level = |h: Option<f64>, extra: &[f64]| -> Vec<FeSpeed> {
@@ -1334,21 +1351,7 @@ mod tests {
             let (nr, a) = (n0 + d * h.powf(p), a0 * (1.0 + e * h.powf(p)));
             let r = n / nr;
             let amplitude = a / ((1.0 - r * r).powi(2) + (2.0 * zeta * r).powi(2)).sqrt();
-            FeSpeed {
-                speed_rpm: n,
-                fine_element_mm: Some(h),
-                mesh_amplitude_rad: amplitude,
-                dte_rms_rad: amplitude / 2f64.sqrt(),
-                measured_s: (0.024, 0.03),
-                settling_drift: 0.0,
-                settled: true,
-                dte_peak_to_peak_rad: f64::NAN,
-                dte_mean_rad: 1.2e-4,
-                window_s: (0.016, 0.03),
-                growth: 1.0,
-                back_flank_share: 0.0,
-                back_flank_force_max_n: f64::NAN,
-            }
+            steady_speed(n, Some(h), amplitude, amplitude / 2f64.sqrt())
         };
         let shared = [4800.0, 5000.0, 5200.0, 5400.0, 5600.0];
         let levels: Vec<Vec<FeSpeed>> = [1.0, 0.7, 0.5]

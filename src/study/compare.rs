@@ -600,7 +600,14 @@ pub fn run(
 
     // (d), (e) per FE speed: the explicit FE holds the driver's bore and drives a light driven
     // hub, so its lumped twin is the speed drive with elastic bodies.
-    let rim_model = twin(Drive::Speed, true, input.fe_stiffness.clone())?;
+    // The elastic twin's dashpot acts on its mesh mode as the FE's on the FE modal's (the same
+    // c g, [`with_dashpot_share`]), here as in the FE sweep; the FE's own coefficient on it
+    // gives `mesh_mode_damping_ratio_fe_twin`.
+    let with_fe_coefficient = twin(Drive::Speed, true, input.fe_stiffness.clone())?;
+    let rim_model = with_dashpot_share(
+        with_fe_coefficient.clone(),
+        mesh_mode_dashpot_share_fe_modal,
+    );
     let rigid_model = twin(Drive::Speed, false, input.fe_stiffness.clone())?;
     let teeth = pair.gears[0].teeth() as f64;
     let speeds: Vec<SpeedComparison> = input
@@ -641,8 +648,6 @@ pub fn run(
                 )?,
                 mesh_mode_dashpot_share_fe_modal,
             );
-            let fe_k_model =
-                with_dashpot_share(rim_model.clone(), mesh_mode_dashpot_share_fe_modal);
             progress("FE sweep against the lumped models", 0, 1);
             let models = [
                 (
@@ -653,7 +658,7 @@ pub fn run(
                 (
                     "fe_k_twin",
                     "FE-stiffness twin (the FE's k(θ), secant)",
-                    &fe_k_model,
+                    &rim_model,
                 ),
             ];
             Some(fe_sweep(case, input, &models, rpms)?)
@@ -702,14 +707,14 @@ pub fn run(
         speeds,
         modal,
         mesh_damping_n_s_per_m: damping_of(Drive::Speed),
-        mesh_mode_damping_ratio_fe_twin: rim_model.mesh_mode_damping_ratio(),
+        mesh_mode_damping_ratio_fe_twin: with_fe_coefficient.mesh_mode_damping_ratio(),
         mesh_mode_damping_ratio_fe_modal,
         mesh_mode_dashpot_share_fe_modal_per_kg: mesh_mode_dashpot_share_fe_modal,
         mesh_mode_dashpot_share_fe_twin_per_kg: dashpot_share(&rim_model),
         paper_stiffness: paper,
         fe_sweep,
         model_note: format!(
-            "FE modal: the explicit FE's mesh ({:.2} mm flanks, {:.2} mm body), consistent mass, hubs rigid with the bore nodes' inertia, the LTCA's active contact points tied along their normals, relief none, {positions} positions; lumped twin of the FE: elastic bodies (hub and rim, the bodies' twist out of the FE's hub-to-hub k), speed drive, no shafts or bearings (I = {:.4e} / {:.4e} kg m2), k(theta) from the FE DTE, zeta = {zeta} on the LTCA k and the driven inertia, back flanks with their own k and e",
+            "FE modal: the explicit FE's mesh ({:.2} mm flanks, {:.2} mm body), consistent mass, hubs rigid with the bore nodes' inertia, the LTCA's active contact points tied along their normals, relief none, {positions} positions; lumped twin of the FE: elastic bodies (hub and rim, the bodies' twist out of the FE's hub-to-hub k), speed drive, no shafts or bearings (I = {:.4e} / {:.4e} kg m2), k(theta) from the FE DTE, the dashpot of zeta = {zeta} on the LTCA k and the driven inertia scaled to the FE modal mesh mode's share of it, back flanks with their own k and e",
             fine * 1e3,
             coarse * 1e3,
             inertias[0],

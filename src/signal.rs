@@ -250,18 +250,26 @@ pub fn amplitude_spectrum(record: &[f64]) -> Vec<f64> {
         .collect()
 }
 
+/// The samples in the longest whole number k ≥ 1 of periods 1/f, sampled every `dt`, that fit
+/// in `len` samples, round(k/(f dt)), to within half a sample (a record cut to k periods to the
+/// nearest sample keeps k); `None` where not one period fits (or f dt is not positive).
+pub fn whole_period_samples(len: usize, dt: f64, f: f64) -> Option<usize> {
+    let per_period = 1.0 / (f * dt);
+    let periods = ((len as f64 + 0.5) / per_period).floor();
+    match periods >= 1.0 && per_period.is_finite() {
+        true => Some(((periods * per_period).round() as usize).min(len)).filter(|n| *n > 0),
+        false => None,
+    }
+}
+
 /// Amplitudes of the harmonics n·f, n = 1 … `count`, of a record sampled every `dt`, over the
 /// longest whole number of periods 1/f from its end: |2/N Σ x_k e^{−i2πnf t_k}| (a DFT at the
 /// exact harmonic frequencies, so they need not fall on FFT bins), the record's mean removed
 /// first. A record shorter than one period gives zeros.
 pub fn harmonic_amplitudes(x: &[f64], dt: f64, f: f64, count: usize) -> Vec<f64> {
-    let per_period = 1.0 / (f * dt);
-    // Half a sample of tolerance: a record cut to k periods to the nearest sample keeps k.
-    let periods = ((x.len() as f64 + 0.5) / per_period).floor();
-    let n = ((periods * per_period).round() as usize).min(x.len());
-    if periods < 1.0 || n == 0 {
+    let Some(n) = whole_period_samples(x.len(), dt, f) else {
         return vec![0.0; count];
-    }
+    };
     // The window holds whole periods only to the nearest sample: remove the mean, or a large
     // mean leaks into small harmonics.
     let tail = &x[x.len() - n..];

@@ -1087,10 +1087,27 @@ mod tests {
     /// A unit dashpot's share in the mesh mode has its analytic value on rigid gears under a
     /// speed drive (one coordinate, the DTE: g = 1/m, m = I₂/r_b2²); scaling a model to its own
     /// share keeps its dashpot, to a share 0.9 × its own scales the dashpot's part of the mode's
-    /// damping ratio by 0.9; a share it cannot take keeps the dashpot.
+    /// damping ratio by 0.9; a share it cannot take keeps the dashpot. On the paper pair, a
+    /// shifted 24/40 pair and its inverse.
     #[test]
     fn a_twin_takes_the_dashpot_share_it_is_given() {
-        let case = Case::load_with(None, &[]).unwrap();
+        use crate::case::Override;
+        // The paper pair, an unequal shifted pair and its inverse.
+        let unequal = |z1: i64, z2: i64| {
+            vec![
+                Override::set("gear1.teeth", z1),
+                Override::set("gear2.teeth", z2),
+                Override::set("gear1.profile_shift", 0.2),
+                Override::set("gear2.profile_shift", -0.1),
+            ]
+        };
+        for overrides in [vec![], unequal(24, 40), unequal(40, 24)] {
+            twin_takes_the_dashpot_share(&Case::load_with(None, &overrides).unwrap());
+        }
+    }
+
+    fn twin_takes_the_dashpot_share(case: &Case) {
+        let case = case.clone();
         let k = || MeshStiffness::constant("mean", 1e-3, 4.0e8);
         let twin = |elastic: bool| {
             lumped_twin(

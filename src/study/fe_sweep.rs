@@ -154,13 +154,7 @@ pub fn whole_period_thirds(
     dt: f64,
     mesh_hz: f64,
 ) -> Option<[std::ops::Range<usize>; 3]> {
-    let per_period = 1.0 / (mesh_hz * dt);
-    // Half a sample of tolerance: a window of exactly 3k periods keeps k a third.
-    let periods_per_third = ((len as f64 + 0.5) / per_period / 3.0).floor();
-    let third = match periods_per_third >= 1.0 && per_period.is_finite() {
-        true => ((periods_per_third * per_period).round() as usize).min(len / 3),
-        false => len / 3,
-    };
+    let third = crate::signal::whole_period_samples(len / 3, dt, mesh_hz).unwrap_or(len / 3);
     match third {
         0 => None,
         n => Some([len - 3 * n..len - 2 * n, len - 2 * n..len - n, len - n..len]),

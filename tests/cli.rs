@@ -1698,7 +1698,7 @@ fn compare_fe_sweep_finds_a_known_resonance() {
             format!(
                 r#"{{"scene": {{"driver_speed": {}, "torque": 143.6, "ramp_time": 0.01}},
                     "statistics_start_s": 0.016, "total_wall_s": 1.0, "diverged": null,
-                    "fine_element_mm": {fine_mm}}}"#,
+                    "fine_element_mm": {fine_mm}, "stiffness_damping_beta_s": 1e-9}}"#,
                 rpm * TAU / 60.0
             ),
         )
@@ -1752,7 +1752,10 @@ fn compare_fe_sweep_finds_a_known_resonance() {
     assert_eq!(sweep["runs_settled"].as_u64(), Some(12));
     assert!(sweep["unsettled_runs"].as_array().unwrap().is_empty());
     let models = sweep["models"].as_array().unwrap();
-    assert_eq!(models.len(), 2);
+    let keys: Vec<&str> = models.iter().map(|m| m["key"].as_str().unwrap()).collect();
+    assert_eq!(keys, ["case_model", "fe_k_twin", "fe_k_law_twin"]);
+    // The twins' bodies carry the FE runs' element damping, not the case's drivetrain ratio.
+    assert_eq!(summary["twin_body_damping_beta_s"].as_f64(), Some(1e-9));
     // Each model's dashpot acts on its mesh mode as the FE's on the FE modal analysis's: the
     // same modal damping coefficient c g.
     let fe_modal = summary["mesh_damping_n_s_per_m"].as_f64().unwrap()

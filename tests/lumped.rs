@@ -878,7 +878,7 @@ fn the_orbit_multiplier_through_the_flank_switches_is_meissners() {
 /// test tells them apart. A rigid pair (g = h) gives back the nominal ζ at either site.
 #[test]
 fn the_hub_dashpot_damps_the_mesh_mode_by_its_modal_share() {
-    use geardyn::lumped::{rk4_step, Drive, DrivetrainSpec, GearBody};
+    use geardyn::lumped::{rk4_step, Drive, DrivetrainSpec, GearBody, SpringDamping};
     let body = |inertia: f64, compliance: f64| GearBody {
         hub_inertia: 0.1 * inertia,
         rim_inertia: 0.9 * inertia,
@@ -890,7 +890,7 @@ fn the_hub_dashpot_damps_the_mesh_mode_by_its_modal_share() {
         gears: [body(3e-3, 1e-7), body(7e-3, 5e-8)],
         shafts: [None; 2],
         bearings: None,
-        spring_damping_ratio: 0.0,
+        spring_damping: SpringDamping::Ratio(0.0),
     })
     .unwrap();
     assert_eq!(structure.dofs, 2, "{:?}", structure.names);

@@ -48,7 +48,9 @@ pub mod structure;
 
 use nalgebra::DMatrix;
 
-pub use structure::{DrivetrainSpec, GearBody, Mode, Shaft, Structure, Tangent, MAX_DOFS};
+pub use structure::{
+    DrivetrainSpec, GearBody, Mode, Shaft, SpringDamping, Structure, Tangent, MAX_DOFS,
+};
 
 use crate::stiffness::{ForceLaw, MeshStiffness, PeriodicTable};
 

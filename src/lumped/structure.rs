@@ -87,9 +87,30 @@ pub struct DrivetrainSpec {
     /// Input shaft and motor (driver side), output shaft and load (driven side).
     pub shafts: [Option<Shaft>; 2],
     pub bearings: Option<Bearings>,
-    /// Damping ratio of every shaft and body spring, c = 2ζ√(k m_r) with m_r the reduced mass
-    /// of the two inertias it joins (the one inertia when the other end is held).
-    pub spring_damping_ratio: f64,
+    /// The damping of every shaft and body spring ([`SpringDamping`]).
+    pub spring_damping: SpringDamping,
+}
+
+/// The damping of a structure's springs (shafts, gear bodies).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SpringDamping {
+    /// A damping ratio ζ of each spring's own mode, c = 2ζ√(k m_r) with m_r the reduced mass
+    /// of the two inertias it joins (the one inertia when the other end is held): a real
+    /// drivetrain's material and joint damping (`lumped.drivetrain_damping_ratio`).
+    Ratio(f64),
+    /// Stiffness-proportional damping c = β k [β in s]: the explicit FE's Rayleigh damping of
+    /// its elements, which its lumped twin's bodies carry and nothing more.
+    StiffnessProportional(f64),
+}
+
+impl SpringDamping {
+    /// The dashpot of a spring of `stiffness` [N/m or N·m/rad] whose mode swings `reduced_mass`.
+    fn coefficient(self, stiffness: f64, reduced_mass: f64) -> f64 {
+        match self {
+            SpringDamping::Ratio(zeta) => 2.0 * zeta * (stiffness * reduced_mass).sqrt(),
+            SpringDamping::StiffnessProportional(beta) => beta * stiffness,
+        }
+    }
 }
 
 /// The linear structure around the mesh, reduced to its independent coordinates y.
@@ -293,7 +314,7 @@ impl Structure {
                 (_, false) => ma,
                 _ => ma * mb / (ma + mb),
             };
-            let damping = 2.0 * spec.spring_damping_ratio * (stiffness * reduced).sqrt();
+            let damping = spec.spring_damping.coefficient(stiffness, reduced);
             for (matrix, value) in [(&mut k, stiffness), (&mut c, damping)] {
                 matrix[(a, a)] += value;
                 matrix[(b, b)] += value;
@@ -585,7 +606,7 @@ mod tests {
                 end_inertia: inertia,
             }); 2],
             bearings: None,
-            spring_damping_ratio: 0.0,
+            spring_damping: SpringDamping::Ratio(0.0),
         })
         .expect("a valid chain")
     }
@@ -633,7 +654,7 @@ mod tests {
                 gears: [GearBody::rigid(i1), GearBody::rigid(i2)],
                 shafts: [None; 2],
                 bearings: None,
-                spring_damping_ratio: 0.02,
+                spring_damping: SpringDamping::Ratio(0.02),
             })
             .unwrap();
             assert_eq!(s.dofs, 1);
@@ -664,9 +685,61 @@ mod tests {
             gears: [body(3e-3, TWIST[0]), body(7e-3, TWIST[1])],
             shafts,
             bearings,
-            spring_damping_ratio: 0.02,
+            spring_damping: SpringDamping::Ratio(0.02),
         })
         .unwrap()
+    }
+
+    /// Stiffness-proportional spring damping (the explicit FE's Rayleigh β) is C = β K over the
+    /// whole structure, shafts and bodies, whatever the drive: the reduction to independent
+    /// coordinates maps both matrices alike. A damping ratio is not proportional: its c grows
+    /// as √k, so the same check fails for it.
+    #[test]
+    fn stiffness_proportional_springs_give_beta_times_the_stiffness() {
+        let shaft = Some(Shaft {
+            stiffness: 2.0e5,
+            end_inertia: 0.05,
+        });
+        let body = |i: f64, c: f64| GearBody {
+            hub_inertia: 0.1 * i,
+            rim_inertia: 0.9 * i,
+            torsional_compliance: c,
+        };
+        let beta = 1.0e-9;
+        for drive in [Drive::Torque, Drive::Speed] {
+            let build = |spring_damping| {
+                Structure::drivetrain(&DrivetrainSpec {
+                    drive,
+                    base_radii: RB,
+                    gears: [body(3e-3, TWIST[0]), body(7e-3, TWIST[1])],
+                    shafts: [shaft; 2],
+                    bearings: None,
+                    spring_damping,
+                })
+                .unwrap()
+            };
+            let s = build(SpringDamping::StiffnessProportional(beta));
+            let expected = &s.stiffness * beta;
+            let scale = expected.amax();
+            assert!(scale > 0.0);
+            assert!(
+                (&s.damping - &expected).amax() <= 1e-12 * scale,
+                "{drive:?}: {} vs {}",
+                s.damping,
+                expected
+            );
+            let ratio = build(SpringDamping::Ratio(0.02));
+            let c_over_k: Vec<f64> = ratio
+                .damping
+                .iter()
+                .zip(ratio.stiffness.iter())
+                .filter(|(_, k)| k.abs() > 0.0)
+                .map(|(c, k)| c / k)
+                .collect();
+            let spread = c_over_k.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+                - c_over_k.iter().copied().fold(f64::INFINITY, f64::min);
+            assert!(spread > 1e-3 * c_over_k[0].abs(), "{drive:?}: {c_over_k:?}");
+        }
     }
 
     const RB: [f64; 2] = [0.05, 0.08];

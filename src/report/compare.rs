@@ -98,6 +98,9 @@ pub fn read_fe_run(dir: &Path) -> Result<FeDte, String> {
         ramp_end_s: number(&["scene", "ramp_time"])?,
         statistics_start_s: number(&["statistics_start_s"])?,
         wall_s: number(&["total_wall_s"])?,
+        stiffness_damping_beta_s: summary
+            .get("stiffness_damping_beta_s")
+            .and_then(|v| v.as_f64()),
     })
 }
 

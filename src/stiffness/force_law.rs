@@ -116,18 +116,51 @@ impl ForceLaw {
     /// its slope 1/(1/m − c). `None` when c is not below every knot's 1/m (the rest would not
     /// be a stiffness).
     pub fn without_series_compliance(&self, c: f64) -> Option<Self> {
+        let mut out = self.with_series_compliances(|_| -c)?;
+        out.source = format!("{} without {c:.3e} m/N body twist", self.source);
+        Some(out)
+    }
+
+    /// The law whose secant at mesh force `force` [N] is `target(θ)` [N/m] at each of its
+    /// positions θ (measured from [`ForceLaw::origin`]): each position gets the series
+    /// compliance c_j = 1/k_target(θ_j) − 1/k_j (k_j its own secant W/(δ − e) at `force`),
+    /// δ → δ + c_j W, so first contact stays and the load dependence keeps its shape about the
+    /// new secant. This carries another model's k(θ) at one load (the explicit FE's, from its
+    /// low-speed DTE) with the LTCA's stiffening around it. `None` where a target is not
+    /// positive and finite or a position's compliance would turn negative.
+    pub fn with_secant_at(&self, force: f64, target: impl Fn(f64) -> f64) -> Option<Self> {
+        let n = self.knots.len();
+        let compliances: Vec<f64> = (0..n)
+            .map(|j| {
+                let theta = j as f64 * self.period / n as f64;
+                // (At θ_j the blend is position j's own, to rounding; its first contact read
+                // from its knots, not the blend's.)
+                let first = self.knots[j][0].deflection;
+                let own = force / (self.deflection_under(theta, force) - first);
+                let k = target(theta);
+                (k > 0.0 && k.is_finite() && own > 0.0).then(|| 1.0 / k - 1.0 / own)
+            })
+            .collect::<Option<_>>()?;
+        self.with_series_compliances(|j| compliances[j])
+    }
+
+    /// The law with compliance `c(j)` [m/N] added in series at position j: each knot's approach
+    /// plus c W, its slope 1/(1/m + c). `None` when a knot's 1/m + c is not positive or the
+    /// approaches would stop growing.
+    fn with_series_compliances(&self, c: impl Fn(usize) -> f64) -> Option<Self> {
         let mut out = self.clone();
-        for knot in out.knots.iter_mut().flatten() {
-            knot.deflection -= c * knot.force;
-            if knot.slope > 0.0 {
-                let rest = 1.0 / knot.slope - c;
-                if !(rest > 0.0) {
-                    return None;
+        for (j, position) in out.knots.iter_mut().enumerate() {
+            let c = c(j);
+            for knot in position.iter_mut() {
+                knot.deflection += c * knot.force;
+                if knot.slope > 0.0 {
+                    let rest = 1.0 / knot.slope + c;
+                    if !(rest > 0.0) {
+                        return None;
+                    }
+                    knot.slope = 1.0 / rest;
                 }
-                knot.slope = 1.0 / rest;
             }
-        }
-        for position in &mut out.knots {
             if position
                 .windows(2)
                 .any(|w| !(w[1].deflection > w[0].deflection))
@@ -136,7 +169,6 @@ impl ForceLaw {
             }
             limit_slopes(position);
         }
-        out.source = format!("{} without {c:.3e} m/N body twist", self.source);
         Some(out)
     }
 
@@ -484,5 +516,50 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// A law made to another secant at one load: at that load every position's secant is the
+    /// target's (to the inverse's tolerance), first contact stays, and the law keeps its
+    /// stiffening about the new secant — for a power law W = c(δ − e)^p with a series
+    /// compliance s added, δ(W) = e + (W/c)^(1/p) + s W exactly, here at twice the load.
+    #[test]
+    fn a_law_takes_the_secant_it_is_given() {
+        let loads = [100.0, 400.0, 1000.0, 2000.0, 4000.0, 8000.0];
+        let (p, e) = (1.25, [0.0, 1e-6, 0.5e-6]);
+        let c = [3e10, 5e10, 4e10];
+        let law = law_of((0..3).map(|j| power_law(c[j], p, e[j], &loads)).collect());
+        let force = 1000.0;
+        // One softer (added compliance), one stiffer (compliance taken out), one unchanged.
+        let own: Vec<f64> = (0..3)
+            .map(|j| force / (law.deflection_under(j as f64 / 3.0, force) - e[j]))
+            .collect();
+        let target = [0.8 * own[0], 1.15 * own[1], own[2]];
+        let at = |theta: f64| target[((theta * 3.0).round() as usize).min(2)];
+        let made = law
+            .with_secant_at(force, at)
+            .expect("compliances leave a stiffness");
+        for j in 0..3 {
+            let theta = j as f64 / 3.0;
+            assert_eq!(made.knots[j][0].deflection, e[j], "first contact moved");
+            let secant = force / (made.deflection_under(theta, force) - e[j]);
+            assert!(
+                (secant / target[j] - 1.0).abs() < 1e-6,
+                "{j}: {secant} vs {}",
+                target[j]
+            );
+            // Off the design load: the power law's own approach plus the added compliance's.
+            let added = 1.0 / target[j] - 1.0 / own[j];
+            for w in [2000.0, 4000.0] {
+                let exact = e[j] + (w / c[j]).powf(1.0 / p) + added * w;
+                let got = made.deflection_under(theta, w);
+                assert!(
+                    (got - exact).abs() < 1e-9 * exact.abs().max(1e-6) + 1e-12,
+                    "{j}, {w}: {got} vs {exact}"
+                );
+            }
+        }
+        // A target no law can hold (a compliance below zero at the knots) is refused.
+        assert!(law.with_secant_at(force, |_| 1e3 * own[0]).is_none());
+        assert!(law.with_secant_at(force, |_| f64::NAN).is_none());
     }
 }

@@ -43,7 +43,7 @@ use crate::lumped::Drive;
 use crate::signal::harmonic_amplitudes;
 use crate::stiffness::{self, potential_energy, ForceLaw, MeshStiffness};
 
-use super::compare::{lumped_twin, FeDte};
+use super::compare::{lumped_twin, FeDamping, FeDte};
 use super::lumped::gear_inertias;
 use super::{Progress, StudyError};
 use crate::explicit::scene::static_te;
@@ -190,7 +190,7 @@ fn answers(
     (mesh, laws): (&MeshStiffness, Option<&(ForceLaw, Option<ForceLaw>)>),
     holds_body_twist: bool,
     torque: f64,
-    speed_rpm: f64,
+    (speed_rpm, body_beta_s): (f64, f64),
 ) -> Result<Answers, StudyError> {
     let started = std::time::Instant::now();
     let pair = &case.pair;
@@ -209,6 +209,10 @@ fn answers(
     let m = Drive::Speed.effective_mass(gear_inertias(case), rb);
     let damping = 2.0 * case.fe.mesh_damping_ratio * (hub_to_hub.mean() * m).sqrt();
     let (law, back_law) = laws.cloned().map_or((None, None), |(l, b)| (Some(l), b));
+    let damping = FeDamping {
+        mesh_n_s_per_m: damping,
+        stiffness_beta_s: body_beta_s,
+    };
     let model = lumped_twin(
         case,
         hub_to_hub.clone(),
@@ -411,7 +415,7 @@ pub fn run(
                 (mesh, law.as_ref()),
                 *family != "analytic",
                 torque,
-                speed_rpm,
+                (speed_rpm, dte_run.stiffness_damping_beta_s.unwrap_or(0.0)),
             )
         })
         .collect::<Result<_, _>>()?;

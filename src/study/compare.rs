@@ -37,7 +37,9 @@ use serde::Serialize;
 
 use crate::case::Case;
 use crate::ltca::modal::{Hubs, PairModes};
-use crate::lumped::{floquet_frequency, steady_state, DampingSite, Drive, MeshModel};
+use crate::lumped::{
+    floquet_frequency, steady_state, DampingSite, Drive, MeshModel, SpringDamping,
+};
 use crate::signal::{
     amplitude_spectrum, hann_amplitude_spectrum, harmonic_amplitudes, spectrum_peaks,
 };
@@ -76,6 +78,36 @@ pub struct FeDte {
     pub ramp_end_s: f64,
     pub statistics_start_s: f64,
     pub wall_s: f64,
+    /// The run's stiffness-proportional (Rayleigh) element damping β [s] (`None`: not
+    /// recorded, e.g. a synthetic run).
+    pub stiffness_damping_beta_s: Option<f64>,
+}
+
+/// The explicit FE's damping, which its lumped twin carries where the FE has it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct FeDamping {
+    /// The mesh dashpot on the driven hub against the DTE rate, along the line of action
+    /// [N·s/m] (the twin's [`DampingSite::HubTransmissionError`]).
+    pub mesh_n_s_per_m: f64,
+    /// The elements' stiffness-proportional damping β [s]: the twin's body springs get c = β k
+    /// ([`SpringDamping::StiffnessProportional`]), not a drivetrain's damping ratio
+    /// (`lumped.drivetrain_damping_ratio`, 0.02 by default), which the FE's bodies do not have.
+    pub stiffness_beta_s: f64,
+}
+
+impl FeDamping {
+    /// The mesh dashpot `mesh` [N·s/m] with the element damping recorded by `runs` (the
+    /// largest; 0 where none is recorded).
+    pub fn of_runs(mesh: f64, runs: &[FeDte]) -> Self {
+        let beta = runs
+            .iter()
+            .filter_map(|r| r.stiffness_damping_beta_s)
+            .fold(0.0, f64::max);
+        FeDamping {
+            mesh_n_s_per_m: mesh,
+            stiffness_beta_s: beta,
+        }
+    }
 }
 
 impl FeDte {
@@ -242,6 +274,9 @@ pub struct CompareSummary {
     /// FE modal at every position and boundary condition.
     pub modal: Vec<PairModes>,
     pub mesh_damping_n_s_per_m: f64,
+    /// The FE runs' element damping β [s] (the largest recorded, 0 where none is), which the
+    /// twins' body springs carry as c = β k ([`FeDamping`]).
+    pub twin_body_damping_beta_s: f64,
     /// The mesh mode's damping ratio that the FE's dashpot gives its elastic-body lumped twin
     /// (driver at speed; [`MeshModel::mesh_mode_damping_ratio`]): about fe.mesh_damping_ratio,
     /// the dashpot being sized on the hub-to-hub stiffness and acting on the hub.
@@ -352,7 +387,9 @@ pub fn body_twist(case: &Case) -> [f64; 2] {
 /// taken out of `mesh`, mesh force T/r_b2, the FE's mesh dashpot `damping` [N·s/m] where the FE
 /// has it (on the hub-to-hub TE rate while a flank touches, [`DampingSite::HubTransmissionError`];
 /// with elastic bodies it damps the mesh mode 1.29 × as much as the same c on the mesh
-/// deflection would: the FE's ζ, not ζ/1.29, paper pair), and with zero
+/// deflection would: the FE's ζ, not ζ/1.29, paper pair), the bodies' springs with the FE's
+/// element damping (c = β k: near the resonance the case's 2 % drivetrain damping ratio on
+/// them would hold the peak 17 % lower, validation/lumped-twin), and with zero
 /// backlash the back flanks engaging with their own mirrored k and e. `elastic = false`: rigid
 /// gears behind the whole hub-to-hub k.
 pub fn lumped_twin(
@@ -361,14 +398,18 @@ pub fn lumped_twin(
     (law, back_law): (Option<ForceLaw>, Option<ForceLaw>),
     (drive, elastic): (Drive, bool),
     torque: f64,
-    damping: f64,
+    damping: FeDamping,
 ) -> Result<MeshModel, StudyError> {
     let pair = &case.pair;
     let bodies = match elastic {
         true => BodyModel::Elastic,
         false => BodyModel::Rigid,
     };
-    let structure = super::lumped::drivetrain_with(case, drive, bodies, [None; 2], false)?;
+    let springs = (
+        bodies,
+        SpringDamping::StiffnessProportional(damping.stiffness_beta_s),
+    );
+    let structure = super::lumped::drivetrain_with(case, drive, springs, [None; 2], false)?;
     let twist: f64 = match elastic {
         true => body_twist(case).iter().sum(),
         false => 0.0,
@@ -381,13 +422,51 @@ pub fn lumped_twin(
         structure,
         back_reflection: Some(super::lumped::back_reflection(pair, &mesh)),
         mesh,
-        damping,
+        damping: damping.mesh_n_s_per_m,
         damping_site: DampingSite::HubTransmissionError,
         force: torque / pair.gears[1].base_radius,
         backlash: Some(pair.backlash_normal.max(0.0)),
         force_law,
         back_force_law,
     })
+}
+
+/// `fe`'s k(θ) at `on`'s positions and origin (hub to hub), with `on`'s unloaded TE: the
+/// secant the law of [`fe_secant_law`] gives at the design load.
+pub fn fe_stiffness_on(on: &MeshStiffness, fe: &MeshStiffness) -> MeshStiffness {
+    let mut mesh = on.clone();
+    let n = mesh.stiffness.values.len();
+    let period = mesh.stiffness.period;
+    for (j, k) in mesh.stiffness.values.iter_mut().enumerate() {
+        *k = fe
+            .stiffness
+            .at(on.origin + j as f64 * period / n as f64 - fe.origin);
+    }
+    mesh.source = format!("{} at the positions of {}", fe.source, on.source);
+    mesh
+}
+
+/// The LTCA's force law `law` made to carry `fe`'s k(θ) at the design mesh force `force` [N]
+/// ([`ForceLaw::with_secant_at`]; both hub to hub, each from its own origin).
+pub fn fe_secant_law(
+    law: &ForceLaw,
+    fe: &MeshStiffness,
+    force: f64,
+) -> Result<ForceLaw, StudyError> {
+    let mut out = law
+        .with_secant_at(force, |theta| {
+            fe.stiffness.at(law.origin + theta - fe.origin)
+        })
+        .ok_or_else(|| {
+            StudyError::Input(format!(
+                "the FE's k(θ) ({}) cannot be carried by the LTCA's force law: a position's \
+                 added compliance would leave no stiffness (check that the FE stiffness is of \
+                 this pair and load)",
+                fe.source
+            ))
+        })?;
+    out.source = format!("{} at the secant of {}", law.source, fe.source);
+    Ok(out)
 }
 
 /// The share of a unit mesh dashpot in `model`'s mesh mode, g = (d·φ)²/(φᵀMφ) [1/kg] (d the
@@ -525,7 +604,7 @@ pub fn run(
             (None, None),
             (drive, elastic),
             torque,
-            damping_of(drive),
+            FeDamping::of_runs(damping_of(drive), &input.fe_runs),
         )
     };
     let constant = |k: f64| MeshStiffness::constant("mean", input.fe_stiffness.period(), k);
@@ -640,11 +719,32 @@ pub fn run(
             let case_model = with_dashpot_share(
                 lumped_twin(
                     case,
-                    laws.mesh,
-                    (Some(laws.law), laws.back_law),
+                    laws.mesh.clone(),
+                    (Some(laws.law.clone()), laws.back_law),
                     (Drive::Speed, true),
                     torque,
-                    damping_of(Drive::Speed),
+                    FeDamping::of_runs(damping_of(Drive::Speed), &input.fe_runs),
+                )?,
+                mesh_mode_dashpot_share_fe_modal,
+            );
+            // The FE's own k(θ) at the design load with the LTCA's stiffening about it: the
+            // twin of the explicit FE's stiffness (its low-speed DTE) that the secant FE twin
+            // cannot be near the resonance, where the load swings far from the design load.
+            let fe_law_model = with_dashpot_share(
+                lumped_twin(
+                    case,
+                    fe_stiffness_on(&laws.mesh, &input.fe_stiffness),
+                    (
+                        Some(fe_secant_law(
+                            &laws.law,
+                            &input.fe_stiffness,
+                            torque / rb[1],
+                        )?),
+                        None,
+                    ),
+                    (Drive::Speed, true),
+                    torque,
+                    FeDamping::of_runs(damping_of(Drive::Speed), &input.fe_runs),
                 )?,
                 mesh_mode_dashpot_share_fe_modal,
             );
@@ -659,6 +759,11 @@ pub fn run(
                     "fe_k_twin",
                     "FE-stiffness twin (the FE's k(θ), secant)",
                     &rim_model,
+                ),
+                (
+                    "fe_k_law_twin",
+                    "FE-stiffness twin (the FE's k(θ) with the LTCA's load dependence)",
+                    &fe_law_model,
                 ),
             ];
             Some(fe_sweep(case, input, &models, rpms)?)
@@ -707,6 +812,7 @@ pub fn run(
         speeds,
         modal,
         mesh_damping_n_s_per_m: damping_of(Drive::Speed),
+        twin_body_damping_beta_s: FeDamping::of_runs(0.0, &input.fe_runs).stiffness_beta_s,
         mesh_mode_damping_ratio_fe_twin: with_fe_coefficient.mesh_mode_damping_ratio(),
         mesh_mode_damping_ratio_fe_modal,
         mesh_mode_dashpot_share_fe_modal_per_kg: mesh_mode_dashpot_share_fe_modal,
@@ -714,11 +820,12 @@ pub fn run(
         paper_stiffness: paper,
         fe_sweep,
         model_note: format!(
-            "FE modal: the explicit FE's mesh ({:.2} mm flanks, {:.2} mm body), consistent mass, hubs rigid with the bore nodes' inertia, the LTCA's active contact points tied along their normals, relief none, {positions} positions; lumped twin of the FE: elastic bodies (hub and rim, the bodies' twist out of the FE's hub-to-hub k), speed drive, no shafts or bearings (I = {:.4e} / {:.4e} kg m2), k(theta) from the FE DTE, the dashpot of zeta = {zeta} on the LTCA k and the driven inertia scaled to the FE modal mesh mode's share of it, back flanks with their own k and e",
+            "FE modal: the explicit FE's mesh ({:.2} mm flanks, {:.2} mm body), consistent mass, hubs rigid with the bore nodes' inertia, the LTCA's active contact points tied along their normals, relief none, {positions} positions; lumped twin of the FE: elastic bodies (hub and rim, the bodies' twist out of the FE's hub-to-hub k), speed drive, no shafts or bearings (I = {:.4e} / {:.4e} kg m2), k(theta) from the FE DTE, the dashpot of zeta = {zeta} on the LTCA k and the driven inertia scaled to the FE modal mesh mode's share of it, the bodies' springs with the FE's element damping (c = beta k, beta = {:.3e} s; not the case's drivetrain damping ratio), back flanks with their own k and e",
             fine * 1e3,
             coarse * 1e3,
             inertias[0],
-            inertias[1]
+            inertias[1],
+            FeDamping::of_runs(0.0, &input.fe_runs).stiffness_beta_s,
         ),
         wall_s: started.elapsed().as_secs_f64(),
     })
@@ -1116,7 +1223,10 @@ mod tests {
                 (None, None),
                 (Drive::Speed, elastic),
                 143.6,
-                2000.0,
+                FeDamping {
+                    mesh_n_s_per_m: 2000.0,
+                    stiffness_beta_s: 0.0,
+                },
             )
             .unwrap()
         };

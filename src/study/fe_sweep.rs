@@ -1121,6 +1121,7 @@ mod tests {
             ramp_end_s: 0.01,
             statistics_start_s: 0.012,
             wall_s: 0.0,
+            stiffness_damping_beta_s: None,
         }
     }
 

@@ -90,7 +90,9 @@ fn lumped_mesh_modes(
     rotations: &[f64],
 ) -> Result<(Vec<f64>, f64), StudyError> {
     let linear = model.linearized();
-    let structure = super::lumped::drivetrain_with(case, drive, bodies, [None; 2], false)?;
+    // Undamped modes: the springs' damping does not enter.
+    let springs = (bodies, crate::lumped::SpringDamping::Ratio(0.0));
+    let structure = super::lumped::drivetrain_with(case, drive, springs, [None; 2], false)?;
     let twist_out = match (bodies, case.lumped.stiffness.holds_body_twist()) {
         (BodyModel::Elastic, true) => super::compare::body_twist(case).iter().sum(),
         _ => 0.0,

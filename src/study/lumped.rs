@@ -12,7 +12,8 @@ use crate::case::BodyModel;
 use crate::case::{Case, Override, StiffnessSource};
 use crate::ltca::{Flank, LtcaModel, PositionResult};
 use crate::lumped::{
-    Bearings, DampingSite, Drive, DrivetrainSpec, ForceLawKind, GearBody, MeshModel, Structure,
+    Bearings, DampingSite, Drive, DrivetrainSpec, ForceLawKind, GearBody, MeshModel, SpringDamping,
+    Structure,
 };
 use crate::stiffness::{self, potential_energy, ForceLaw, MeshStiffness};
 
@@ -573,16 +574,24 @@ pub fn structure_body_twist(case: &Case) -> f64 {
 /// asks for them) bearings.
 pub fn drivetrain(case: &Case, drive: Drive, bearings: bool) -> Result<Structure, StudyError> {
     let settings = &case.lumped;
-    drivetrain_with(case, drive, settings.bodies, settings.shafts, bearings)
+    let damping = SpringDamping::Ratio(settings.drivetrain_damping_ratio);
+    drivetrain_with(
+        case,
+        drive,
+        (settings.bodies, damping),
+        settings.shafts,
+        bearings,
+    )
 }
 
-/// The pair under `drive` with `bodies`, `shafts` and (with `bearings`, when the case asks for
-/// them) the case's bearings: e.g. the explicit FE's boundary conditions (elastic bodies, no
+/// The pair under `drive` with `bodies`, their and the shafts' spring damping, `shafts` and
+/// (with `bearings`, when the case asks for them) the case's bearings: e.g. the explicit FE's
+/// boundary conditions (elastic bodies with the FE's stiffness-proportional damping, no
 /// shafts, no bearings).
 pub fn drivetrain_with(
     case: &Case,
     drive: Drive,
-    bodies: BodyModel,
+    (bodies, spring_damping): (BodyModel, SpringDamping),
     shafts: [Option<crate::lumped::Shaft>; 2],
     bearings: bool,
 ) -> Result<Structure, StudyError> {
@@ -610,7 +619,7 @@ pub fn drivetrain_with(
         gears: gear_bodies(case, bodies),
         shafts,
         bearings,
-        spring_damping_ratio: settings.drivetrain_damping_ratio,
+        spring_damping,
     })
     .map_err(|e| StudyError::Input(format!("[lumped] drivetrain: {e}")))
 }

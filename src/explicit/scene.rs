@@ -102,8 +102,9 @@
 //! damping ratio ζ — the lumped model's viscous mesh damping c = 2ζ√(k̄ m) with the driver at
 //! prescribed speed (m = I₂/R_b2²). k_m is the pair's own mean mesh stiffness hub to hub (the
 //! LTCA on the same bodies, which the caller passes, their twist included), so ζ is the lumped
-//! model's at the same nominal value; with the bodies' twist too (0.0495 for 0.05 on the paper
-//! pair by its lumped twin, which carries the dashpot where the FE does: `lumped::DampingSite`).
+//! model's at the same nominal value; with the bodies' twist too (0.0482 for 0.05 on the paper
+//! pair by its lumped twin, which carries the dashpot where the FE does, `lumped::DampingSite`,
+//! and on its bodies only the elements' β: `study::compare::FeDamping`).
 //!
 //! # Settling after the ramp
 //! The ramp leaves the mesh mode ringing; statistics start when that ringing has decayed to

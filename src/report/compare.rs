@@ -98,9 +98,11 @@ pub fn read_fe_run(dir: &Path) -> Result<FeDte, String> {
         ramp_end_s: number(&["scene", "ramp_time"])?,
         statistics_start_s: number(&["statistics_start_s"])?,
         wall_s: number(&["total_wall_s"])?,
+        // β = 2ζ/ω_max grows with √ of the mass scaling: the unscaled bodies' β.
         stiffness_damping_beta_s: summary
             .get("stiffness_damping_beta_s")
-            .and_then(|v| v.as_f64()),
+            .and_then(|v| v.as_f64())
+            .map(|beta| beta / number(&["mass_scaling", "factor"]).unwrap_or(1.0).sqrt()),
     })
 }
 

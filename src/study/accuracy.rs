@@ -43,7 +43,7 @@ use crate::lumped::Drive;
 use crate::signal::harmonic_amplitudes;
 use crate::stiffness::{self, potential_energy, ForceLaw, MeshStiffness};
 
-use super::compare::{lumped_twin, FeDamping, FeDte};
+use super::compare::{lumped_twin, runs_element_damping, FeDamping, FeDte};
 use super::lumped::gear_inertias;
 use super::{Progress, StudyError};
 use crate::explicit::scene::static_te;
@@ -415,7 +415,10 @@ pub fn run(
                 (mesh, law.as_ref()),
                 *family != "analytic",
                 torque,
-                (speed_rpm, dte_run.stiffness_damping_beta_s.unwrap_or(0.0)),
+                (
+                    speed_rpm,
+                    runs_element_damping(std::slice::from_ref(dte_run)),
+                ),
             )
         })
         .collect::<Result<_, _>>()?;

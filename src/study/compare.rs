@@ -78,7 +78,8 @@ pub struct FeDte {
     pub ramp_end_s: f64,
     pub statistics_start_s: f64,
     pub wall_s: f64,
-    /// The run's stiffness-proportional (Rayleigh) element damping β [s] (`None`: not
+    /// The run's stiffness-proportional (Rayleigh) element damping β [s], of its bodies'
+    /// unscaled masses (a mass-scaled run's β over √ of its scaling factor; `None`: not
     /// recorded, e.g. a synthetic run).
     pub stiffness_damping_beta_s: Option<f64>,
 }
@@ -92,21 +93,23 @@ pub struct FeDamping {
     /// The elements' stiffness-proportional damping β [s]: the twin's body springs get c = β k
     /// ([`SpringDamping::StiffnessProportional`]), not a drivetrain's damping ratio
     /// (`lumped.drivetrain_damping_ratio`, 0.02 by default), which the FE's bodies do not have.
+    /// At the mesh mode it is next to nothing (β ω/2 ≈ 1e-5 on the paper pair); the same β on
+    /// the teeth's elements, which the twin's mesh spring leaves out, gives about β k̄ ≈ 0.4
+    /// N·s/m beside the mesh dashpot's ≈ 2 000.
     pub stiffness_beta_s: f64,
 }
 
-impl FeDamping {
-    /// The mesh dashpot `mesh` [N·s/m] with the element damping recorded by `runs` (the
-    /// largest; 0 where none is recorded).
-    pub fn of_runs(mesh: f64, runs: &[FeDte]) -> Self {
-        let beta = runs
-            .iter()
-            .filter_map(|r| r.stiffness_damping_beta_s)
-            .fold(0.0, f64::max);
-        FeDamping {
-            mesh_n_s_per_m: mesh,
-            stiffness_beta_s: beta,
-        }
+/// The element damping β [s] of the FE runs `runs`: their mean (each of the unscaled bodies,
+/// [`FeDte::stiffness_damping_beta_s`]; it varies with the mesh, β = 2ζ/ω_max), 0 where none
+/// is recorded.
+pub fn runs_element_damping(runs: &[FeDte]) -> f64 {
+    let betas: Vec<f64> = runs
+        .iter()
+        .filter_map(|r| r.stiffness_damping_beta_s)
+        .collect();
+    match betas.is_empty() {
+        true => 0.0,
+        false => betas.iter().sum::<f64>() / betas.len() as f64,
     }
 }
 
@@ -274,8 +277,8 @@ pub struct CompareSummary {
     /// FE modal at every position and boundary condition.
     pub modal: Vec<PairModes>,
     pub mesh_damping_n_s_per_m: f64,
-    /// The FE runs' element damping β [s] (the largest recorded, 0 where none is), which the
-    /// twins' body springs carry as c = β k ([`FeDamping`]).
+    /// The FE runs' element damping β [s] ([`runs_element_damping`]), which the twins' body
+    /// springs carry as c = β k ([`FeDamping`]).
     pub twin_body_damping_beta_s: f64,
     /// The mesh mode's damping ratio that the FE's dashpot gives its elastic-body lumped twin
     /// (driver at speed; [`MeshModel::mesh_mode_damping_ratio`]): about fe.mesh_damping_ratio,
@@ -384,12 +387,12 @@ pub fn body_twist(case: &Case) -> [f64; 2] {
 /// The lumped twin of the explicit FE on `mesh` (hub to hub, as the FE's DTE and the LTCA give
 /// it): the pair under `drive` with elastic bodies and nothing else (the FE's boundary
 /// conditions: no shafts, no bearings; [`super::lumped::drivetrain_with`]), the bodies' twist
-/// taken out of `mesh`, mesh force T/r_b2, the FE's mesh dashpot `damping` [N·s/m] where the FE
+/// taken out of `mesh`, mesh force T/r_b2, the FE's mesh dashpot `damping.mesh_n_s_per_m` where the FE
 /// has it (on the hub-to-hub TE rate while a flank touches, [`DampingSite::HubTransmissionError`];
 /// with elastic bodies it damps the mesh mode 1.29 × as much as the same c on the mesh
 /// deflection would: the FE's ζ, not ζ/1.29, paper pair), the bodies' springs with the FE's
 /// element damping (c = β k: near the resonance the case's 2 % drivetrain damping ratio on
-/// them would hold the peak 17 % lower, validation/lumped-twin), and with zero
+/// them held the peak about 15 % lower on the paper pair, validation/lumped-twin), and with zero
 /// backlash the back flanks engaging with their own mirrored k and e. `elastic = false`: rigid
 /// gears behind the whole hub-to-hub k.
 pub fn lumped_twin(
@@ -431,42 +434,45 @@ pub fn lumped_twin(
     })
 }
 
-/// `fe`'s k(θ) at `on`'s positions and origin (hub to hub), with `on`'s unloaded TE: the
-/// secant the law of [`fe_secant_law`] gives at the design load.
-pub fn fe_stiffness_on(on: &MeshStiffness, fe: &MeshStiffness) -> MeshStiffness {
-    let mut mesh = on.clone();
-    let n = mesh.stiffness.values.len();
-    let period = mesh.stiffness.period;
-    for (j, k) in mesh.stiffness.values.iter_mut().enumerate() {
-        *k = fe
-            .stiffness
-            .at(on.origin + j as f64 * period / n as f64 - fe.origin);
-    }
-    mesh.source = format!("{} at the positions of {}", fe.source, on.source);
-    mesh
-}
-
-/// The LTCA's force law `law` made to carry `fe`'s k(θ) at the design mesh force `force` [N]
-/// ([`ForceLaw::with_secant_at`]; both hub to hub, each from its own origin).
-pub fn fe_secant_law(
-    law: &ForceLaw,
+/// The FE-stiffness twin's tables: the LTCA's secant `mesh` and force law `law` (hub to hub,
+/// the same positions: [`super::lumped::ltca_tables`]) made to carry `fe`'s k(θ) at the design
+/// mesh force `force` [N] ([`ForceLaw::with_secant_at`]), the secant table then `fe`'s k(θ) at
+/// those positions. The unloaded TE e(θ) (first contact) stays the LTCA's (the FE's from its
+/// DTE is that of the unmodified pair to 1e-3 µm on the paper pair), and so do the back
+/// flanks: the drive law's mirror (exact for symmetric teeth without backlash, the FE sweep's
+/// pair; with a backlash about 3 % of the STE off where a pair enters, README `force_law`).
+pub fn fe_twin_tables(
+    (mesh, law): (&MeshStiffness, &ForceLaw),
     fe: &MeshStiffness,
     force: f64,
-) -> Result<ForceLaw, StudyError> {
-    let mut out = law
-        .with_secant_at(force, |theta| {
-            fe.stiffness.at(law.origin + theta - fe.origin)
-        })
-        .ok_or_else(|| {
-            StudyError::Input(format!(
-                "the FE's k(θ) ({}) cannot be carried by the LTCA's force law: a position's \
-                 added compliance would leave no stiffness (check that the FE stiffness is of \
-                 this pair and load)",
-                fe.source
-            ))
-        })?;
-    out.source = format!("{} at the secant of {}", law.source, fe.source);
-    Ok(out)
+) -> Result<(MeshStiffness, ForceLaw), StudyError> {
+    let n = law.knots.len();
+    if mesh.origin != law.origin || mesh.stiffness.values.len() != n {
+        return Err(StudyError::Input(format!(
+            "the LTCA's secant ({} positions from {:.6} rad) and force law ({n} from {:.6} rad) \
+             are not at the same positions: report this case",
+            mesh.stiffness.values.len(),
+            mesh.origin,
+            law.origin
+        )));
+    }
+    // Both tables from the law's origin; `fe` from its own.
+    let fe_at = |theta: f64| fe.stiffness.at(law.origin + theta - fe.origin);
+    let mut made = law.with_secant_at(force, fe_at).ok_or_else(|| {
+        StudyError::Input(format!(
+            "the FE's k(θ) ({}) cannot be carried by the LTCA's force law: at some position it \
+             is stiffer than the law's stiffest knot can give (check that the FE stiffness is \
+             of this pair and load)",
+            fe.source
+        ))
+    })?;
+    made.source = format!("{} at the secant of {}", law.source, fe.source);
+    let mut secant = mesh.clone();
+    for (j, k) in secant.stiffness.values.iter_mut().enumerate() {
+        *k = fe_at(j as f64 * law.period / n as f64);
+    }
+    secant.source = format!("{} at the positions of {}", fe.source, mesh.source);
+    Ok((secant, made))
 }
 
 /// The share of a unit mesh dashpot in `model`'s mesh mode, g = (d·φ)²/(φᵀMφ) [1/kg] (d the
@@ -597,6 +603,11 @@ pub fn run(
         },
         Hubs::DriverHeld,
     );
+    let body_beta = runs_element_damping(&input.fe_runs);
+    let fe_damping = |mesh_n_s_per_m: f64| FeDamping {
+        mesh_n_s_per_m,
+        stiffness_beta_s: body_beta,
+    };
     let twin = |drive: Drive, elastic: bool, mesh: MeshStiffness| {
         lumped_twin(
             case,
@@ -604,7 +615,7 @@ pub fn run(
             (None, None),
             (drive, elastic),
             torque,
-            FeDamping::of_runs(damping_of(drive), &input.fe_runs),
+            fe_damping(damping_of(drive)),
         )
     };
     let constant = |k: f64| MeshStiffness::constant("mean", input.fe_stiffness.period(), k);
@@ -723,28 +734,23 @@ pub fn run(
                     (Some(laws.law.clone()), laws.back_law),
                     (Drive::Speed, true),
                     torque,
-                    FeDamping::of_runs(damping_of(Drive::Speed), &input.fe_runs),
+                    fe_damping(damping_of(Drive::Speed)),
                 )?,
                 mesh_mode_dashpot_share_fe_modal,
             );
             // The FE's own k(θ) at the design load with the LTCA's stiffening about it: the
             // twin of the explicit FE's stiffness (its low-speed DTE) that the secant FE twin
             // cannot be near the resonance, where the load swings far from the design load.
+            let (fe_mesh, fe_law) =
+                fe_twin_tables((&laws.mesh, &laws.law), &input.fe_stiffness, torque / rb[1])?;
             let fe_law_model = with_dashpot_share(
                 lumped_twin(
                     case,
-                    fe_stiffness_on(&laws.mesh, &input.fe_stiffness),
-                    (
-                        Some(fe_secant_law(
-                            &laws.law,
-                            &input.fe_stiffness,
-                            torque / rb[1],
-                        )?),
-                        None,
-                    ),
+                    fe_mesh,
+                    (Some(fe_law), None),
                     (Drive::Speed, true),
                     torque,
-                    FeDamping::of_runs(damping_of(Drive::Speed), &input.fe_runs),
+                    fe_damping(damping_of(Drive::Speed)),
                 )?,
                 mesh_mode_dashpot_share_fe_modal,
             );
@@ -812,7 +818,7 @@ pub fn run(
         speeds,
         modal,
         mesh_damping_n_s_per_m: damping_of(Drive::Speed),
-        twin_body_damping_beta_s: FeDamping::of_runs(0.0, &input.fe_runs).stiffness_beta_s,
+        twin_body_damping_beta_s: body_beta,
         mesh_mode_damping_ratio_fe_twin: with_fe_coefficient.mesh_mode_damping_ratio(),
         mesh_mode_damping_ratio_fe_modal,
         mesh_mode_dashpot_share_fe_modal_per_kg: mesh_mode_dashpot_share_fe_modal,
@@ -825,7 +831,7 @@ pub fn run(
             coarse * 1e3,
             inertias[0],
             inertias[1],
-            FeDamping::of_runs(0.0, &input.fe_runs).stiffness_beta_s,
+            body_beta,
         ),
         wall_s: started.elapsed().as_secs_f64(),
     })
@@ -1190,6 +1196,79 @@ pub fn label_line(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The FE-stiffness twin's tables carry the FE's k(θ) at the design load at the law's
+    /// positions, the FE's table read from its own origin (here 0.31 of a period before the
+    /// law's): a linear law of 24 positions (k = 5e8 − 1e8 cos, e = 0) made to an FE k(θ) of
+    /// another shape gives, at each position, the FE's value there — the made law's secant and
+    /// the secant table alike — and tables at other positions are refused.
+    #[test]
+    fn the_fe_twin_carries_the_fe_stiffness_at_its_own_angles() {
+        use crate::stiffness::force_law::Knot;
+        use crate::stiffness::PeriodicTable;
+        use std::f64::consts::TAU;
+        let (n, period, origin) = (24, 0.1745, 0.42);
+        let ltca_k = |theta: f64| 5e8 - 1e8 * (TAU * theta / period).cos();
+        let knots = (0..n)
+            .map(|j| {
+                let k = ltca_k(j as f64 * period / n as f64);
+                (0..6)
+                    .map(|i| {
+                        let w = if i == 0 { 0.0 } else { 500.0 * 2f64.powi(i) };
+                        Knot {
+                            deflection: w / k,
+                            force: w,
+                            slope: if i == 0 { f64::NAN } else { k },
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let law = ForceLaw {
+            source: "synthetic".into(),
+            period,
+            origin,
+            torques: vec![],
+            knots,
+        };
+        let mut mesh = MeshStiffness::from_tables(
+            "synthetic secant",
+            None,
+            PeriodicTable::from_fn(period, n, ltca_k),
+            PeriodicTable::constant(period, 0.0),
+        );
+        mesh.origin = origin;
+        // The FE's table from 0.31 periods earlier, of its own shape, sampled more finely.
+        let fe_origin = origin - 0.31 * period;
+        let fe_k = |absolute: f64| 4.2e8 + 0.6e8 * (TAU * (absolute - 0.1) / period).sin();
+        let mut fe = MeshStiffness::from_tables(
+            "synthetic FE",
+            None,
+            PeriodicTable::from_fn(period, 960, |t| fe_k(fe_origin + t)),
+            PeriodicTable::constant(period, 0.0),
+        );
+        fe.origin = fe_origin;
+        let force = 2345.0;
+        let (secant, made) = fe_twin_tables((&mesh, &law), &fe, force).unwrap();
+        let made_secant = made.secant_stiffness(force, n);
+        for j in 0..n {
+            let expected = fe_k(origin + j as f64 * period / n as f64);
+            // The FE table is linear between its 960 samples: 1e-4 of the sine's swing.
+            assert!(
+                (secant.stiffness.values[j] / expected - 1.0).abs() < 1e-4,
+                "{j}"
+            );
+            assert!(
+                (made_secant[j] / expected - 1.0).abs() < 1e-4,
+                "{j}: {} vs {expected}",
+                made_secant[j]
+            );
+        }
+        assert_eq!(secant.origin, origin);
+        let mut shifted = mesh.clone();
+        shifted.origin += 1e-3;
+        assert!(fe_twin_tables((&shifted, &law), &fe, force).is_err());
+    }
 
     /// A unit dashpot's share in the mesh mode has its analytic value on rigid gears under a
     /// speed drive (one coordinate, the DTE: g = 1/m, m = I₂/r_b2²); scaling a model to its own

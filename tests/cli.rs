@@ -1753,7 +1753,15 @@ fn compare_fe_sweep_finds_a_known_resonance() {
     assert!(sweep["unsettled_runs"].as_array().unwrap().is_empty());
     let models = sweep["models"].as_array().unwrap();
     let keys: Vec<&str> = models.iter().map(|m| m["key"].as_str().unwrap()).collect();
-    assert_eq!(keys, ["case_model", "fe_k_twin", "fe_k_law_twin"]);
+    assert_eq!(
+        keys,
+        [
+            "case_model",
+            "fe_k_twin",
+            "fe_k_law_twin",
+            "case_model_fe_mean"
+        ]
+    );
     // The twins' bodies carry the FE runs' element damping, not the case's drivetrain ratio.
     let beta = summary["twin_body_damping_beta_s"].as_f64().unwrap();
     assert!((beta / 1e-9 - 1.0).abs() < 1e-12, "{beta}");

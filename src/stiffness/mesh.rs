@@ -204,6 +204,17 @@ impl MeshStiffness {
         self.stiffness.mean()
     }
 
+    /// The same k(θ) scaled to the mean `mean` [N/m]: its shape, e(θ) and origin kept.
+    pub fn scaled_to_mean(&self, mean: f64) -> Self {
+        let mut scaled = self.clone();
+        let ratio = mean / self.mean();
+        for k in scaled.stiffness.values.iter_mut() {
+            *k *= ratio;
+        }
+        scaled.source = format!("{} scaled to the mean {mean:.4e} N/m", self.source);
+        scaled
+    }
+
     pub fn min(&self) -> f64 {
         self.stiffness.min()
     }

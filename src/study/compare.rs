@@ -741,19 +741,26 @@ pub fn run(
             // The FE's own k(θ) at the design load with the LTCA's stiffening about it: the
             // twin of the explicit FE's stiffness (its low-speed DTE) that the secant FE twin
             // cannot be near the resonance, where the load swings far from the design load.
-            let (fe_mesh, fe_law) =
-                fe_twin_tables((&laws.mesh, &laws.law), &input.fe_stiffness, torque / rb[1])?;
-            let fe_law_model = with_dashpot_share(
-                lumped_twin(
-                    case,
-                    fe_mesh,
-                    (Some(fe_law), None),
-                    (Drive::Speed, true),
-                    torque,
-                    fe_damping(damping_of(Drive::Speed)),
-                )?,
-                mesh_mode_dashpot_share_fe_modal,
-            );
+            let law_twin = |target: &MeshStiffness| -> Result<MeshModel, StudyError> {
+                let (mesh, law) = fe_twin_tables((&laws.mesh, &laws.law), target, torque / rb[1])?;
+                Ok(with_dashpot_share(
+                    lumped_twin(
+                        case,
+                        mesh,
+                        (Some(law), None),
+                        (Drive::Speed, true),
+                        torque,
+                        fe_damping(damping_of(Drive::Speed)),
+                    )?,
+                    mesh_mode_dashpot_share_fe_modal,
+                ))
+            };
+            let fe_law_model = law_twin(&input.fe_stiffness)?;
+            // The case's law at the FE's mean stiffness (its ripple and load dependence the
+            // LTCA's): what the case's model misses against the FE for the FE mesh's own
+            // stiffness (an explicit mesh converges from the stiff side) and what it misses as
+            // a model, apart.
+            let fe_mean_model = law_twin(&laws.mesh.scaled_to_mean(input.fe_stiffness.mean()))?;
             progress("FE sweep against the lumped models", 0, 1);
             let models = [
                 (
@@ -770,6 +777,11 @@ pub fn run(
                     "fe_k_law_twin",
                     "FE-stiffness twin (the FE's k(θ) with the LTCA's load dependence)",
                     &fe_law_model,
+                ),
+                (
+                    "case_model_fe_mean",
+                    "lumped model at the FE's mean stiffness (the LTCA's ripple and load dependence)",
+                    &fe_mean_model,
                 ),
             ];
             Some(fe_sweep(case, input, &models, rpms)?)
@@ -1265,6 +1277,12 @@ mod tests {
             );
         }
         assert_eq!(secant.origin, origin);
+        // Scaled to another mean: that mean, the shape kept.
+        let scaled = mesh.scaled_to_mean(4.4e8);
+        assert!((scaled.mean() / 4.4e8 - 1.0).abs() < 1e-12);
+        for (a, b) in scaled.stiffness.values.iter().zip(&mesh.stiffness.values) {
+            assert!((a / b / (4.4e8 / mesh.mean()) - 1.0).abs() < 1e-12);
+        }
         let mut shifted = mesh.clone();
         shifted.origin += 1e-3;
         assert!(fe_twin_tables((&shifted, &law), &fe, force).is_err());

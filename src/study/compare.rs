@@ -387,8 +387,9 @@ pub fn body_twist(case: &Case) -> [f64; 2] {
 /// The lumped twin of the explicit FE on `mesh` (hub to hub, as the FE's DTE and the LTCA give
 /// it): the pair under `drive` with elastic bodies and nothing else (the FE's boundary
 /// conditions: no shafts, no bearings; [`super::lumped::drivetrain_with`]), the bodies' twist
-/// taken out of `mesh`, mesh force T/r_b2, the FE's mesh dashpot `damping.mesh_n_s_per_m` where the FE
-/// has it (on the hub-to-hub TE rate while a flank touches, [`DampingSite::HubTransmissionError`];
+/// taken out of `mesh`, mesh force T/r_b2, the FE's mesh dashpot `damping.mesh_n_s_per_m` where
+/// the FE has it (on the hub-to-hub TE rate while a flank touches,
+/// [`DampingSite::HubTransmissionError`];
 /// with elastic bodies it damps the mesh mode 1.29 × as much as the same c on the mesh
 /// deflection would: the FE's ζ, not ζ/1.29, paper pair), the bodies' springs with the FE's
 /// element damping (c = β k: near the resonance the case's 2 % drivetrain damping ratio on

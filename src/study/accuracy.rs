@@ -207,10 +207,9 @@ fn answers(
             .expect("adding a compliance keeps k positive"),
     };
     let m = Drive::Speed.effective_mass(gear_inertias(case), rb);
-    let damping = 2.0 * case.fe.mesh_damping_ratio * (hub_to_hub.mean() * m).sqrt();
     let (law, back_law) = laws.cloned().map_or((None, None), |(l, b)| (Some(l), b));
     let damping = FeDamping {
-        mesh_n_s_per_m: damping,
+        mesh_n_s_per_m: 2.0 * case.fe.mesh_damping_ratio * (hub_to_hub.mean() * m).sqrt(),
         stiffness_beta_s: body_beta_s,
     };
     let model = lumped_twin(

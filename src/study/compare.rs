@@ -1292,8 +1292,9 @@ mod tests {
     /// A unit dashpot's share in the mesh mode has its analytic value on rigid gears under a
     /// speed drive (one coordinate, the DTE: g = 1/m, m = I₂/r_b2²); scaling a model to its own
     /// share keeps its dashpot, to a share 0.9 × its own scales the dashpot's part of the mode's
-    /// damping ratio by 0.9; a share it cannot take keeps the dashpot. On the paper pair, a
-    /// shifted 24/40 pair and its inverse.
+    /// damping ratio by 0.9; a share it cannot take keeps the dashpot; the elastic twin's bodies
+    /// carry the FE's element damping β K. On the paper pair, a shifted 24/40 pair and its
+    /// inverse.
     #[test]
     fn a_twin_takes_the_dashpot_share_it_is_given() {
         use crate::case::Override;
@@ -1323,11 +1324,12 @@ mod tests {
                 143.6,
                 FeDamping {
                     mesh_n_s_per_m: 2000.0,
-                    stiffness_beta_s: 0.0,
+                    stiffness_beta_s: BETA,
                 },
             )
             .unwrap()
         };
+        const BETA: f64 = 1e-9;
         let rigid = twin(false);
         let mass = Drive::Speed.effective_mass(gear_inertias(&case), {
             let g = &case.pair.gears;
@@ -1339,6 +1341,11 @@ mod tests {
             dashpot_share(&rigid) * mass
         );
         let elastic = twin(true);
+        // The bodies carry the FE's element damping, C = β K, not the case's drivetrain ratio.
+        let s = &elastic.structure;
+        let body_damping = &s.stiffness * BETA;
+        assert!(s.stiffness.amax() > 0.0);
+        assert!((&s.damping - &body_damping).amax() <= 1e-12 * body_damping.amax());
         let share = dashpot_share(&elastic);
         assert!(share > 0.0);
         let same = with_dashpot_share(elastic.clone(), share);

@@ -455,6 +455,10 @@ pub struct FeSummary {
     pub total_wall_s: f64,
     /// Threads the wall times were measured with.
     pub wall_threads: usize,
+    /// The element kernel this CPU ran (`avx512`, `avx2`, `portable`; chosen at run time, capped
+    /// by `GEARDYN_KERNEL`): on CPUs of different kinds a run agrees to round-off, not bit for
+    /// bit (README, Determinism).
+    pub element_kernel: crate::explicit::body::Kernel,
     pub diverged: Option<String>,
     /// Where a stop request ended the run early ([`crate::interrupt`]).
     pub interrupted: Option<String>,
@@ -747,6 +751,7 @@ pub fn run(
         wall_s: outcome.wall_s,
         total_wall_s: started.elapsed().as_secs_f64() + prepared.setup_wall_s,
         wall_threads: rayon::current_num_threads(),
+        element_kernel: crate::explicit::body::Kernel::best(),
         diverged: outcome.diverged,
         interrupted: outcome.interrupted,
         dt_critical_coupled_s: outcome

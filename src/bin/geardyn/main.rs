@@ -50,6 +50,10 @@ pub fn error_text(error: &anyhow::Error) -> String {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Err(message) = geardyn::explicit::body::Kernel::cap_from_env() {
+        eprintln!("error: {message}");
+        return ExitCode::FAILURE;
+    }
     install_stop_handler();
     if cli.command.common().is_some_and(|c| c.force) {
         geardyn::resources::set_force(true);

@@ -53,17 +53,16 @@ fn prepared(case: &Case, rpm: f64, duration: f64, ramp: f64, penalty: f64) -> Pr
 
 /// One thread and two (the lock-step's partner thread) step the pair to the same numbers, on
 /// 24/40 and on its inverse 40/24 at 300 rpm through contact onset, with the bodies' stiffness
-/// damping on. The contact goes with the gear of fewer elements: gear 0 on
-/// one pair, gear 1 on the other, so both of the step's task layouts are held.
+/// damping on: the integrator's own placement of the contact (beside the gear of fewer
+/// elements at first, then wherever the threads' measured times balance), and the contact
+/// moved to the other thread at every step, so both of the step's task layouts are held, and
+/// changes between them.
 #[test]
 fn one_and_two_threads_step_the_pair_alike() {
-    let mut layouts = [false; 2];
     for name in ["24-40", "40-24"] {
         let case = coarse_matrix_pair(name);
         let p = prepared(&case, 300.0, 1e-3, 1e-4, 1.0);
-        let [e0, e1] = [0, 1].map(|g| p.model.bodies[g].elements.len());
-        layouts[usize::from(e0 > e1)] = true;
-        let run = |threads: usize| {
+        let run = |threads: usize, alternate: bool| {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
@@ -71,6 +70,9 @@ fn one_and_two_threads_step_the_pair_alike() {
             pool.install(|| {
                 let mut integrator = PairIntegrator::new(&p.model, p.drive, p.dt, 0.05 * p.dt);
                 assert_eq!(integrator.is_parallel(), threads > 1);
+                if alternate {
+                    integrator.alternate_contact_thread();
+                }
                 let mut state = p.model.initial_state(&p.drive);
                 integrator.initialize(&mut state);
                 let mut contacts = 0;
@@ -79,15 +81,28 @@ fn one_and_two_threads_step_the_pair_alike() {
                     contacts = contacts.max(integrator.last_contact.active);
                 }
                 integrator.update_energy(&state).unwrap();
-                (state, integrator.energy, contacts)
+                let beside = integrator.phase_wall.contact_beside;
+                (state, integrator.energy, contacts, beside)
             })
         };
-        let (one, two) = (run(1), run(2));
+        let one = run(1, false);
         assert!(one.2 > 0, "{name}: no contact closed");
-        assert!(one.0 == two.0, "{name}: the states differ");
-        assert_eq!(one.1, two.1, "{name}: the energy accounts differ");
+        for alternate in [false, true] {
+            let two = run(2, alternate);
+            assert!(
+                one.0 == two.0,
+                "{name}, alternating {alternate}: the states differ"
+            );
+            assert_eq!(
+                one.1, two.1,
+                "{name}, alternating {alternate}: the energy accounts"
+            );
+            if alternate {
+                // initialize's force phase and 3000 steps, every other one on each thread.
+                assert!(two.3[0].abs_diff(two.3[1]) <= 1, "{name}: {:?}", two.3);
+            }
+        }
     }
-    assert_eq!(layouts, [true, true], "both task layouts");
 }
 
 /// Without damping, kinetic + strain + contact energy equals the work of the driver and the

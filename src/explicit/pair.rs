@@ -41,6 +41,7 @@
 //! on the prescribed bore nodes) and of the load torque; work terms by the trapezoid rule.
 
 use nalgebra::{Point2, Rotation2, Vector2};
+use std::time::Instant;
 
 use crate::contact::{project_on_quadratic_edge, ContactLaw, FrictionState};
 use crate::explicit::body::{ExplicitBody, ExplicitMaterial, ForceOutput};
@@ -961,6 +962,17 @@ pub struct PairIntegrator<'a> {
     old_bore_x: Vec<f64>,
     /// The two gears' phases side by side (a partner thread kept for the run) or in series.
     lockstep: Lockstep,
+    /// Where the steps' time went.
+    pub phase_wall: PhaseWall,
+    /// The gear whose element forces share their thread with the contact (its forces and the
+    /// contact one after the other, the other gear's beside them): chosen every
+    /// [`BALANCE_EVERY`] steps from the last ones' measured times, so that the longer of the
+    /// two threads' shares is the shorter. Which thread computes what changes no result.
+    contact_beside: usize,
+    /// The contact's and the two bodies' times since that choice [s].
+    balance: [f64; 3],
+    /// The contact to the other thread at every step instead ([`Self::alternate_contact_thread`]).
+    alternate_contact: bool,
 }
 
 /// A `Vector2` as `[x, y]` in a checkpoint.
@@ -978,6 +990,64 @@ mod vector2_as_array {
     }
 }
 
+/// Where the steps' wall time goes, phase by phase, summed over a run's steps [s]: what the
+/// two lock-step threads wait for. Timings only: no result depends on them. Steps a run takes
+/// back (its step control's return to a sample) take their times with them.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PhaseWall {
+    pub steps: u64,
+    /// Whole steps.
+    pub step_s: f64,
+    /// The drift phase, both gears side by side.
+    pub drift_s: f64,
+    /// The force phase: the contact search and forces beside the two bodies' element forces.
+    pub forces_s: f64,
+    /// Within the force phase, on their threads: the contact, and each gear's element forces.
+    pub contact_s: f64,
+    pub body_forces_s: [f64; 2],
+    /// The accelerations and closing half kick, both gears side by side.
+    pub accelerate_s: f64,
+    /// Steps whose contact ran on the thread of gear 1's element forces, of gear 2's.
+    pub contact_beside: [u64; 2],
+}
+
+/// Per-step means of a [`PhaseWall`] [µs], and the share of steps whose contact ran beside
+/// gear 2's element forces (summary.json's `wall_phases_us_per_step`).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct PhaseWallPerStep {
+    pub step: f64,
+    pub drift: f64,
+    pub forces: f64,
+    pub contact: f64,
+    pub body_forces: [f64; 2],
+    pub accelerate: f64,
+    /// The rest of a step: its serial middle (hub, contact forces added, work terms).
+    pub serial: f64,
+    pub contact_beside_gear2_share: f64,
+}
+
+impl PhaseWall {
+    pub fn per_step_us(&self) -> PhaseWallPerStep {
+        let per = |t: f64| 1e6 * t / (self.steps.max(1) as f64);
+        PhaseWallPerStep {
+            step: per(self.step_s),
+            drift: per(self.drift_s),
+            forces: per(self.forces_s),
+            contact: per(self.contact_s),
+            body_forces: self.body_forces_s.map(per),
+            accelerate: per(self.accelerate_s),
+            serial: per(self.step_s - self.drift_s - self.forces_s - self.accelerate_s),
+            contact_beside_gear2_share: self.contact_beside[1] as f64
+                / (self.contact_beside[0] + self.contact_beside[1]).max(1) as f64,
+        }
+    }
+}
+
+/// Steps between the choices of the thread that runs the contact ([`PairIntegrator`]).
+const BALANCE_EVERY: usize = 1024;
+/// The gain in the longer thread's share that moves the contact to the other thread.
+const BALANCE_MARGIN: f64 = 0.02;
+
 /// The integrator's state between two steps, beside the pair's [`PairState`]: with both, a run
 /// goes on exactly as if it had not stopped. Scratch is not kept: the internal force array is
 /// zero between steps and the node stamps only compare with the stamp counter, which restarts
@@ -985,6 +1055,9 @@ mod vector2_as_array {
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct IntegratorCheckpoint {
     energy: PairEnergy,
+    /// Timings, carried from window to window (absent from older checkpoints: zero).
+    #[serde(default)]
+    phase_wall: PhaseWall,
     steps: usize,
     last_contact: ContactOutput,
     contact_force: [Vec<f64>; 2],
@@ -1099,6 +1172,7 @@ impl IntegratorCheckpoint {
         let bore = 2 * new.meshes[0].bore_nodes.len();
         Ok(IntegratorCheckpoint {
             energy: self.energy,
+            phase_wall: self.phase_wall,
             steps: self.steps,
             last_contact,
             contact_force: std::array::from_fn(|g| {
@@ -1124,6 +1198,11 @@ impl IntegratorCheckpoint {
     pub fn energy(&self) -> PairEnergy {
         self.energy
     }
+
+    /// The steps' wall time up to this checkpoint, phase by phase.
+    pub fn phase_wall(&self) -> PhaseWall {
+        self.phase_wall
+    }
 }
 
 impl<'a> PairIntegrator<'a> {
@@ -1131,6 +1210,7 @@ impl<'a> PairIntegrator<'a> {
     pub fn checkpoint(&self) -> IntegratorCheckpoint {
         IntegratorCheckpoint {
             energy: self.energy,
+            phase_wall: self.phase_wall,
             steps: self.steps,
             last_contact: self.last_contact.clone(),
             contact_force: self.contact_force.clone(),
@@ -1158,6 +1238,7 @@ impl<'a> PairIntegrator<'a> {
         }
         let IntegratorCheckpoint {
             energy,
+            phase_wall,
             steps,
             last_contact,
             contact_force,
@@ -1169,6 +1250,7 @@ impl<'a> PairIntegrator<'a> {
             old_bore_x,
         } = checkpoint;
         self.energy = energy;
+        self.phase_wall = phase_wall;
         self.steps = steps;
         self.last_contact = last_contact;
         self.contact_force = contact_force;
@@ -1210,7 +1292,21 @@ impl<'a> PairIntegrator<'a> {
             stamp_id: 0,
             old_bore_x: vec![0.0; 2 * model.meshes[0].bore_nodes.len()],
             lockstep: Lockstep::for_current_pool(),
+            phase_wall: PhaseWall::default(),
+            // Until the first measurement: the gear of fewer elements.
+            contact_beside: usize::from(
+                model.bodies[0].elements.len() > model.bodies[1].elements.len(),
+            ),
+            balance: [0.0; 3],
+            alternate_contact: false,
         }
+    }
+
+    /// From here on the contact runs on the other thread at every step, not where the threads
+    /// balance: for the tests that hold the claim that the contact's thread changes no result.
+    #[doc(hidden)]
+    pub fn alternate_contact_thread(&mut self) {
+        self.alternate_contact = true;
     }
 
     /// Whether the integrator steps the two gears on two threads (a partner thread of its own).
@@ -1242,10 +1338,14 @@ impl<'a> PairIntegrator<'a> {
     /// with their bookkeeping) beside the bodies' internal and damping forces (into `force`,
     /// whose contact forces are not yet added; `force` is zero here: `accelerate` clears it as
     /// it reads it).
-    /// The contact goes with the gear of fewer elements. Splitting a body between the threads
-    /// to balance them gained nothing (validation/performance): its nodes' cache lines then
-    /// move between the cores at every step.
-    fn contact_and_body_forces(&mut self, state: &PairState) -> [ForceOutput; 2] {
+    /// The contact goes with the gear whose thread then finishes first by the last
+    /// [`BALANCE_EVERY`] steps' times ([`PairIntegrator::contact_beside`]). Splitting a body
+    /// between the threads to balance them gained nothing (validation/performance): its nodes'
+    /// cache lines then move between the cores at every step.
+    ///
+    /// Returns the bodies' forces and energies and the phase's times [s]: the contact's, each
+    /// gear's element forces'.
+    fn contact_and_body_forces(&mut self, state: &PairState) -> ([ForceOutput; 2], [f64; 3]) {
         let PairIntegrator {
             model,
             dt,
@@ -1259,14 +1359,18 @@ impl<'a> PairIntegrator<'a> {
             stamp_id,
             last_contact,
             lockstep,
+            contact_beside,
             ..
         } = self;
         let (model, dt, beta) = (*model, *dt, *beta_k);
         let [f0, f1] = force;
         let forces = |g: usize, f: &mut [f64]| {
-            model.bodies[g].internal_forces(&state.x[g], &state.v[g], beta, f)
+            let started = Instant::now();
+            let out = model.bodies[g].internal_forces(&state.x[g], &state.v[g], beta, f);
+            (out, started.elapsed().as_secs_f64())
         };
         let mut contact = || {
+            let started = Instant::now();
             // After the swap, `contact_force` holds the forces of two steps ago, on the flanks
             // searched then.
             for g in 0..2 {
@@ -1280,25 +1384,46 @@ impl<'a> PairIntegrator<'a> {
             model.contact_forces(state, dt, history, contact_force, last_contact);
             searched.swap(0, 1);
             searched[1].copy_from_slice(&last_contact.searched);
+            started.elapsed().as_secs_f64()
         };
-        let (o0, o1) = if model.bodies[0].elements.len() <= model.bodies[1].elements.len() {
-            lockstep.join(
-                || {
-                    contact();
-                    forces(0, f0)
-                },
-                || forces(1, f1),
-            )
+        let ((o0, t0), (o1, t1), t_contact) = if *contact_beside == 0 {
+            let ((c, b0), b1) = lockstep.join(|| (contact(), forces(0, f0)), || forces(1, f1));
+            (b0, b1, c)
         } else {
-            lockstep.join(
-                || forces(0, f0),
-                || {
-                    contact();
-                    forces(1, f1)
-                },
-            )
+            let (b0, (c, b1)) = lockstep.join(|| forces(0, f0), || (contact(), forces(1, f1)));
+            (b0, b1, c)
         };
-        [o0, o1]
+        ([o0, o1], [t_contact, t0, t1])
+    }
+
+    /// Books a step's force-phase times and, every [`BALANCE_EVERY`] steps, puts the contact
+    /// where the threads finish closest together: beside the other gear's element forces only
+    /// if that shortens the longer thread's share by more than [`BALANCE_MARGIN`] (the times of
+    /// the placement not in use are estimates, taken from the one in use).
+    fn book_force_phase(&mut self, wall_s: f64, times: [f64; 3]) {
+        let beside = self.contact_beside;
+        let [contact, t0, t1] = times;
+        let wall = &mut self.phase_wall;
+        wall.forces_s += wall_s;
+        wall.contact_s += contact;
+        wall.body_forces_s[0] += t0;
+        wall.body_forces_s[1] += t1;
+        wall.contact_beside[beside] += 1;
+        for (sum, t) in self.balance.iter_mut().zip(times) {
+            *sum += t;
+        }
+        if self.alternate_contact {
+            self.contact_beside = 1 - beside;
+        } else if self.phase_wall.steps % BALANCE_EVERY as u64 == BALANCE_EVERY as u64 - 1 {
+            let [c, b0, b1] = self.balance;
+            // The longer thread's share with the contact beside gear 0's forces or gear 1's.
+            let longer = [(c + b0).max(b1), (c + b1).max(b0)];
+            let other = 1 - beside;
+            if longer[other] < (1.0 - BALANCE_MARGIN) * longer[beside] {
+                self.contact_beside = other;
+            }
+            self.balance = [0.0; 3];
+        }
     }
 
     /// The serial middle of a step: the contact forces added to the body forces, the driven
@@ -1394,7 +1519,7 @@ impl<'a> PairIntegrator<'a> {
         let (theta, rate, accel) = self.drive.driver_motion(state.time);
         let [phi, phi_rate, _] = state.hub;
         self.drift(state, None, [[theta, rate, accel], [phi, phi_rate, 0.0]]);
-        let body = self.contact_and_body_forces(state);
+        let (body, _) = self.contact_and_body_forces(state);
         self.contact_and_hubs(state);
         self.accelerate(state, None, [[theta, rate, accel], state.hub]);
         self.energy.strain = body[0].strain_energy + body[1].strain_energy;
@@ -1455,6 +1580,7 @@ impl<'a> PairIntegrator<'a> {
     /// non-finite hub state is reported as divergence here; energy growth is checked in
     /// `update_energy`.
     pub fn step(&mut self, state: &mut PairState) -> Result<(), String> {
+        let started = Instant::now();
         let model = self.model;
         let dt = self.dt;
         for (i, &n) in model.meshes[0].bore_nodes.iter().enumerate() {
@@ -1469,11 +1595,17 @@ impl<'a> PairIntegrator<'a> {
         state.hub[1] += 0.5 * dt * state.hub[2];
         state.hub[0] += dt * state.hub[1];
         // Half kick and drift on every DOF, then the hubs set the bore DOFs.
+        let phase = Instant::now();
         self.drift(state, Some(dt), [[theta, rate, accel], state.hub]);
-        let body = self.contact_and_body_forces(state);
+        self.phase_wall.drift_s += phase.elapsed().as_secs_f64();
+        let phase = Instant::now();
+        let (body, times) = self.contact_and_body_forces(state);
+        self.book_force_phase(phase.elapsed().as_secs_f64(), times);
         let hub_power = self.contact_and_hubs(state);
         state.hub[1] += 0.5 * dt * state.hub[2];
+        let phase = Instant::now();
         let node_power = self.accelerate(state, Some(dt), [[theta, rate, accel], state.hub]);
+        self.phase_wall.accelerate_s += phase.elapsed().as_secs_f64();
         let strain = body[0].strain_energy + body[1].strain_energy;
         let damping_power = body[0].damping_power + body[1].damping_power + hub_power + node_power;
         // Work: driver reactions, load torque, contact forces (trapezoid).
@@ -1511,6 +1643,8 @@ impl<'a> PairIntegrator<'a> {
         self.energy.contact += contact;
         self.energy.damping += damping_power * dt;
         self.energy.strain = strain;
+        self.phase_wall.steps += 1;
+        self.phase_wall.step_s += started.elapsed().as_secs_f64();
         if !(state.hub[0].is_finite() && strain.is_finite()) {
             return Err("the state is not finite (NaN or infinity)".into());
         }

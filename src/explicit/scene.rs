@@ -145,7 +145,8 @@ use std::time::Instant;
 
 use crate::explicit::body::ExplicitMaterial;
 use crate::explicit::pair::{
-    Drive, ExplicitPair, IntegratorCheckpoint, PairEnergy, PairIntegrator, PairState, Ramp, Start,
+    Drive, ExplicitPair, IntegratorCheckpoint, PairEnergy, PairIntegrator, PairState, PhaseWall,
+    Ramp, Start,
 };
 use crate::explicit::remesh::NodeTransfer;
 use crate::explicit::solver::critical_step;
@@ -662,6 +663,8 @@ pub struct RunOutcome {
     /// Where the run stopped on a stop request ([`crate::interrupt`]), if it did.
     pub interrupted: Option<String>,
     pub final_energy: PairEnergy,
+    /// Where the steps' wall time went, phase by phase.
+    pub phase_wall: PhaseWall,
     /// The pair's stable step where the contact was, at every check: [`COUPLED_CHECKS`]
     /// instants spread over a [`TimeStep::Bound`] run (those with points in contact), and
     /// wherever the springs stiffened and about [`COUPLED_RECHECKS`] times besides in a
@@ -927,6 +930,7 @@ impl RunCheckpoint {
             diverged: Some(reason),
             interrupted: None,
             final_energy: self.integrator.energy(),
+            phase_wall: self.integrator.phase_wall(),
             coupled_steps: self.coupled_steps,
             step_changes: control.changes,
             fallback: control.fallback,
@@ -1877,6 +1881,7 @@ fn run_window(
         diverged,
         interrupted,
         final_energy: integrator.energy,
+        phase_wall: integrator.phase_wall,
         coupled_steps,
         step_changes: control.changes,
         fallback: control.fallback,

@@ -474,6 +474,19 @@ pub fn console(study: &FeStudy) -> String {
         s.energy_error_rel,
         s.energy_error_rel_transmitted
     );
+    let phases = &s.wall_phases_us_per_step;
+    text.push_str(&format!(
+        "a step's {:.1} us: drift {:.1}, forces {:.1} (contact {:.1}, beside gear 2's in {:.0} % of the steps; element forces gear 1 {:.1}, gear 2 {:.1}), accelerations {:.1}, serial {:.1}\n",
+        phases.step,
+        phases.drift,
+        phases.forces,
+        phases.contact,
+        phases.contact_beside_gear2_share * 100.0,
+        phases.body_forces[0],
+        phases.body_forces[1],
+        phases.accelerate,
+        phases.serial
+    ));
     if let Some(same) = &s.stiffness_vs_ltca_same_mesh {
         text.push_str(&format!(
             "k(theta) from the DTE: mean {:.4e} N/m over {:.0} % of a base pitch; against the LTCA on this mesh {:+.2} % in the mean, {:.2} % at the worst of {} bins",

@@ -459,6 +459,11 @@ pub struct FeSummary {
     /// by `GEARDYN_KERNEL`): on CPUs of different kinds a run agrees to round-off, not bit for
     /// bit (README, Determinism).
     pub element_kernel: crate::explicit::body::Kernel,
+    /// Where a step's wall time went [µs per step]: the drift, the force phase (and within it,
+    /// on their threads, the contact and each gear's element forces), the accelerations, the
+    /// serial rest; and the share of steps whose contact ran beside gear 2's element forces
+    /// (the integrator puts it where the two threads finish closest together).
+    pub wall_phases_us_per_step: crate::explicit::pair::PhaseWallPerStep,
     pub diverged: Option<String>,
     /// Where a stop request ended the run early ([`crate::interrupt`]).
     pub interrupted: Option<String>,
@@ -752,6 +757,7 @@ pub fn run(
         total_wall_s: started.elapsed().as_secs_f64() + prepared.setup_wall_s,
         wall_threads: rayon::current_num_threads(),
         element_kernel: crate::explicit::body::Kernel::best(),
+        wall_phases_us_per_step: outcome.phase_wall.per_step_us(),
         diverged: outcome.diverged,
         interrupted: outcome.interrupted,
         dt_critical_coupled_s: outcome

@@ -81,7 +81,7 @@ fn one_and_two_threads_step_the_pair_alike() {
                     contacts = contacts.max(integrator.last_contact.active);
                 }
                 integrator.update_energy(&state).unwrap();
-                let beside = integrator.phase_wall.contact_beside;
+                let beside = integrator.phase_wall.contact_beside_steps;
                 (state, integrator.energy, contacts, beside)
             })
         };

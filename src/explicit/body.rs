@@ -163,8 +163,9 @@ impl ExplicitBody {
             });
             prototype_of.push(id as u32);
         }
-        let batches = make_batches(elements, &prototype_of, prototypes.len());
-        let wide_batches = make_wide_batches(elements, &prototype_of, prototypes.len());
+        let members = prototype_members(&prototype_of, prototypes.len());
+        let batches = make_batches(elements, &members);
+        let wide_batches = make_wide_batches(elements, &members);
         Ok(ExplicitBody {
             reference: nodes.to_vec(),
             elements: elements.to_vec(),
@@ -840,7 +841,8 @@ pub const LANES: usize = 4;
 pub const WIDE_LANES: usize = 8;
 
 /// The element kernels, chosen at run time by what the CPU has.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+/// Ordered by width: a cap admits the kernels up to it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Kernel {
     /// Plain arrays, any CPU.
@@ -899,17 +901,9 @@ impl Kernel {
             let cap = Kernel::cap_from_env().unwrap_or_else(|message| panic!("{message}"));
             [Kernel::Avx512, Kernel::Avx2, Kernel::Portable]
                 .into_iter()
-                .find(|k| k.rank() <= cap.rank() && k.available())
+                .find(|&k| k <= cap && k.available())
                 .unwrap_or(Kernel::Portable)
         })
-    }
-
-    fn rank(self) -> u8 {
-        match self {
-            Kernel::Portable => 0,
-            Kernel::Avx2 => 1,
-            Kernel::Avx512 => 2,
-        }
     }
 }
 
@@ -956,12 +950,7 @@ fn prototype_members(prototype_of: &[u32], prototypes: usize) -> Vec<Vec<usize>>
 }
 
 /// Groups the elements of each prototype into batches of [`LANES`].
-fn make_batches(
-    elements: &[[usize; 8]],
-    prototype_of: &[u32],
-    prototypes: usize,
-) -> Vec<Batch<LANES>> {
-    let members = prototype_members(prototype_of, prototypes);
+fn make_batches(elements: &[[usize; 8]], members: &[Vec<usize>]) -> Vec<Batch<LANES>> {
     let mut batches = Vec::new();
     for (p, list) in members.iter().enumerate() {
         for chunk in list.chunks(LANES) {
@@ -973,12 +962,7 @@ fn make_batches(
 
 /// Groups the elements of each prototype into batches of [`WIDE_LANES`], a last chunk of
 /// [`LANES`] or fewer into a narrow batch.
-fn make_wide_batches(
-    elements: &[[usize; 8]],
-    prototype_of: &[u32],
-    prototypes: usize,
-) -> Vec<WideOrNarrow> {
-    let members = prototype_members(prototype_of, prototypes);
+fn make_wide_batches(elements: &[[usize; 8]], members: &[Vec<usize>]) -> Vec<WideOrNarrow> {
     let mut batches = Vec::new();
     for (p, list) in members.iter().enumerate() {
         for chunk in list.chunks(WIDE_LANES) {

@@ -1007,8 +1007,9 @@ pub struct PhaseWall {
     pub body_forces_s: [f64; 2],
     /// The accelerations and closing half kick, both gears side by side.
     pub accelerate_s: f64,
-    /// Steps whose contact ran on the thread of gear 1's element forces, of gear 2's.
-    pub contact_beside: [u64; 2],
+    /// Steps whose contact ran on the thread of gear 1's element forces, of gear 2's (on one
+    /// thread the choice is made all the same, and means nothing).
+    pub contact_beside_steps: [u64; 2],
 }
 
 /// Per-step means of a [`PhaseWall`] [µs], and the share of steps whose contact ran beside
@@ -1037,8 +1038,8 @@ impl PhaseWall {
             body_forces: self.body_forces_s.map(per),
             accelerate: per(self.accelerate_s),
             serial: per(self.step_s - self.drift_s - self.forces_s - self.accelerate_s),
-            contact_beside_gear2_share: self.contact_beside[1] as f64
-                / (self.contact_beside[0] + self.contact_beside[1]).max(1) as f64,
+            contact_beside_gear2_share: self.contact_beside_steps[1] as f64
+                / (self.contact_beside_steps[0] + self.contact_beside_steps[1]).max(1) as f64,
         }
     }
 }
@@ -1408,7 +1409,7 @@ impl<'a> PairIntegrator<'a> {
         wall.contact_s += contact;
         wall.body_forces_s[0] += t0;
         wall.body_forces_s[1] += t1;
-        wall.contact_beside[beside] += 1;
+        wall.contact_beside_steps[beside] += 1;
         for (sum, t) in self.balance.iter_mut().zip(times) {
             *sum += t;
         }

@@ -475,13 +475,21 @@ pub fn console(study: &FeStudy) -> String {
         s.energy_error_rel_transmitted
     );
     let phases = &s.wall_phases_us_per_step;
+    // On one thread the contact's placement is only an order.
+    let beside = if s.wall_threads > 1 {
+        format!(
+            ", beside gear 2's in {:.0} % of the steps",
+            phases.contact_beside_gear2_share * 100.0
+        )
+    } else {
+        String::new()
+    };
     text.push_str(&format!(
-        "a step's {:.1} us: drift {:.1}, forces {:.1} (contact {:.1}, beside gear 2's in {:.0} % of the steps; element forces gear 1 {:.1}, gear 2 {:.1}), accelerations {:.1}, serial {:.1}\n",
+        "a step's {:.1} us: drift {:.1}, forces {:.1} (contact {:.1}{beside}; element forces gear 1 {:.1}, gear 2 {:.1}), accelerations {:.1}, serial {:.1}\n",
         phases.step,
         phases.drift,
         phases.forces,
         phases.contact,
-        phases.contact_beside_gear2_share * 100.0,
         phases.body_forces[0],
         phases.body_forces[1],
         phases.accelerate,

@@ -13,7 +13,7 @@ use thiserror::Error;
 
 use crate::explicit::body::ExplicitMaterial;
 use crate::explicit::pair::{Ramp, Start};
-use crate::explicit::scene::{FeSettings, FineTeeth, Scene, TimeStep};
+use crate::explicit::scene::{FeSettings, FineTeeth, MassScalingMode, Scene, TimeStep};
 use crate::fe::{MassLumping, PlaneState};
 use crate::geometry::{
     BasicRack, FlankModification, FlankReliefSpec, GearPair, GearSpec, GeometryError, PairSpec,
@@ -278,6 +278,10 @@ pub struct FeSection {
     /// The scaled mesh mode over the fifth mesh harmonic.
     #[serde(default = "default_mass_scaling_margin")]
     pub mass_scaling_margin: f64,
+    /// Where the added mass goes: "uniform" (every mass times s) or "target-step" (each
+    /// element's mass raised to one common stable step within the same inertia budget s).
+    #[serde(default)]
+    pub mass_scaling_mode: MassScalingMode,
     /// Interval of the recorded time histories [µs].
     #[serde(default = "default_output_interval")]
     pub output_interval_us: f64,
@@ -301,6 +305,7 @@ impl Default for FeSection {
             mesh_damping_ratio: default_mesh_damping(),
             mass_scaling: true,
             mass_scaling_margin: default_mass_scaling_margin(),
+            mass_scaling_mode: MassScalingMode::default(),
             output_interval_us: default_output_interval(),
             explicit_fine_element_mm: None,
             explicit_coarse_element_mm: None,
@@ -1186,6 +1191,7 @@ impl Case {
         check_mass_scaling_margin("fe.mass_scaling_margin", fe.mass_scaling_margin)?;
         let fe_settings = FeSettings {
             mass_scaling_margin: fe.mass_scaling.then_some(fe.mass_scaling_margin),
+            mass_scaling_mode: fe.mass_scaling_mode,
             step_factor: fe.step_factor,
             time_step: fe.time_step,
             fine_teeth: fe.fine_teeth,

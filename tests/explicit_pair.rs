@@ -673,7 +673,7 @@ fn the_mesh_dashpot_transmits_nothing_across_open_teeth() {
     assert!(state.hub[1].abs() < 1e-9 * kinematic, "{}", state.hub[1]);
 }
 
-/// Mass scaling at 60 rpm: the factor puts the mesh mode at three times the fifth mesh harmonic
+/// Uniform mass scaling at 60 rpm: the factor puts the mesh mode at three times the fifth mesh harmonic
 /// (36 Hz × 5 × 3 = 540 Hz), and every stable step — each body's power iteration, the contact
 /// springs' bound, the step used — grows by exactly √factor (all of M⁻¹K scales by 1/factor).
 #[test]
@@ -681,6 +681,7 @@ fn mass_scaling_lowers_the_mesh_mode_and_lengthens_the_step_by_its_root() {
     let case = coarse_case();
     let unscaled = prepared(&case, 60.0, 1e-3, 1e-4, 1.0);
     let mut scaled_case = case.clone();
+    scaled_case.fe.mass_scaling_mode = geardyn::explicit::scene::MassScalingMode::Uniform;
     scaled_case.fe.high_frequency_damping_ratio = 0.0;
     scaled_case.fe.mesh_damping_ratio = 0.0;
     let mut scene = case.scene("low-unmodified").unwrap().clone();
@@ -707,6 +708,70 @@ fn mass_scaling_lowers_the_mesh_mode_and_lengthens_the_step_by_its_root() {
         (scaled.model.driven_inertia() / unscaled.model.driven_inertia() / s.factor - 1.0).abs()
             < 1e-12
     );
+}
+
+/// Mass scaling to a target step (`fe.mass_scaling_mode = "target-step"`) on the paper pair, 24/40
+/// and 40/24 at 60 rpm: the gear whose budget binds the step has its polar inertia raised by
+/// exactly the uniform scaling's factor s, the other by no more (1e-9), so the rigid gears' mesh
+/// mode is at least uniform scaling's; the step T lies between uniform scaling's element bound
+/// (√s × the least element step) and √s × the largest, each body's measured stable step is at
+/// least T (Irons' element bound, which the per-element factors (T/Δtₑ)² are built on), and it
+/// is more than 1.5 × uniform scaling's measured step: the mass goes to the small elements that
+/// set the step, not to the body (about 2.9 × on the paper pair's 1 mm flanks, 3 mm body).
+#[test]
+fn target_step_mass_scaling_keeps_the_inertia_and_lengthens_the_step() {
+    use geardyn::explicit::scene::MassScalingMode;
+    for name in ["paper36", "24-40", "40-24"] {
+        let mut case = coarse_matrix_pair(name);
+        case.fe.high_frequency_damping_ratio = 0.0;
+        case.fe.mesh_damping_ratio = 0.0;
+        let mut scene = case.scene("low-unmodified").unwrap().clone();
+        (scene.duration, scene.ramp_time) = (1e-3, 1e-4);
+        case.fe.mass_scaling_mode = MassScalingMode::Uniform;
+        let uniform = study::fe::prepare(&case, &scene).unwrap();
+        case.fe.mass_scaling_mode = MassScalingMode::TargetStep;
+        let target = study::fe::prepare(&case, &scene).unwrap();
+        let s = target.mass_scaling;
+        eprintln!("{name}: {s:?}");
+        assert_eq!(s.mode, MassScalingMode::TargetStep);
+        assert_eq!(s.factor, uniform.mass_scaling.factor);
+        assert!(s.factor > 10.0, "{s:?}");
+        let step = s.target_step_s.expect("a target step");
+        let mut unscaled_case = case.clone();
+        unscaled_case.fe.mass_scaling_margin = None;
+        let unscaled = study::fe::prepare(&unscaled_case, &scene).unwrap();
+        let ratios: Vec<f64> = (0..2)
+            .map(|g| target.model.inertia(g) / unscaled.model.inertia(g) / s.factor)
+            .collect();
+        assert!(
+            ratios.iter().all(|r| *r < 1.0 + 1e-9) && ratios.iter().any(|r| (r - 1.0).abs() < 1e-9),
+            "{name}: inertia over s × unscaled {ratios:?}"
+        );
+        assert!(s.scaled_mesh_mode_hz >= uniform.mass_scaling.scaled_mesh_mode_hz * (1.0 - 1e-9));
+        let element_steps: Vec<f64> = (0..2)
+            .flat_map(|g| unscaled.model.bodies[g].element_critical_steps())
+            .collect();
+        let least = element_steps.iter().copied().fold(f64::INFINITY, f64::min);
+        let largest = element_steps.iter().copied().fold(0.0, f64::max);
+        let root = s.factor.sqrt();
+        assert!(
+            step > root * least && step < root * largest,
+            "{name}: T {step}"
+        );
+        for g in 0..2 {
+            assert!(
+                target.dt_bodies[g] >= step * (1.0 - 1e-6),
+                "{name}: gear {g}'s stable step {} under T {step}",
+                target.dt_bodies[g]
+            );
+        }
+        let gain = target.dt / uniform.dt;
+        eprintln!(
+            "{name}: T {step:e}, step {:e} against uniform {:e}: {gain:.2} x",
+            target.dt, uniform.dt
+        );
+        assert!(gain > 1.5, "{name}: {gain}");
+    }
 }
 
 /// A start at speed ([`Start::AtSpeed`]) without load and without contact surfaces: both gears

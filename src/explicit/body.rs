@@ -229,18 +229,17 @@ impl ExplicitBody {
     /// Each element's own stable step 2/ω_e,max, ω_e,max² the largest eigenvalue of M_e⁻¹K_e
     /// with the element's own lumped masses at the material's density (what a group of
     /// elements stepped on its own would allow: validation/performance, subcycling).
+    /// Congruent elements share their prototype, so the eigenvalue problem is solved once per
+    /// prototype (on its first element).
     pub fn element_critical_steps(&self) -> Vec<f64> {
-        self.elements
+        let mut first = vec![usize::MAX; self.prototypes.len()];
+        for (e, &p) in self.prototype_of.iter().enumerate().rev() {
+            first[p as usize] = e;
+        }
+        let per_prototype: Vec<f64> = first
             .iter()
-            .enumerate()
-            .map(|(index, e)| {
-                let xe = e.map(|i| self.reference[i]);
-                let m = q8::lumped_mass(
-                    &xe,
-                    self.material.density,
-                    self.material.thickness,
-                    self.material.lumping,
-                );
+            .map(|&index| {
+                let m = self.element_masses(index);
                 let k = self.element_stiffness(index);
                 let scaled =
                     ElementMatrix::from_fn(|i, j| k[(i, j)] / (m[i / 2] * m[j / 2]).sqrt());
@@ -251,7 +250,35 @@ impl ExplicitBody {
                     .fold(0.0, f64::max);
                 2.0 / omega2.sqrt()
             })
+            .collect();
+        self.prototype_of
+            .iter()
+            .map(|&p| per_prototype[p as usize])
             .collect()
+    }
+
+    /// The lumped masses element `element` puts on its 8 nodes at the material's density [kg].
+    pub fn element_masses(&self, element: usize) -> [f64; 8] {
+        let xe = self.elements[element].map(|i| self.reference[i]);
+        q8::lumped_mass(
+            &xe,
+            self.material.density,
+            self.material.thickness,
+            self.material.lumping,
+        )
+    }
+
+    /// Sets the nodal masses to Σₑ sₑ mₑ: each element's lumped masses times its factor
+    /// `factors[e]` (per-element mass scaling; all ones give the body's own masses).
+    pub fn set_element_mass_factors(&mut self, factors: &[f64]) {
+        assert_eq!(factors.len(), self.elements.len(), "one factor per element");
+        self.mass.iter_mut().for_each(|m| *m = 0.0);
+        for (e, &s) in factors.iter().enumerate() {
+            let m = self.element_masses(e);
+            for (k, &node) in self.elements[e].iter().enumerate() {
+                self.mass[node] += s * m[k];
+            }
+        }
     }
 
     /// Internal (and damping) forces at positions `x` and velocities `v` (2 per node), added into

@@ -373,22 +373,8 @@ impl ExplicitPair {
             }
             free
         });
-        let inverse_mass = std::array::from_fn(|g| {
-            (0..free[g].len())
-                .map(|d| {
-                    if free[g][d] {
-                        1.0 / bodies[g].mass[d / 2]
-                    } else {
-                        0.0
-                    }
-                })
-                .collect()
-        });
-        let hub_inertia = meshes[1]
-            .bore_nodes
-            .iter()
-            .map(|&n| bodies[1].mass[n] * meshes[1].nodes[n].coords.norm_squared())
-            .sum();
+        let inverse_mass = std::array::from_fn(|g| inverse_masses(&bodies[g], &free[g]));
+        let hub_inertia = hub_inertia_of(&meshes[1], &bodies[1]);
         let mut flanks = Vec::new();
         let mut flank_pairs = Vec::new();
         let mut add_pair = |t1: usize, t2: usize, side: Side, drive: bool| {
@@ -449,6 +435,79 @@ impl ExplicitPair {
             self.inverse_mass[g].iter_mut().for_each(|w| *w /= factor);
         }
         self.hub_inertia *= factor;
+    }
+
+    /// Per-element mass scaling to a common stable step `step` [s]: each element's lumped
+    /// masses times sₑ = max(1, (step/Δtₑ)²), Δtₑ its own stable step at the material's density
+    /// ([`ExplicitBody::element_critical_steps`]), so that by Irons' element bound no element
+    /// holds either body's stable step below `step`; the driven hub's inertia follows its bore
+    /// nodes. Where uniform scaling ([`ExplicitPair::scale_mass`]) multiplies the mass of the
+    /// large, slow body elements as much as that of the small flank elements that set the step,
+    /// this puts the mass where the step is made (step and inertia budget:
+    /// [`ExplicitPair::mass_scaling_step`]). Returns each gear's least and largest factor.
+    pub fn scale_mass_to_step(&mut self, step: f64) -> [[f64; 2]; 2] {
+        std::array::from_fn(|g| {
+            let factors: Vec<f64> = self.bodies[g]
+                .element_critical_steps()
+                .iter()
+                .map(|dt| (step / dt).powi(2).max(1.0))
+                .collect();
+            self.bodies[g].set_element_mass_factors(&factors);
+            self.inverse_mass[g] = inverse_masses(&self.bodies[g], &self.free[g]);
+            if g == 1 {
+                self.hub_inertia = hub_inertia_of(&self.meshes[1], &self.bodies[1]);
+            }
+            let least = factors.iter().copied().fold(f64::INFINITY, f64::min);
+            [least, factors.iter().copied().fold(1.0, f64::max)]
+        })
+    }
+
+    /// The largest step T at which [`ExplicitPair::scale_mass_to_step`] raises neither gear's
+    /// polar inertia by more than `factor` (at the masses as built): per gear the root of
+    /// Σₑ Iₑ max(1, (T/Δtₑ)²) = factor · Σₑ Iₑ, Iₑ = Σ mₑ,ₖ |Xₖ|² the element's share of the
+    /// inertia about the gear's centre, by bisection between √factor · min Δtₑ (uniform
+    /// scaling's step, where the left side is at most the right) and √factor · max Δtₑ (where
+    /// it is at least); the smaller of the two gears' roots. With the driven gear's inertia the
+    /// mesh mode f_n = √(k_m R_b2²/I₂)/2π of the rigid gears is the uniform scaling's.
+    pub fn mass_scaling_step(&self, factor: f64) -> f64 {
+        (0..2)
+            .map(|g| {
+                let body = &self.bodies[g];
+                let steps = body.element_critical_steps();
+                let inertias: Vec<f64> = (0..body.elements.len())
+                    .map(|e| {
+                        let m = body.element_masses(e);
+                        body.elements[e]
+                            .iter()
+                            .zip(m)
+                            .map(|(&n, m)| m * self.meshes[g].nodes[n].coords.norm_squared())
+                            .sum()
+                    })
+                    .collect();
+                let budget = factor * inertias.iter().sum::<f64>();
+                let inertia_at = |t: f64| -> f64 {
+                    steps
+                        .iter()
+                        .zip(&inertias)
+                        .map(|(dt, i)| i * (t / dt).powi(2).max(1.0))
+                        .sum()
+                };
+                let root = factor.max(1.0).sqrt();
+                let (mut lo, mut hi) = (
+                    root * steps.iter().copied().fold(f64::INFINITY, f64::min),
+                    root * steps.iter().copied().fold(0.0, f64::max),
+                );
+                for _ in 0..100 {
+                    let mid = 0.5 * (lo + hi);
+                    if inertia_at(mid) > budget {
+                        hi = mid;
+                    } else {
+                        lo = mid;
+                    }
+                }
+                lo
+            })
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// Polar moment of inertia of gear `g` (body and hub) about its centre [kg m²]:
@@ -794,6 +853,21 @@ impl ExplicitPair {
         }
         2.0 / omega2.sqrt()
     }
+}
+
+/// Inverse nodal masses per DOF of `body`, zero where the DOF is not free (the bore's).
+fn inverse_masses(body: &ExplicitBody, free: &[bool]) -> Vec<f64> {
+    (0..free.len())
+        .map(|d| if free[d] { 1.0 / body.mass[d / 2] } else { 0.0 })
+        .collect()
+}
+
+/// The hub's inertia: its bore nodes' masses at their radii, Σ mₙ |Xₙ|² [kg m²].
+fn hub_inertia_of(mesh: &GearMesh, body: &ExplicitBody) -> f64 {
+    mesh.bore_nodes
+        .iter()
+        .map(|&n| body.mass[n] * mesh.nodes[n].coords.norm_squared())
+        .sum()
 }
 
 /// A closed penalty spring of one Gauss point: √k and, for the three slave and three master

@@ -808,7 +808,21 @@ struct RunMesh {
 fn model_description(case: &Case, prepared: &PreparedScene, mesh: &RunMesh) -> String {
     let settings = &case.fe;
     let scaling = &prepared.mass_scaling;
-    let mass_scaling = if scaling.factor > 1.0 {
+    let mass_scaling = if let (Some(step), Some([least, largest])) =
+        (scaling.target_step_s, scaling.element_factor_range)
+    {
+        format!(
+            "; element masses raised to a common element step {:.4e} s within {:.1} x each gear's inertia (element factors {:.2} to {:.1}; quasi-static: mesh mode {:.0} -> {:.0} Hz, {:.1} x the fifth mesh harmonic {:.0} Hz)",
+            step,
+            scaling.factor,
+            least,
+            largest,
+            scaling.mesh_mode_hz,
+            scaling.scaled_mesh_mode_hz,
+            scaling.scaled_mode_over_harmonic,
+            scaling.highest_harmonic_hz,
+        )
+    } else if scaling.factor > 1.0 {
         format!(
             "; mass scaled by {:.1} (quasi-static: mesh mode {:.0} -> {:.0} Hz, {:.1} x the fifth mesh harmonic {:.0} Hz; stable step {:.2} x)",
             scaling.factor,

@@ -270,9 +270,10 @@ pub struct FeSection {
     /// carry almost no damping at the mesh frequencies).
     #[serde(default = "default_mesh_damping")]
     pub mesh_damping_ratio: f64,
-    /// Mass scaling at low speeds: every mass times s so that the mesh mode falls to
+    /// Mass scaling at low speeds: each gear's inertia times s so that the mesh mode falls to
     /// `mass_scaling_margin` × the fifth mesh harmonic, when it is above that (the stable step
-    /// grows by √s; quasi-static response kept). Off by itself where the mesh frequency is high.
+    /// grows by √s or more, `mass_scaling_mode`; quasi-static response kept). Off by itself
+    /// where the mesh frequency is high.
     #[serde(default = "default_true")]
     pub mass_scaling: bool,
     /// The scaled mesh mode over the fifth mesh harmonic.

@@ -207,6 +207,13 @@ impl ExplicitBody {
     /// node spacing, so for Q8 this overestimates the stable step (see
     /// [`ExplicitBody::element_eigen_critical_step`]).
     pub fn paper_critical_step(&self) -> f64 {
+        self.paper_critical_steps()
+            .into_iter()
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// [`ExplicitBody::paper_critical_step`] of each element.
+    pub fn paper_critical_steps(&self) -> Vec<f64> {
         let c = self.wave_speed();
         self.elements
             .iter()
@@ -215,7 +222,7 @@ impl ExplicitBody {
                 let edges = [(0, 1), (1, 2), (2, 3), (3, 0)].map(|(a, b)| (xe[b] - xe[a]).norm());
                 q8::area(&xe) / edges.iter().copied().fold(0.0, f64::max) / c
             })
-            .fold(f64::INFINITY, f64::min)
+            .collect()
     }
 
     /// A rigorous bound: the global ω_max never exceeds the largest element ω_max of

@@ -437,21 +437,17 @@ impl ExplicitPair {
         self.hub_inertia *= factor;
     }
 
-    /// Per-element mass scaling to a common stable step `step` [s]: each element's lumped
-    /// masses times sₑ = max(1, (step/Δtₑ)²), Δtₑ its own stable step at the material's density
-    /// ([`ExplicitBody::element_critical_steps`]), so that by Irons' element bound no element
-    /// holds either body's stable step below `step`; the driven hub's inertia follows its bore
-    /// nodes. Where uniform scaling ([`ExplicitPair::scale_mass`]) multiplies the mass of the
-    /// large, slow body elements as much as that of the small flank elements that set the step,
-    /// this puts the mass where the step is made (step and inertia budget:
-    /// [`ExplicitPair::mass_scaling_step`]). Returns each gear's least and largest factor.
-    pub fn scale_mass_to_step(&mut self, step: f64) -> [[f64; 2]; 2] {
+    /// Per-element mass scaling to the stable steps `steps` [s] (one per gear): each element's
+    /// lumped masses times sₑ = max(1, (T_g/Δtₑ)²) ([`ExplicitPair::element_mass_factors`]),
+    /// so that by Irons' element bound no element holds its body's stable step below T_g; the
+    /// inverse masses and the driven hub's inertia follow. Where uniform scaling
+    /// ([`ExplicitPair::scale_mass`]) multiplies the mass of the large, slow body elements as
+    /// much as that of the small flank elements that set the step, this puts the mass where
+    /// the step is made (the steps for an inertia budget: [`ExplicitPair::mass_scaling_steps`]).
+    /// Returns each gear's least and largest factor.
+    pub fn scale_mass_to_steps(&mut self, steps: [f64; 2]) -> [[f64; 2]; 2] {
         std::array::from_fn(|g| {
-            let factors: Vec<f64> = self.bodies[g]
-                .element_critical_steps()
-                .iter()
-                .map(|dt| (step / dt).powi(2).max(1.0))
-                .collect();
+            let factors = self.element_mass_factors(g, steps[g]);
             self.bodies[g].set_element_mass_factors(&factors);
             self.inverse_mass[g] = inverse_masses(&self.bodies[g], &self.free[g]);
             if g == 1 {
@@ -462,52 +458,68 @@ impl ExplicitPair {
         })
     }
 
-    /// The largest step T at which [`ExplicitPair::scale_mass_to_step`] raises neither gear's
-    /// polar inertia by more than `factor` (at the masses as built): per gear the root of
-    /// Σₑ Iₑ max(1, (T/Δtₑ)²) = factor · Σₑ Iₑ, Iₑ = Σ mₑ,ₖ |Xₖ|² the element's share of the
-    /// inertia about the gear's centre, by bisection between √factor · min Δtₑ (uniform
-    /// scaling's step, where the left side is at most the right) and √factor · max Δtₑ (where
-    /// it is at least); the smaller of the two gears' roots. With the driven gear's inertia the
-    /// mesh mode f_n = √(k_m R_b2²/I₂)/2π of the rigid gears is the uniform scaling's.
-    pub fn mass_scaling_step(&self, factor: f64) -> f64 {
-        (0..2)
-            .map(|g| {
-                let body = &self.bodies[g];
-                let steps = body.element_critical_steps();
-                let inertias: Vec<f64> = (0..body.elements.len())
-                    .map(|e| {
-                        let m = body.element_masses(e);
-                        body.elements[e]
-                            .iter()
-                            .zip(m)
-                            .map(|(&n, m)| m * self.meshes[g].nodes[n].coords.norm_squared())
-                            .sum()
-                    })
-                    .collect();
-                let budget = factor * inertias.iter().sum::<f64>();
-                let inertia_at = |t: f64| -> f64 {
-                    steps
+    /// The mass factor of each element of gear `g` that raises its own stable step to `step`:
+    /// max(1, (step/Δtₑ)²), Δtₑ at the material's density
+    /// ([`ExplicitBody::element_critical_steps`]).
+    pub fn element_mass_factors(&self, g: usize, step: f64) -> Vec<f64> {
+        self.bodies[g]
+            .element_critical_steps()
+            .iter()
+            .map(|dt| (step / dt).powi(2).max(1.0))
+            .collect()
+    }
+
+    /// For each gear the step T_g at which [`ExplicitPair::scale_mass_to_steps`] raises its
+    /// polar inertia by exactly `factor` (at the masses as built): the root of
+    /// Σₑ Iₑ max(1, (T/Δtₑ)²) = factor · Σₑ Iₑ, Iₑ = Σₖ mₑ,ₖ |Xₖ|² the element's share of
+    /// the inertia about the gear's centre ([`ExplicitPair::inertia`] element by element), by
+    /// bisection between √factor · min Δtₑ (uniform scaling's element step, where the left side
+    /// is at most the right) and √factor · max Δtₑ (where it is at least; the left side grows
+    /// with T). Each gear's inertia is then uniform scaling's, and so is the rigid gears' mesh
+    /// mode; the pair's step is bounded by the smaller T_g.
+    pub fn mass_scaling_steps(&self, factor: f64) -> [f64; 2] {
+        std::array::from_fn(|g| {
+            let body = &self.bodies[g];
+            let steps = body.element_critical_steps();
+            let inertias: Vec<f64> = (0..body.elements.len())
+                .map(|e| {
+                    let m = body.element_masses(e);
+                    body.elements[e]
                         .iter()
-                        .zip(&inertias)
-                        .map(|(dt, i)| i * (t / dt).powi(2).max(1.0))
+                        .zip(m)
+                        .map(|(&n, m)| m * self.meshes[g].nodes[n].coords.norm_squared())
                         .sum()
-                };
-                let root = factor.max(1.0).sqrt();
-                let (mut lo, mut hi) = (
-                    root * steps.iter().copied().fold(f64::INFINITY, f64::min),
-                    root * steps.iter().copied().fold(0.0, f64::max),
-                );
-                for _ in 0..100 {
-                    let mid = 0.5 * (lo + hi);
-                    if inertia_at(mid) > budget {
-                        hi = mid;
-                    } else {
-                        lo = mid;
-                    }
+                })
+                .collect();
+            let budget = factor * inertias.iter().sum::<f64>();
+            let inertia_at = |t: f64| -> f64 {
+                steps
+                    .iter()
+                    .zip(&inertias)
+                    .map(|(dt, i)| i * (t / dt).powi(2).max(1.0))
+                    .sum()
+            };
+            let root = factor.max(1.0).sqrt();
+            let (mut lo, mut hi) = (
+                root * steps.iter().copied().fold(f64::INFINITY, f64::min),
+                root * steps.iter().copied().fold(0.0, f64::max),
+            );
+            for _ in 0..100 {
+                let mid = 0.5 * (lo + hi);
+                if inertia_at(mid) > budget {
+                    hi = mid;
+                } else {
+                    lo = mid;
                 }
-                lo
-            })
-            .fold(f64::INFINITY, f64::min)
+            }
+            lo
+        })
+    }
+
+    /// Inverse nodal masses of gear `g` per DOF, zero on the bore (what the integrator divides
+    /// the forces by).
+    pub fn inverse_mass(&self, g: usize) -> &[f64] {
+        &self.inverse_mass[g]
     }
 
     /// Polar moment of inertia of gear `g` (body and hub) about its centre [kg m²]:

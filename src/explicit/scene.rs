@@ -74,11 +74,13 @@
 //! # Mass scaling (low speeds)
 //! At low speed the mesh harmonics lie far below the mesh mode and the response is
 //! quasi-static, while the step is set by the element and contact frequencies: the run pays for
-//! dynamics it does not need. Every nodal mass and the hub's inertia are multiplied by
+//! dynamics it does not need. Each gear's polar inertia is raised by
 //! s = (f_n / (margin · 5 f_mesh))² when that is above 1 (f_n the mesh mode with the driver
-//! held, √(k_m R_b2²/I₂)/2π; 5 f_mesh the highest mesh harmonic kept): every natural frequency
-//! falls by √s — the mesh mode to `margin` × the fifth harmonic, the element and contact
-//! frequencies with it — so the stable step grows by √s. What is kept are the means: of the
+//! held, √(k_m R_b2²/I₂)/2π; 5 f_mesh the highest mesh harmonic kept), so the mesh mode falls
+//! by √s to `margin` × the fifth harmonic. Scaled uniformly (every nodal mass and the hub's
+//! inertia times s), every natural frequency falls by √s, the element and contact frequencies
+//! with it, and the stable step grows by √s; scaled to a target step (below, the default) the
+//! step grows by about 3√s. What is kept are the means: of the
 //! DTE, of k(θ) = ΣW/Σ(R_b2 θ − e) and of the static TE from it (within 0.1 % of an unscaled
 //! run, `geardyn validate mass-scaling`); harmonic h of the mesh frequency is amplified by
 //! 1/(1 − (h f_mesh/f_n,scaled)²), +0.4 % at the first, +12.5 % at the fifth with margin 3.
@@ -89,7 +91,7 @@
 //! of k(θ) move by up to 4 % (the static TE's peak-to-peak by 1.5 % at margin 3, 10.7 % at
 //! margin 2; validation/low-speed). The level-1
 //! impact detail is not reported for a scaled run (its 25–50 kHz band then holds body modes
-//! lowered by √s). Where 5·margin·f_mesh ≥ f_n (the 3000 rpm scenes: f_mesh = 1 800 Hz against
+//! lowered by √s, or by up to √sₑ). Where 5·margin·f_mesh ≥ f_n (the 3000 rpm scenes: f_mesh = 1 800 Hz against
 //! f_n ≈ 3.1 kHz), s = 1: the dynamics matter and nothing is scaled. The scaled mesh mode is
 //! the one the dashpot, the settling time and the low-pass use; `summary.json` states the
 //! factor and both frequencies.
@@ -99,16 +101,17 @@
 //! smallest elements: the 1 mm flank elements and the thin rim layers below the teeth (the
 //! paper pair's elements' own steps Δtₑ spread over 8× at 1 mm / 3 mm). Uniform scaling
 //! multiplies all of them alike. `"target-step"` spends the same inertia budget where the step
-//! is made: each element's lumped masses times sₑ = max(1, (T/Δtₑ)²), with the largest T at
-//! which neither gear's inertia Σₑ sₑ Iₑ exceeds s Σₑ Iₑ
-//! ([`ExplicitPair::mass_scaling_step`]). By Irons' element bound no element then holds a
-//! body's stable step below T. The rigid gears' mesh mode is uniform scaling's, or above it
-//! for the gear whose budget does not bind T. Mass moved towards the contact raises the real
-//! mesh mode over the rigid estimate: it sits nearer the support than the hub does. The
-//! teeth's own modes fall by √sₑ; on the paper pair at 60 rpm they stay far above the fifth
-//! harmonic. The stable step of the stiffness scene grows 2.9× over uniform scaling's, the same
-//! budget. Against an unscaled run the means and the static TE's fluctuation are kept as well
-//! as by uniform scaling (validation/low-speed, "Mass scaling").
+//! is made: each element's lumped masses times sₑ = max(1, (T_g/Δtₑ)²), with the T_g at which
+//! gear g's inertia Σₑ sₑ Iₑ is s Σₑ Iₑ ([`ExplicitPair::mass_scaling_steps`]). By Irons'
+//! element bound no element then holds a body's stable step below its T_g. Each gear's inertia,
+//! and so the rigid gears' mesh mode, is uniform scaling's. Mass moved towards the contact
+//! raises the real mesh mode over the rigid estimate: it sits nearer the support than the hub
+//! does. The teeth's own modes fall by up to √sₑ; on the paper pair at 60 rpm they stay far
+//! above the fifth harmonic. The stiffness scene's step grows 2.9× over uniform scaling's, the
+//! same budget, and its means, static TE and k(θ) bins stay as close to an unscaled run's
+//! (validation/low-speed, "Mass scaling"). A run on windows of fine teeth scales uniformly:
+//! the fine teeth change at every switch, and most of a target step's mass would move with
+//! them.
 //!
 //! # Mesh damping
 //! The elastic bodies' stiffness damping is tuned to the element scale (ζ at ω_max) and is a few
@@ -159,7 +162,7 @@
 
 use std::time::Instant;
 
-use crate::explicit::body::ExplicitMaterial;
+use crate::explicit::body::{ExplicitBody, ExplicitMaterial};
 use crate::explicit::pair::{
     Drive, ExplicitPair, IntegratorCheckpoint, PairEnergy, PairIntegrator, PairState, PhaseWall,
     Ramp, Start,
@@ -243,8 +246,8 @@ pub enum MassScalingMode {
     /// Every nodal mass and the hub's inertia times s: every natural frequency falls by √s,
     /// the stable step grows by √s.
     Uniform,
-    /// Each element's mass raised to a common stable step T, as far as the inertia budget s
-    /// allows ([`ExplicitPair::mass_scaling_step`], [`ExplicitPair::scale_mass_to_step`]):
+    /// Each element's mass raised to one stable step T_g per gear, as far as the inertia budget
+    /// s allows ([`ExplicitPair::mass_scaling_steps`], [`ExplicitPair::scale_mass_to_steps`]):
     /// the small flank elements and the thin rim layers that set the step take most of the
     /// mass, the large body elements little. The stiffness scene's step is 2.9× uniform
     /// scaling's, its answers as close to an unscaled run's (validation/low-speed).
@@ -372,7 +375,9 @@ pub const KEPT_HARMONIC: usize = 5;
 /// Mass scaling of a scene (see the module doc).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct MassScaling {
-    /// Every nodal mass and the hub's inertia times this (1: off).
+    /// Each gear's polar inertia times this (1: off): every nodal mass and the hub's inertia
+    /// times it ([`MassScalingMode::Uniform`]), or each element's mass raised to its gear's
+    /// target step within it ([`MassScalingMode::TargetStep`]).
     pub factor: f64,
     /// The mesh mode with the driver held, f_n = √(k_m R_b2²/I₂)/2π, unscaled and scaled [Hz].
     pub mesh_mode_hz: f64,
@@ -381,10 +386,12 @@ pub struct MassScaling {
     /// over it.
     pub highest_harmonic_hz: f64,
     pub scaled_mode_over_harmonic: f64,
+    /// Where the mass went: the case's mode, uniform for a run on windows of fine teeth.
     pub mode: MassScalingMode,
-    /// [`MassScalingMode::TargetStep`]: the common element step T the masses are raised to
-    /// [s] (the stable step then grows by about T over the unscaled elements' least step).
-    pub target_step_s: Option<f64>,
+    /// [`MassScalingMode::TargetStep`]: each gear's element step T_g its masses are raised to
+    /// [s] (the pair's stable step then grows by about min T_g over the unscaled elements'
+    /// least step).
+    pub target_steps_s: Option<[f64; 2]>,
     /// [`MassScalingMode::TargetStep`]: the least and largest element mass factor of both
     /// gears.
     pub element_factor_range: Option<[f64; 2]>,
@@ -407,27 +414,25 @@ impl MassScaling {
             highest_harmonic_hz,
             scaled_mode_over_harmonic: scaled_mesh_mode_hz / highest_harmonic_hz,
             mode: MassScalingMode::Uniform,
-            target_step_s: None,
+            target_steps_s: None,
             element_factor_range: None,
         }
     }
 
-    /// Scales `model`'s masses: every mass times `factor`, or each element's to
-    /// `target_step_s` ([`ExplicitPair::scale_mass_to_step`]); nothing when `factor` is 1.
-    /// Returns the element factors' range of a target step.
+    /// Scales `model`'s masses: each element's to `target_steps_s`
+    /// ([`ExplicitPair::scale_mass_to_steps`]), else every mass times `factor` (nothing when it
+    /// is 1). Returns the element factors' range of a target step.
     fn apply(&self, model: &mut ExplicitPair) -> Option<[f64; 2]> {
-        if self.factor <= 1.0 {
-            return None;
-        }
-        match self.target_step_s {
-            None => {
+        match self.target_steps_s {
+            Some(steps) => {
+                let [a, b] = model.scale_mass_to_steps(steps);
+                Some([a[0].min(b[0]), a[1].max(b[1])])
+            }
+            None if self.factor > 1.0 => {
                 model.scale_mass(self.factor);
                 None
             }
-            Some(step) => {
-                let [a, b] = model.scale_mass_to_step(step);
-                Some([a[0].min(b[0]), a[1].max(b[1])])
-            }
+            None => None,
         }
     }
 }
@@ -479,19 +484,29 @@ pub fn prepare(
     let margin = settings
         .mass_scaling_margin
         .map(|m| scene.mass_scaling_margin.unwrap_or(m));
+    let windows = WindowPlan::new(
+        settings.fine_teeth,
+        pair,
+        &drive,
+        scene.duration,
+        settings.output_interval,
+    );
     let mut mass_scaling = MassScaling::new(mesh_mode_hz, mesh_hz, margin);
-    if mass_scaling.factor > 1.0 && settings.mass_scaling_mode == MassScalingMode::TargetStep {
-        mass_scaling.mode = MassScalingMode::TargetStep;
-        mass_scaling.target_step_s = Some(model.mass_scaling_step(mass_scaling.factor));
+    // A run on windows changes which teeth are fine at every switch, and a target step's mass
+    // sits mostly in the fine teeth: it would come and go with them. Such scenes (300 rpm and
+    // long low-speed scenes) scale uniformly.
+    if windows.is_none() || mass_scaling.factor <= 1.0 {
+        mass_scaling.mode = settings.mass_scaling_mode;
+    }
+    if mass_scaling.factor > 1.0 && mass_scaling.mode == MassScalingMode::TargetStep {
+        mass_scaling.target_steps_s = Some(model.mass_scaling_steps(mass_scaling.factor));
     }
     mass_scaling.element_factor_range = mass_scaling.apply(&mut model);
-    if mass_scaling.target_step_s.is_some() {
-        // The gear whose budget binds T takes all of it; the other less: the mode as built.
-        mass_scaling.scaled_mesh_mode_hz =
-            (mesh_stiffness * rb2 * rb2 / model.driven_inertia()).sqrt() / std::f64::consts::TAU;
-        mass_scaling.scaled_mode_over_harmonic =
-            mass_scaling.scaled_mesh_mode_hz / mass_scaling.highest_harmonic_hz;
-    }
+    // Each gear's inertia is s times its own either way: the scaled model's mesh mode.
+    mass_scaling.scaled_mesh_mode_hz =
+        (mesh_stiffness * rb2 * rb2 / model.driven_inertia()).sqrt() / std::f64::consts::TAU;
+    mass_scaling.scaled_mode_over_harmonic =
+        mass_scaling.scaled_mesh_mode_hz / mass_scaling.highest_harmonic_hz;
     let body_steps = |model: &ExplicitPair| -> [f64; 2] {
         std::array::from_fn(|g| {
             let fixed: Vec<bool> = model.free[g].iter().map(|f| !f).collect();
@@ -502,13 +517,7 @@ pub fn prepare(
     // A run on windows steps meshes with fine and coarse sectors side by side, which the
     // scene's mesh may not have (at 3000 rpm every tooth is fine): the first window's bodies
     // bound the step too (the later ones are the same mesh, turned by whole pitches).
-    if let Some(plan) = WindowPlan::new(
-        settings.fine_teeth,
-        pair,
-        &drive,
-        scene.duration,
-        settings.output_interval,
-    ) {
+    if let Some(plan) = windows {
         let first = window_model_of(
             &model,
             modifications,
@@ -529,19 +538,33 @@ pub fn prepare(
     let beta_k = 2.0 * zeta / omega_max;
     let dt_critical = dt_undamped * ((1.0 + zeta * zeta).sqrt() - zeta);
     // Both bounds come from the material's density: with uniformly scaled masses they grow by
-    // √s too (the paper's L/c is given at that density for a target step as well); a target
-    // step raises every element's own step to at least T, the least of them to T.
-    let density_scale = mass_scaling.factor.sqrt();
-    let dt_paper = density_scale
-        * model.bodies[0]
-            .paper_critical_step()
-            .min(model.bodies[1].paper_critical_step());
-    let dt_element_bound = mass_scaling.target_step_s.unwrap_or_else(|| {
-        density_scale
-            * model.bodies[0]
-                .element_eigen_critical_step()
-                .min(model.bodies[1].element_eigen_critical_step())
-    });
+    // √s; with a target step each element's by √sₑ, the Irons bound to the least T_g.
+    let (dt_paper, dt_element_bound) = match mass_scaling.target_steps_s {
+        None => {
+            let density_scale = mass_scaling.factor.sqrt();
+            let least = |f: fn(&ExplicitBody) -> f64| {
+                density_scale * f(&model.bodies[0]).min(f(&model.bodies[1]))
+            };
+            (
+                least(ExplicitBody::paper_critical_step),
+                least(ExplicitBody::element_eigen_critical_step),
+            )
+        }
+        Some(steps) => {
+            let paper = (0..2)
+                .flat_map(|g| {
+                    let factors = model.element_mass_factors(g, steps[g]);
+                    model.bodies[g]
+                        .paper_critical_steps()
+                        .into_iter()
+                        .zip(factors)
+                        .map(|(dt, s)| dt * s.sqrt())
+                        .collect::<Vec<_>>()
+                })
+                .fold(f64::INFINITY, f64::min);
+            (paper, steps[0].min(steps[1]))
+        }
+    };
     // Mesh dashpot: ζ of the driven gear turning against the mesh spring (driver prescribed),
     // k_t = k_m R_b2², c_t = 2ζ√(k_t I₂).
     let mesh_damping_stiffness = mesh_stiffness;

@@ -98,10 +98,18 @@ pub fn read_fe_run(dir: &Path) -> Result<FeDte, String> {
         ramp_end_s: number(&["scene", "ramp_time"])?,
         statistics_start_s: number(&["statistics_start_s"])?,
         wall_s: number(&["total_wall_s"])?,
-        // β = 2ζ/ω_max grows with √ of the mass scaling: the unscaled bodies' β.
+        // β = 2ζ/ω_max grows with √ of a uniform mass scaling: the unscaled bodies' β. A
+        // target step lowers ω_max by more, by how much the summary does not say: no β then.
         stiffness_damping_beta_s: summary
             .get("stiffness_damping_beta_s")
             .and_then(|v| v.as_f64())
+            .filter(|_| {
+                let factor = number(&["mass_scaling", "factor"]).unwrap_or(1.0);
+                let target_step = summary
+                    .pointer("/mass_scaling/target_steps_s")
+                    .is_some_and(|v| !v.is_null());
+                factor <= 1.0 || !target_step
+            })
             .map(|beta| beta / number(&["mass_scaling", "factor"]).unwrap_or(1.0).sqrt()),
     })
 }

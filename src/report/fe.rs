@@ -721,7 +721,7 @@ pub fn write_mass_scaling(
             y_range: None,
             markers: Vec::new(),
             title: format!(
-                "{}: {}: k from the DTE, mass scaled {:.1}x against unscaled",
+                "{}: {}: k from the DTE, mass-scaled (inertia {:.1}x) against unscaled",
                 case.name(),
                 s.scene,
                 a.mass_scaling_factor
@@ -730,7 +730,7 @@ pub fn write_mass_scaling(
             y_label: "mesh stiffness [N/m]".into(),
             series: vec![
                 (
-                    format!("mass scaled {:.1}x", a.mass_scaling_factor),
+                    format!("mass-scaled, inertia {:.1}x", a.mass_scaling_factor),
                     curve(|b| b.1),
                 ),
                 ("unscaled".to_string(), curve(|b| b.2)),

@@ -430,7 +430,7 @@ pub struct FeSummary {
     pub dte_spectrum_peaks: Vec<DtePeak>,
     pub contact_force_max_n: f64,
     /// Largest |db5 level-1 detail| of the contact force over the statistics window.
-    /// None for a mass-scaled run: its body modes are lowered by √s, so the level-1 band
+    /// None for a mass-scaled run: its body modes are lowered by √s or more, so the level-1 band
     /// (25–50 kHz at 10 µs) no longer reads the real pair's impacts.
     pub impact_d1_max_n: Option<f64>,
     /// k(θ) from the DTE against the LTCA's, bin by bin, on the run's mesh and the case's.
@@ -808,12 +808,13 @@ struct RunMesh {
 fn model_description(case: &Case, prepared: &PreparedScene, mesh: &RunMesh) -> String {
     let settings = &case.fe;
     let scaling = &prepared.mass_scaling;
-    let mass_scaling = if let (Some(step), Some([least, largest])) =
-        (scaling.target_step_s, scaling.element_factor_range)
+    let mass_scaling = if let (Some([t1, t2]), Some([least, largest])) =
+        (scaling.target_steps_s, scaling.element_factor_range)
     {
         format!(
-            "; element masses raised to a common element step {:.4e} s within {:.1} x each gear's inertia (element factors {:.2} to {:.1}; quasi-static: mesh mode {:.0} -> {:.0} Hz, {:.1} x the fifth mesh harmonic {:.0} Hz)",
-            step,
+            "; element masses raised to element steps of {:.4e} / {:.4e} s, each gear's inertia {:.1} x (element factors {:.2} to {:.1}; quasi-static: mesh mode {:.0} -> {:.0} Hz, {:.1} x the fifth mesh harmonic {:.0} Hz)",
+            t1,
+            t2,
             scaling.factor,
             least,
             largest,
@@ -824,7 +825,7 @@ fn model_description(case: &Case, prepared: &PreparedScene, mesh: &RunMesh) -> S
         )
     } else if scaling.factor > 1.0 {
         format!(
-            "; mass scaled by {:.1} (quasi-static: mesh mode {:.0} -> {:.0} Hz, {:.1} x the fifth mesh harmonic {:.0} Hz; stable step {:.2} x)",
+            "; every mass scaled by {:.1} (quasi-static: mesh mode {:.0} -> {:.0} Hz, {:.1} x the fifth mesh harmonic {:.0} Hz; stable step {:.2} x)",
             scaling.factor,
             scaling.mesh_mode_hz,
             scaling.scaled_mesh_mode_hz,

@@ -280,7 +280,8 @@ pub struct FeSection {
     #[serde(default = "default_mass_scaling_margin")]
     pub mass_scaling_margin: f64,
     /// Where the added mass goes: "uniform" (every mass times s) or "target-step" (each
-    /// element's mass raised to one common stable step within the same inertia budget s).
+    /// element's mass raised to a stable step T_g per gear, at which each gear's inertia is
+    /// exactly s times its own).
     #[serde(default)]
     pub mass_scaling_mode: MassScalingMode,
     /// Interval of the recorded time histories [µs].

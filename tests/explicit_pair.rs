@@ -710,8 +710,8 @@ fn mass_scaling_lowers_the_mesh_mode_and_lengthens_the_step_by_its_root() {
     );
 }
 
-/// Mass scaling to a target step (`fe.mass_scaling_mode = "target-step"`) on the paper pair, 24/40
-/// and 40/24 at 60 rpm: each gear's polar inertia is raised by exactly the uniform scaling's
+/// Mass scaling to a target step (`fe.mass_scaling_mode = "target-step"`) on the paper pair, 24/40,
+/// 40/24 and the shifted 17/53 at 60 rpm: each gear's polar inertia is raised by exactly the uniform scaling's
 /// factor s (1e-9), so the scaled mesh mode is uniform scaling's (and is what the model's
 /// driven inertia gives); the integrator's inverse masses and the driven hub's inertia follow
 /// the new nodal masses; each body's measured stable step is at least its T_g (Irons' element
@@ -721,7 +721,7 @@ fn mass_scaling_lowers_the_mesh_mode_and_lengthens_the_step_by_its_root() {
 #[test]
 fn target_step_mass_scaling_keeps_the_inertia_and_lengthens_the_step() {
     use geardyn::explicit::scene::MassScalingMode;
-    for name in ["paper36", "24-40", "40-24"] {
+    for name in ["paper36", "24-40", "40-24", "17-53-shift"] {
         let mut case = coarse_matrix_pair(name);
         case.fe.high_frequency_damping_ratio = 0.0;
         case.fe.mesh_damping_ratio = 0.0;

@@ -103,7 +103,6 @@ impl ExplicitBody {
             material.poisson_ratio,
             material.plane,
         );
-        let mut mass = vec![0.0; nodes.len()];
         let mut prototypes = Vec::new();
         let mut prototype_of = Vec::with_capacity(elements.len());
         let mut index = std::collections::HashMap::new();
@@ -114,13 +113,6 @@ impl ExplicitBody {
             .max(1e-12);
         for e in elements {
             let xe = e.map(|i| nodes[i]);
-            for (k, m) in
-                q8::lumped_mass(&xe, material.density, material.thickness, material.lumping)
-                    .iter()
-                    .enumerate()
-            {
-                mass[e[k]] += m;
-            }
             // Turn the element back into sector 0 (tooth-local frame: tooth k at k·2π/z).
             let local = match symmetry {
                 Some(z) => {
@@ -166,16 +158,18 @@ impl ExplicitBody {
         let members = prototype_members(&prototype_of, prototypes.len());
         let batches = make_batches(elements, &members);
         let wide_batches = make_wide_batches(elements, &members);
-        Ok(ExplicitBody {
+        let mut body = ExplicitBody {
             reference: nodes.to_vec(),
             elements: elements.to_vec(),
             prototype_of,
             batches,
             wide_batches,
             prototypes,
-            mass,
+            mass: vec![0.0; nodes.len()],
             material,
-        })
+        };
+        body.set_element_mass_factors(&vec![1.0; elements.len()]);
+        Ok(body)
     }
 
     /// Number of element batches of the kernel this CPU runs (elements / batches: the lane

@@ -481,8 +481,10 @@ pub fn prepare(
         settings.penalty_factor,
     )?;
     let rb2 = pair.gears[1].base_radius;
-    let mesh_mode_hz =
-        (mesh_stiffness * rb2 * rb2 / model.driven_inertia()).sqrt() / std::f64::consts::TAU;
+    // The mesh mode with the driver held, ω_n = √(k_m R_b2²/I₂) [rad/s], of a model's masses.
+    let mesh_mode_of =
+        |model: &ExplicitPair| (mesh_stiffness * rb2 * rb2 / model.driven_inertia()).sqrt();
+    let mesh_mode_hz = mesh_mode_of(&model) / std::f64::consts::TAU;
     let mesh_hz = scene.driver_speed / pair.gears[0].angular_pitch();
     let margin = settings
         .mass_scaling_margin
@@ -506,8 +508,7 @@ pub fn prepare(
     }
     mass_scaling.element_factor_range = mass_scaling.apply(&mut model);
     // Each gear's inertia is s times its own either way: the scaled model's mesh mode.
-    mass_scaling.scaled_mesh_mode_hz =
-        (mesh_stiffness * rb2 * rb2 / model.driven_inertia()).sqrt() / std::f64::consts::TAU;
+    mass_scaling.scaled_mesh_mode_hz = mesh_mode_of(&model) / std::f64::consts::TAU;
     mass_scaling.scaled_mode_over_harmonic =
         mass_scaling.scaled_mesh_mode_hz / mass_scaling.highest_harmonic_hz;
     let body_steps = |model: &ExplicitPair| -> [f64; 2] {
@@ -574,7 +575,7 @@ pub fn prepare(
     let mesh_damping = 2.0
         * settings.mesh_damping_ratio
         * (mesh_damping_stiffness * rb2 * rb2 * model.driven_inertia()).sqrt();
-    let mesh_mode = (mesh_damping_stiffness * rb2 * rb2 / model.driven_inertia()).sqrt();
+    let mesh_mode = mesh_mode_of(&model);
     let driven_speed = model.kinematic_hub_rotation(drive.driver_speed).abs();
     let ringing = ramp_ringing(&drive, mesh_mode, model.driven_inertia(), driven_speed);
     let settling_time = if settings.mesh_damping_ratio > 0.0 && ringing > SETTLED_RINGING {

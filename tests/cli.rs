@@ -1786,8 +1786,17 @@ fn compare_fe_sweep_finds_a_known_resonance() {
         "resonance_rpm_lumped",
         "peak_dte_mesh_amplitude_rel_err",
         "dte_rms_max_rel_err",
+        "dte_rms_max_rel_err_at_fe_resonance",
+        "dte_rms_speed_sensitivity_max",
     ] {
         assert!(sweep[key].as_f64().unwrap().is_finite(), "{key}");
+    }
+    let case_model = &models[0];
+    for key in [
+        "dte_rms_speed_sensitivity",
+        "dte_rms_rel_err_at_fe_resonance",
+    ] {
+        assert_eq!(case_model[key].as_array().unwrap().len(), 5, "{key}");
     }
     for file in [
         "fe_sweep.csv",

@@ -441,6 +441,8 @@ fn write_fe_sweep(
             "mesh_amplitude_urad",
             "dte_rms_urad",
             "dte_rms_rel_err",
+            "dte_rms_rel_err_at_fe_resonance",
+            "dte_rms_speed_sensitivity",
             "diverged",
         ] {
             header.push(format!("{}_{column}", m.key));
@@ -468,6 +470,8 @@ fn write_fe_sweep(
                     format!("{:.5}", um(l.mesh_amplitude_rad)),
                     format!("{:.5}", um(l.dte_rms_rad)),
                     format!("{:.4}", m.dte_rms_rel_err[i]),
+                    format!("{:.4}", m.dte_rms_rel_err_at_fe_resonance[i]),
+                    format!("{:.3}", m.dte_rms_speed_sensitivity[i]),
                     l.diverged.to_string(),
                 ]);
             }
@@ -610,7 +614,7 @@ fn write_fe_sweep(
     );
     for m in &sweep.models {
         text += &format!(
-            "\n* {} (dashpot {:.0} N·s/m, acting on its mesh mode as the FE's on the FE modal's: ζ {:.4}): resonance {:.0} rpm ({:+.2} %), peak 1st mesh harmonic {:.3} urad ({:+.1} %), DTE rms largest difference {:.1} % where it settled{}{}",
+            "\n* {} (dashpot {:.0} N·s/m, acting on its mesh mode as the FE's on the FE modal's: ζ {:.4}): resonance {:.0} rpm ({:+.2} %), peak 1st mesh harmonic {:.3} urad ({:+.1} %), DTE rms largest difference {:.1} % where it settled ({:.1} % at the FE's speeds taken relative to each one's resonance; the rms's log-slope over speed there up to {:.1}, so a resonance 1 % off alone moves it by about {:.0} %){}{}",
             m.label,
             m.mesh_damping_n_s_per_m,
             m.mesh_mode_damping_ratio,
@@ -619,6 +623,9 @@ fn write_fe_sweep(
             um(m.peak_dte_mesh_amplitude_rad),
             100.0 * m.peak_dte_mesh_amplitude_rel_err,
             100.0 * m.dte_rms_max_rel_err,
+            100.0 * m.dte_rms_max_rel_err_at_fe_resonance,
+            m.dte_rms_speed_sensitivity_max,
+            m.dte_rms_speed_sensitivity_max,
             match m.diverged_at_fe_rpm.is_empty() {
                 true => String::new(),
                 false => format!("; diverged at the FE speeds {:?} rpm", m.diverged_at_fe_rpm),

@@ -1036,13 +1036,16 @@ fn sections(
     {
         let n = |key: &str| number(compare, &["fe_sweep", key]);
         frequency_text.push(format!(
-            "The explicit FE through the resonance ({} speeds, speed drive as the FE): resonance {} rpm (FE) against {} rpm (the case's lumped model, {}); peak first mesh harmonic {}; DTE rms at most {} apart. Where a lumped model's sweep diverged, compare/table.md says what the FE did there.",
+            "The explicit FE through the resonance ({} speeds, speed drive as the FE): resonance {} rpm (FE) against {} rpm (the case's lumped model, {}); peak first mesh harmonic {}; DTE rms at most {} apart ({} at the FE's speeds taken relative to each one's resonance; there a resonance 1 % off alone moves the rms by up to {}). Where a lumped model's sweep diverged, compare/table.md says what the FE did there.",
             sweep.get("fe").and_then(|f| f.as_array()).map_or(0, |f| f.len()),
             show(n("resonance_rpm_fe"), 0),
             show(n("resonance_rpm_lumped"), 0),
             n("resonance_rpm_rel_err").map_or("–".into(), |r| format!("{:+.2} %", 100.0 * r)),
             n("peak_dte_mesh_amplitude_rel_err").map_or("–".into(), |r| format!("{:+.1} %", 100.0 * r)),
             n("dte_rms_max_rel_err").map_or("–".into(), |r| format!("{:.1} %", 100.0 * r)),
+            n("dte_rms_max_rel_err_at_fe_resonance")
+                .map_or("–".into(), |r| format!("{:.1} %", 100.0 * r)),
+            n("dte_rms_speed_sensitivity_max").map_or("–".into(), |s| format!("{s:.0} %")),
         ));
         frequency_plots.push((
             "Explicit FE through the resonance (markers) against the lumped models (lines)".into(),

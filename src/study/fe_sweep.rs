@@ -271,6 +271,18 @@ pub struct ModelSweep {
     pub peak_dte_mesh_amplitude_rel_err: f64,
     /// The largest |lumped/FE − 1| of the DTE rms over the FE speeds where the model settled.
     pub dte_rms_max_rel_err: f64,
+    /// The rms comparison's conditioning: at each FE speed n the model's log-slope
+    /// d ln rms / d ln n (central difference over n(1 ± [`SENSITIVITY_STEP`])), so that a
+    /// resonance δ off alone moves the rms there by about slope × δ; and the largest |slope|
+    /// over the FE speeds (NaN where the model diverged beside one).
+    pub dte_rms_speed_sensitivity: Vec<f64>,
+    pub dte_rms_speed_sensitivity_max: f64,
+    /// At each FE speed n the model at n · n_r/n_r,FE (its fitted resonance over the FE's):
+    /// the DTE rms held at the same speed relative to each one's own resonance, lumped/FE − 1,
+    /// so that the resonance's error (held on its own, `resonance_rpm_rel_err`) is not counted
+    /// again in the rms; and the largest |error|.
+    pub dte_rms_rel_err_at_fe_resonance: Vec<f64>,
+    pub dte_rms_max_rel_err_at_fe_resonance: f64,
     /// The FE speeds where it diverged from rest.
     pub diverged_at_fe_rpm: Vec<f64>,
     /// The speeds it diverged at, continued up or down or from rest: (lowest, highest) [rpm].
@@ -324,6 +336,10 @@ pub struct FeSweep {
     pub peak_dte_mesh_amplitude_lumped_rad: f64,
     pub peak_dte_mesh_amplitude_rel_err: f64,
     pub dte_rms_max_rel_err: f64,
+    /// The case's model's [`ModelSweep::dte_rms_max_rel_err_at_fe_resonance`] and
+    /// [`ModelSweep::dte_rms_speed_sensitivity_max`].
+    pub dte_rms_max_rel_err_at_fe_resonance: f64,
+    pub dte_rms_speed_sensitivity_max: f64,
     /// The FE extrapolated to zero flank size, where three meshes ran common speeds.
     pub extrapolated: Option<ExtrapolatedFe>,
     /// The FE runs in each model's unstable band, as measured.
@@ -836,6 +852,8 @@ pub fn run(
         peak_dte_mesh_amplitude_lumped_rad: case_model.peak_dte_mesh_amplitude_rad,
         peak_dte_mesh_amplitude_rel_err: case_model.peak_dte_mesh_amplitude_rel_err,
         dte_rms_max_rel_err: case_model.dte_rms_max_rel_err,
+        dte_rms_max_rel_err_at_fe_resonance: case_model.dte_rms_max_rel_err_at_fe_resonance,
+        dte_rms_speed_sensitivity_max: case_model.dte_rms_speed_sensitivity_max,
         extrapolated,
         settling_note: format!(
             "each FE run's statistics window starts at least {settled:.1} decay times 1/(ζω_n) of the mesh mode after its start (the ramp included): a linear start transient is down to e^-{settled:.1} of itself; amplitudes and rms are read over the window's last third (the last of three stretches of whole mesh periods ending at its end); growth (that last third's rms over the first's) {:.3}–{:.3}; {} of {} runs settled (the rms still to come after the window, from its thirds, within {:.0} %){unsettled_text}",
@@ -967,6 +985,29 @@ fn model_sweep(
         .map(|(l, f)| l.dte_rms_rad / f.dte_rms_rad - 1.0)
         .collect();
     let dte_rms_max_rel_err = largest_abs(dte_rms_rel_err.iter().copied());
+    // The model beside each FE speed (the log-slope's two ends) and at the same speed
+    // relative to its resonance as the FE speed to the FE's.
+    let shift = rpm / fe_rpm;
+    let probes: Vec<[LumpedSpeed; 3]> = fe
+        .par_iter()
+        .map(|s| {
+            let n = s.speed_rpm;
+            [1.0 - SENSITIVITY_STEP, 1.0 + SENSITIVITY_STEP, shift]
+                .map(|factor| lumped_at(model, n * factor, rb2))
+        })
+        .collect();
+    let dte_rms_speed_sensitivity: Vec<f64> = probes
+        .iter()
+        .map(|[below, above, _]| {
+            (above.dte_rms_rad / below.dte_rms_rad).ln()
+                / ((1.0 + SENSITIVITY_STEP) / (1.0 - SENSITIVITY_STEP)).ln()
+        })
+        .collect();
+    let dte_rms_rel_err_at_fe_resonance: Vec<f64> = probes
+        .iter()
+        .zip(fe)
+        .map(|([_, _, matched], f)| matched.dte_rms_rad / f.dte_rms_rad - 1.0)
+        .collect();
     Some(ModelSweep {
         key: String::new(),
         label: label.to_string(),
@@ -989,9 +1030,20 @@ fn model_sweep(
         peak_dte_mesh_amplitude_rad: peak,
         peak_dte_mesh_amplitude_rel_err: peak / fe_peak - 1.0,
         dte_rms_max_rel_err,
+        dte_rms_speed_sensitivity_max: largest_abs(dte_rms_speed_sensitivity.iter().copied()),
+        dte_rms_speed_sensitivity,
+        dte_rms_max_rel_err_at_fe_resonance: largest_abs(
+            dte_rms_rel_err_at_fe_resonance.iter().copied(),
+        ),
+        dte_rms_rel_err_at_fe_resonance,
         unstable_band_rpm,
     })
 }
+
+/// The relative speed step either side of an FE speed over which
+/// [`ModelSweep::dte_rms_speed_sensitivity`] takes the rms's log-slope: small against the
+/// resonance's width (2ζ ≈ 10 % at ζ = 0.05), large against the steady state's convergence.
+pub const SENSITIVITY_STEP: f64 = 0.005;
 
 /// The FE runs inside `band` (or the nearest one when none is) with what they did.
 fn band_runs(model: &str, band: (f64, f64), fe: &[FeSpeed]) -> Vec<BandRun> {
@@ -1381,6 +1433,87 @@ mod tests {
             .count();
         assert_eq!(x.speeds_extrapolated, counted);
         assert!(counted < shared.len());
+    }
+
+    /// The rms comparison's conditioning on a known answer. The "FE" is the linear one-DOF
+    /// model's own response with its resonance 1.5 % higher (the model at n/1.015, as exact
+    /// steady states), so the two differ only in the resonance. The raw rms comparison then
+    /// misses by far more than 1.5 % on the resonance's flanks; held at the same speed relative
+    /// to each one's fitted resonance it agrees; the resonance error reads −1.5 %. The rms's
+    /// log-slope is the one-DOF response's, |H| = 1/|1 − r² + 2iζr| (m p̈ + c ṗ + k(p − e) = F
+    /// with e a cosine, r = f_mesh/f_n):
+    /// d ln|H| / d ln r = (2r²(1 − r²) − 4ζ²r²) / ((1 − r²)² + 4ζ²r²).
+    #[test]
+    fn the_rms_held_at_each_ones_resonance_takes_out_a_known_shift() {
+        use crate::lumped::{DampingSite, MeshModel, Structure};
+        use crate::stiffness::{MeshStiffness, PeriodicTable};
+        use std::f64::consts::PI;
+        let (zeta, shift) = (0.03, 1.015);
+        let period = 2.0 * PI / 36.0;
+        let mut model = MeshModel {
+            structure: Structure::rigid_pair(0.57),
+            mesh: MeshStiffness::from_tables(
+                "analytic",
+                None,
+                PeriodicTable::constant(period, 4e8),
+                PeriodicTable::from_fn(period, 256, |t| 1e-6 * (2.0 * PI * t / period).cos()),
+            ),
+            damping: 0.0,
+            damping_site: DampingSite::MeshDeflection,
+            force: 2670.0,
+            backlash: None,
+            back_reflection: None,
+            back_force_law: None,
+            force_law: None,
+        };
+        model.damping = model.damping_from_ratio(zeta);
+        let rpm_n = model.natural_frequency() / (2.0 * PI) * 60.0 / 36.0;
+        let fe: Vec<FeSpeed> = (0..8)
+            .map(|i| {
+                let n = rpm_n * shift * (0.85 + 0.3 * i as f64 / 7.0 + 0.007);
+                let own = super::lumped_at(&model, n / shift, 1.0);
+                steady_speed(n, None, own.mesh_amplitude_rad, own.dte_rms_rad)
+            })
+            .collect();
+        let sweep = super::run(fe.clone(), &[("m", "the model", &model)], 1.0, 1e-3).unwrap();
+        let m = &sweep.models[0];
+        assert!(
+            (sweep.resonance_rpm_rel_err - (1.0 / shift - 1.0)).abs() < 1e-4,
+            "{}",
+            sweep.resonance_rpm_rel_err
+        );
+        assert!(
+            sweep.dte_rms_max_rel_err > 0.2,
+            "{}",
+            sweep.dte_rms_max_rel_err
+        );
+        for (i, s) in fe.iter().enumerate() {
+            let err = m.dte_rms_rel_err_at_fe_resonance[i];
+            // Both fits are of exact one-DOF curves: the shift is theirs to about 1e-6.
+            assert!(err.abs() < 1e-4, "{} rpm: {err}", s.speed_rpm);
+            let r = s.speed_rpm / rpm_n;
+            let d = (1.0 - r * r).powi(2) + 4.0 * zeta * zeta * r * r;
+            let want = (2.0 * r * r * (1.0 - r * r) - 4.0 * zeta * zeta * r * r) / d;
+            let got = m.dte_rms_speed_sensitivity[i];
+            // The central difference over ±0.5 % against the derivative (third-order terms
+            // (0.005²/6) S''' of the slope): within 1 % of it, or 0.05 where it passes through
+            // zero at the peak.
+            assert!(
+                (got - want).abs() < 0.01 * want.abs() + 0.05,
+                "{} rpm (r = {r:.4}): {got} vs {want}",
+                s.speed_rpm
+            );
+        }
+        let largest = m
+            .dte_rms_speed_sensitivity
+            .iter()
+            .fold(0.0f64, |a, s| a.max(s.abs()));
+        assert_eq!(sweep.dte_rms_speed_sensitivity_max, largest);
+        assert!(largest > 5.0, "{largest}");
+        assert_eq!(
+            sweep.dte_rms_max_rel_err_at_fe_resonance,
+            m.dte_rms_max_rel_err_at_fe_resonance
+        );
     }
 
     /// A synthetic one-degree-of-freedom response sampled at eight speeds from 0.8 to 1.2 × its

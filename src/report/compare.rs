@@ -629,6 +629,16 @@ fn write_fe_sweep(
             match m.diverged_at_fe_rpm.is_empty() {
                 true => String::new(),
                 false => format!("; diverged at the FE speeds {:?} rpm", m.diverged_at_fe_rpm),
+            } + &match m.diverged_at_probe_rpm.is_empty() {
+                true => String::new(),
+                false => format!(
+                    "; diverged beside the FE speeds at {} rpm (left out of the slope and the rms at the FE's resonance)",
+                    m.diverged_at_probe_rpm
+                        .iter()
+                        .map(|r| format!("{r:.0}"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
             },
             m.unstable_band_rpm.map_or(String::new(), |(lo, hi)| format!(
                 "; unstable (the sweep diverged) at {lo:.0}–{hi:.0} rpm"

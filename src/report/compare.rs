@@ -614,7 +614,7 @@ fn write_fe_sweep(
     );
     for m in &sweep.models {
         text += &format!(
-            "\n* {} (dashpot {:.0} N·s/m, acting on its mesh mode as the FE's on the FE modal's: ζ {:.4}): resonance {:.0} rpm ({:+.2} %), peak 1st mesh harmonic {:.3} urad ({:+.1} %), DTE rms largest difference {:.1} % where it settled ({:.1} % at the FE's speeds taken relative to each one's resonance, its resonance read as the FE's {:.0} rpm ({:+.2} %); the rms's log-slope over speed there up to {:.1}, so a resonance 1 % off alone moves it by about {:.0} %){}{}",
+            "\n* {} (dashpot {:.0} N·s/m, acting on its mesh mode as the FE's on the FE modal's: ζ {:.4}): resonance {:.0} rpm ({:+.2} %), peak 1st mesh harmonic {:.3} urad ({:+.1} %), DTE rms largest difference {:.1} % where it settled ({:.1} % at the FE's speeds taken relative to each one's resonance, {}; the rms's log-slope over speed there up to {:.1}, so a resonance 1 % off alone moves it by about {:.0} %){}{}",
             m.label,
             m.mesh_damping_n_s_per_m,
             m.mesh_mode_damping_ratio,
@@ -624,8 +624,15 @@ fn write_fe_sweep(
             100.0 * m.peak_dte_mesh_amplitude_rel_err,
             100.0 * m.dte_rms_max_rel_err,
             100.0 * m.dte_rms_max_rel_err_at_fe_resonance,
-            m.resonance_rpm_sampled_like_fe,
-            100.0 * (m.resonance_rpm_sampled_like_fe / sweep.resonance_rpm_fe - 1.0),
+            match m.resonance_rpm_sampled_like_fe.is_finite() {
+                true => format!(
+                    "its resonance read as the FE's {:.0} rpm ({:+.2} %; fixed point to {:.0e})",
+                    m.resonance_rpm_sampled_like_fe,
+                    100.0 * (m.resonance_rpm_sampled_like_fe / sweep.resonance_rpm_fe - 1.0),
+                    m.held_residual
+                ),
+                false => "its resonance not read as the FE's (it diverged beside the FE speeds: held at its dense fit's ratio)".to_string(),
+            },
             m.dte_rms_speed_sensitivity_max,
             m.dte_rms_speed_sensitivity_max,
             match m.diverged_at_fe_rpm.is_empty() {

@@ -1545,6 +1545,54 @@ mod tests {
         assert!(counted < shared.len());
     }
 
+    /// The one-DOF lumped model of the rms tests: a rigid pair of 36 teeth, constant mesh
+    /// stiffness 4e8 N/m, a cosine TE of amplitude `te` [m] once per mesh period, the mesh
+    /// damper at ratio `zeta` on ṗ, with `backlash` [m] or none; and its undamped natural
+    /// frequency as a driver speed [rpm] (f_mesh = f_n).
+    fn one_dof(te: f64, backlash: Option<f64>, zeta: f64) -> (crate::lumped::MeshModel, f64) {
+        use crate::lumped::{DampingSite, MeshModel, Structure};
+        use crate::stiffness::{MeshStiffness, PeriodicTable};
+        use std::f64::consts::PI;
+        let period = 2.0 * PI / 36.0;
+        let mut model = MeshModel {
+            structure: Structure::rigid_pair(0.57),
+            mesh: MeshStiffness::from_tables(
+                "analytic",
+                None,
+                PeriodicTable::constant(period, 4e8),
+                PeriodicTable::from_fn(period, 256, |t| te * (2.0 * PI * t / period).cos()),
+            ),
+            damping: 0.0,
+            damping_site: DampingSite::MeshDeflection,
+            force: 2670.0,
+            backlash,
+            back_reflection: None,
+            back_force_law: None,
+            force_law: None,
+        };
+        model.damping = model.damping_from_ratio(zeta);
+        let rpm_n = model.natural_frequency() / (2.0 * PI) * 60.0 / 36.0;
+        (model, rpm_n)
+    }
+
+    /// Eight settled "FE" speeds from `from` to `from + span` times `rpm` (offset 0.7 %, so
+    /// none sits on a grid of the fit) whose responses are `model`'s own at the speed over
+    /// `shift`: the model with its resonance `shift` times higher.
+    fn shifted(
+        model: &crate::lumped::MeshModel,
+        rpm: f64,
+        shift: f64,
+        (from, span): (f64, f64),
+    ) -> Vec<FeSpeed> {
+        (0..8)
+            .map(|i| {
+                let n = rpm * (from + span * i as f64 / 7.0 + 0.007);
+                let own = super::lumped_at(model, n / shift, 1.0);
+                steady_speed(n, None, own.mesh_amplitude_rad, own.dte_rms_rad)
+            })
+            .collect()
+    }
+
     /// The rms comparison's conditioning on a known answer. The "FE" is the linear one-DOF
     /// model's own response with its resonance 1.5 % higher (the model at n/1.015, as exact
     /// steady states), so the two differ only in the resonance. The raw rms comparison then
@@ -1555,36 +1603,9 @@ mod tests {
     /// d ln|H| / d ln r = (2r²(1 − r²) − 4ζ²r²) / ((1 − r²)² + 4ζ²r²).
     #[test]
     fn the_rms_held_at_each_ones_resonance_takes_out_a_known_shift() {
-        use crate::lumped::{DampingSite, MeshModel, Structure};
-        use crate::stiffness::{MeshStiffness, PeriodicTable};
-        use std::f64::consts::PI;
         let (zeta, shift) = (0.03, 1.015);
-        let period = 2.0 * PI / 36.0;
-        let mut model = MeshModel {
-            structure: Structure::rigid_pair(0.57),
-            mesh: MeshStiffness::from_tables(
-                "analytic",
-                None,
-                PeriodicTable::constant(period, 4e8),
-                PeriodicTable::from_fn(period, 256, |t| 1e-6 * (2.0 * PI * t / period).cos()),
-            ),
-            damping: 0.0,
-            damping_site: DampingSite::MeshDeflection,
-            force: 2670.0,
-            backlash: None,
-            back_reflection: None,
-            back_force_law: None,
-            force_law: None,
-        };
-        model.damping = model.damping_from_ratio(zeta);
-        let rpm_n = model.natural_frequency() / (2.0 * PI) * 60.0 / 36.0;
-        let fe: Vec<FeSpeed> = (0..8)
-            .map(|i| {
-                let n = rpm_n * shift * (0.85 + 0.3 * i as f64 / 7.0 + 0.007);
-                let own = super::lumped_at(&model, n / shift, 1.0);
-                steady_speed(n, None, own.mesh_amplitude_rad, own.dte_rms_rad)
-            })
-            .collect();
+        let (model, rpm_n) = one_dof(1e-6, None, zeta);
+        let fe = shifted(&model, rpm_n * shift, shift, (0.85, 0.3));
         let sweep = super::run(fe.clone(), &[("m", "the model", &model)], 1.0, 1e-3).unwrap();
         let m = &sweep.models[0];
         assert!(
@@ -1632,36 +1653,9 @@ mod tests {
     /// 8.9 % and the dense fit's ratio would by 4.2 %.
     #[test]
     fn the_rms_held_at_each_ones_resonance_on_a_bent_peak() {
-        use crate::lumped::{DampingSite, MeshModel, Structure};
-        use crate::stiffness::{MeshStiffness, PeriodicTable};
-        use std::f64::consts::PI;
         let shift = 1.015;
-        let period = 2.0 * PI / 36.0;
-        let mut model = MeshModel {
-            structure: Structure::rigid_pair(0.57),
-            mesh: MeshStiffness::from_tables(
-                "analytic",
-                None,
-                PeriodicTable::constant(period, 4e8),
-                PeriodicTable::from_fn(period, 256, |t| 2e-6 * (2.0 * PI * t / period).cos()),
-            ),
-            damping: 0.0,
-            damping_site: DampingSite::MeshDeflection,
-            force: 2670.0,
-            backlash: Some(50e-6),
-            back_reflection: None,
-            back_force_law: None,
-            force_law: None,
-        };
-        model.damping = model.damping_from_ratio(0.05);
-        let rpm_n = model.natural_frequency() / (2.0 * PI) * 60.0 / 36.0;
-        let fe: Vec<FeSpeed> = (0..8)
-            .map(|i| {
-                let n = rpm_n * shift * (0.82 + 0.36 * i as f64 / 7.0 + 0.007);
-                let own = super::lumped_at(&model, n / shift, 1.0);
-                steady_speed(n, None, own.mesh_amplitude_rad, own.dte_rms_rad)
-            })
-            .collect();
+        let (model, rpm_n) = one_dof(2e-6, Some(50e-6), 0.05);
+        let fe = shifted(&model, rpm_n * shift, shift, (0.82, 0.36));
         let sweep = super::run(fe.clone(), &[("m", "the model", &model)], 1.0, 1e-3).unwrap();
         let m = &sweep.models[0];
         assert!(

@@ -1247,8 +1247,9 @@ enum WindowEnd {
 }
 
 /// Where a running scene keeps checkpoints as it goes: every `every_s` seconds of wall time
-/// (checked every [`KEEP_CHECK_STEPS`] steps) `keep` gets one, with the history so far, so a
-/// process killed outright (SIGKILL, a batch job's time limit) can go on from the last one.
+/// (checked every [`KEEP_CHECK_STEPS`] steps, on one clock across the run's windows) `keep`
+/// gets one, with the history so far, so a process killed outright (SIGKILL, a batch job's time
+/// limit) can go on from the last one.
 pub struct Keeping<'a> {
     pub every_s: f64,
     pub keep: &'a mut dyn FnMut(&RunCheckpoint, &History),
@@ -1426,6 +1427,9 @@ pub fn run(
             ));
         }
     }
+    // One clock for the whole run: a window shorter than `every_s` must not restart it, or a
+    // run on windows would keep no checkpoint after its first.
+    let mut last_kept = Instant::now();
     let plan = WindowPlan::of(prepared, duration, output_interval);
     let Some(plan) = plan else {
         if resume.as_ref().is_some_and(|(c, _)| c.window.is_some()) {
@@ -1443,7 +1447,7 @@ pub fn run(
             duration,
             output_interval,
             from,
-            &mut keeping,
+            (&mut keeping, &mut last_kept),
             progress,
         )? {
             WindowEnd::Done(outcome) => Ok(*outcome),
@@ -1471,7 +1475,7 @@ pub fn run(
             duration,
             output_interval,
             from.take(),
-            &mut keeping,
+            (&mut keeping, &mut last_kept),
             progress,
         )? {
             WindowEnd::Done(outcome) => return Ok(*outcome),
@@ -1526,7 +1530,7 @@ fn run_window(
     duration: f64,
     output_interval: f64,
     from: Option<(RunCheckpoint, History, bool)>,
-    keeping: &mut Option<Keeping>,
+    (keeping, last_kept): (&mut Option<Keeping>, &mut Instant),
     progress: &mut dyn FnMut(f64),
 ) -> Result<WindowEnd, FeError> {
     let (total_steps, every) = step_counts(prepared, duration, output_interval);
@@ -1720,7 +1724,6 @@ fn run_window(
         element_steps: element_steps_before
             + (integrator.steps as f64 - steps_before as f64) * model.elements() as f64,
     };
-    let mut last_kept = Instant::now();
     let mut step = first_step;
     while step <= control.total_steps {
         if crate::interrupt::stop_requested() {
@@ -1957,7 +1960,7 @@ fn run_window(
                     &trusted,
                 );
                 (keeping.keep)(&checkpoint, &history);
-                last_kept = Instant::now();
+                *last_kept = Instant::now();
             }
         }
         step += 1;

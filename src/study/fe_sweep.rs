@@ -375,17 +375,27 @@ pub struct UnsettledRun {
     pub duration_s: f64,
 }
 
+/// Whether [`resonance_fit`] takes the point (speed, amplitude): both positive, finite.
+fn fits(&(speed, amplitude): &(f64, f64)) -> bool {
+    speed > 0.0 && amplitude > 0.0 && amplitude.is_finite()
+}
+
+/// The DTE rms of `lumped` against `fe`'s, speed by speed: lumped/FE − 1.
+fn rms_rel_errs<'a>(lumped: impl IntoIterator<Item = &'a LumpedSpeed>, fe: &[FeSpeed]) -> Vec<f64> {
+    lumped
+        .into_iter()
+        .zip(fe)
+        .map(|(l, f)| l.dte_rms_rad / f.dte_rms_rad - 1.0)
+        .collect()
+}
+
 /// The peak of a one-degree-of-freedom response fitted to `points` (speed, amplitude > 0):
 /// |X(n)| = A/√((1 − r²)² + (2ζr)²), r = n/n_r, A by linear least squares for each (n_r, ζ),
 /// (n_r, ζ) by a grid over the points' speed range and ζ ∈ [0.005, 0.5] (log), refined by
 /// narrowing the grid about the best three times. Returns the fitted curve's peak: its speed
 /// n_r√(1 − 2ζ²), ζ, and its amplitude A/(2ζ√(1 − ζ²)); `None` with fewer than three points.
 pub fn resonance_fit(points: &[(f64, f64)]) -> Option<(f64, f64, f64)> {
-    let points: Vec<(f64, f64)> = points
-        .iter()
-        .copied()
-        .filter(|p| p.0 > 0.0 && p.1 > 0.0 && p.1.is_finite())
-        .collect();
+    let points: Vec<(f64, f64)> = points.iter().copied().filter(fits).collect();
     if points.len() < 3 {
         return None;
     }
@@ -920,12 +930,7 @@ fn mesh_level(
         .par_iter()
         .map(|s| case_model_at(model, sweep, s.speed_rpm, rb2))
         .collect();
-    let rms_err = largest_abs(
-        lumped
-            .iter()
-            .zip(&fe)
-            .map(|(l, f)| l.dte_rms_rad / f.dte_rms_rad - 1.0),
-    );
+    let rms_err = largest_abs(rms_rel_errs(&lumped, &fe).into_iter());
     MeshLevel {
         fine_element_mm: fe[0].fine_element_mm,
         fe,
@@ -990,11 +995,7 @@ fn model_sweep(
         .map(|s| (s.speed_rpm, s.mesh_amplitude_rad))
         .collect();
     let (rpm, zeta, peak) = resonance_fit(&fit_points)?;
-    let dte_rms_rel_err: Vec<f64> = at_fe_speeds
-        .iter()
-        .zip(fe)
-        .map(|(l, f)| l.dte_rms_rad / f.dte_rms_rad - 1.0)
-        .collect();
+    let dte_rms_rel_err = rms_rel_errs(&at_fe_speeds, fe);
     let dte_rms_max_rel_err = largest_abs(dte_rms_rel_err.iter().copied());
     // The model beside each FE speed: the log-slope's two ends.
     let beside: Vec<[LumpedSpeed; 2]> = fe
@@ -1019,12 +1020,7 @@ fn model_sweep(
         .map(|p| p.speed_rpm)
         .collect();
     diverged_at_probe_rpm.extend(&held.diverged_rpm);
-    let dte_rms_rel_err_at_fe_resonance: Vec<f64> = held
-        .probes
-        .iter()
-        .zip(fe)
-        .map(|(matched, f)| matched.dte_rms_rad / f.dte_rms_rad - 1.0)
-        .collect();
+    let dte_rms_rel_err_at_fe_resonance = rms_rel_errs(&held.probes, fe);
     Some(ModelSweep {
         key: String::new(),
         label: label.to_string(),
@@ -1104,7 +1100,6 @@ fn held_at_fe_resonance(
             .map(|s| lumped_at(model, s.speed_rpm * c, rb2))
             .collect()
     };
-    let fitted = |s: &FeSpeed| s.mesh_amplitude_rad.is_finite() && s.mesh_amplitude_rad > 0.0;
     let first = at(start);
     let (mut c, mut probes) = (start, first.clone());
     let mut read: Option<(Vec<LumpedSpeed>, f64, f64)> = None;
@@ -1117,7 +1112,7 @@ fn held_at_fe_resonance(
         let points: Vec<(f64, f64)> = probes
             .iter()
             .zip(fe)
-            .filter(|(_, s)| fitted(s))
+            .filter(|(_, s)| fits(&(s.speed_rpm, s.mesh_amplitude_rad)))
             .map(|(p, _)| (p.speed_rpm, p.mesh_amplitude_rad))
             .collect();
         let Some((resonance, _, _)) = resonance_fit(&points) else {

@@ -1359,6 +1359,11 @@ fn compare_reads_a_known_fe_run_and_names_its_lines() {
     for name in ["accuracy_cost.csv", "accuracy_cost.md", "accuracy_cost.png"] {
         assert!(out.join(name).exists(), "{name}");
     }
+    // One stiffness run: no limit of the FE's own to hold against the LTCA's (three sizes).
+    assert!(
+        chart["explicit_fe_mean_stiffness_limit"].is_null(),
+        "{chart}"
+    );
     let s = read_summary(&out);
     let speed = &s["speeds"][0];
     let fe: Vec<f64> = speed["fe_harmonics_rad"]

@@ -965,6 +965,27 @@ pub fn write_accuracy_cost(dir: OutputDir, chart: &AccuracyCost) -> Result<Strin
             100.0 * p.dte_amplitude_error
         );
     }
+    if let Some(limit) = &chart.explicit_fe_mean_stiffness_limit {
+        table += &format!(
+            "\nThe explicit FE's own k̄ at zero flank size, from {:?} mm: {:.5e} ± {:.2e} N/m ({}), \
+             {:+.2} % from the LTCA's limit, whose and its uncertainties add to {:.2} %: {}.\n",
+            limit.flank_mm,
+            limit.value_n_per_m,
+            limit.uncertainty_n_per_m,
+            limit
+                .order
+                .map_or("not extrapolated: the finest, the levels' spread".into(), |p| {
+                    format!("observed order {p:.2}")
+                }),
+            100.0 * limit.rel_to_ltca_limit,
+            100.0 * limit.combined_uncertainty_rel,
+            if limit.agrees {
+                "the two fidelities meet"
+            } else {
+                "they part by more than that"
+            }
+        );
+    }
     dir.bytes("accuracy_cost.md", table.as_bytes())?;
     Ok(table)
 }

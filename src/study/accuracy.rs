@@ -106,6 +106,64 @@ pub struct AccuracyCost {
     pub references: References,
     pub speed_rpm: f64,
     pub points: Vec<MethodPoint>,
+    /// The explicit FE's own k̄ at zero flank size, held against the LTCA's (given stiffness runs
+    /// at three flank sizes or more).
+    pub explicit_fe_mean_stiffness_limit: Option<FeLimit>,
+}
+
+/// The explicit FE's mean stiffness extrapolated to zero flank size ([`richardson`] on its three
+/// finest stiffness runs) beside the LTCA's extrapolated k̄: two fidelities that discretize the
+/// contact differently (penalty springs at Gauss points against an exact active set at nodes)
+/// and converge from different sides at different rates should meet in their limit, within
+/// the two extrapolations' uncertainties.
+#[derive(Debug, Clone, Serialize)]
+pub struct FeLimit {
+    /// The three flank sizes used, coarsest first [mm].
+    pub flank_mm: [f64; 3],
+    /// The FE's k̄ at each [N/m].
+    pub mean_stiffness_n_per_m: [f64; 3],
+    /// The extrapolated k̄ [N/m], its uncertainty (the extrapolation's own size, or the levels'
+    /// spread where they do not converge monotonically) and the observed order.
+    pub value_n_per_m: f64,
+    pub uncertainty_n_per_m: f64,
+    pub order: Option<f64>,
+    /// value / the LTCA's extrapolated k̄ − 1.
+    pub rel_to_ltca_limit: f64,
+    /// The two limits' uncertainties added, over the LTCA's k̄.
+    pub combined_uncertainty_rel: f64,
+    /// |rel_to_ltca_limit| within combined_uncertainty_rel.
+    pub agrees: bool,
+}
+
+/// [`FeLimit`] from stiffness runs given as (flank size [mm], mass-scaled, k̄ [N/m]): one run per
+/// size (the unscaled one where a size has both: it carries no scaling's approximation), the
+/// three finest sizes. None with fewer than three sizes.
+pub fn explicit_fe_limit(runs: &[(f64, bool, f64)], ltca: &Reference) -> Option<FeLimit> {
+    let mut by_size: Vec<(f64, bool, f64)> = Vec::new();
+    for &(mm, scaled, k) in runs {
+        match by_size.iter_mut().find(|(m, _, _)| (m - mm).abs() < 1e-9) {
+            Some(kept) if kept.1 && !scaled => *kept = (mm, scaled, k),
+            Some(_) => {}
+            None => by_size.push((mm, scaled, k)),
+        }
+    }
+    by_size.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let finest = by_size.get(by_size.len().checked_sub(3)?..)?;
+    let flank_mm = [finest[0].0, finest[1].0, finest[2].0];
+    let k = [finest[0].2, finest[1].2, finest[2].2];
+    let (value, uncertainty, order) = richardson(flank_mm, k);
+    let rel_to_ltca_limit = value / ltca.value - 1.0;
+    let combined_uncertainty_rel = (uncertainty + ltca.uncertainty) / ltca.value;
+    Some(FeLimit {
+        flank_mm,
+        mean_stiffness_n_per_m: k,
+        value_n_per_m: value,
+        uncertainty_n_per_m: uncertainty,
+        order,
+        rel_to_ltca_limit,
+        combined_uncertainty_rel,
+        agrees: rel_to_ltca_limit.abs() <= combined_uncertainty_rel,
+    })
 }
 
 /// f at zero mesh size from three sizes h₁ > h₂ > h₃ (finest last), f(h) = f₀ + c hᵖ:
@@ -384,6 +442,13 @@ pub fn run(
         ));
     }
     let (mean_stiffness, static_te_peak_to_peak) = ltca_references(case, torque, progress)?;
+    let explicit_fe_mean_stiffness_limit = explicit_fe_limit(
+        &fe_runs
+            .iter()
+            .map(|r| (r.fine_mm, r.mass_scaling_factor > 1.0, r.stiffness.mean()))
+            .collect::<Vec<_>>(),
+        &mean_stiffness,
+    );
     let mesh_hz = speed_rpm / 60.0 * case.pair.gears[0].teeth() as f64;
     let (_, late) = dte_run.window_starts();
     let window = &dte_run.dte[late..];
@@ -444,12 +509,40 @@ pub fn run(
         references,
         speed_rpm,
         points,
+        explicit_fe_mean_stiffness_limit,
     })
 }
 
 #[cfg(test)]
 mod tests {
-    use super::richardson;
+    use super::{explicit_fe_limit, richardson, Reference};
+
+    /// Known answers: FE runs on k̄ = k₀ + c h² recover k₀ and the order; a size run both
+    /// scaled and unscaled counts once, unscaled; the three finest sizes are taken; a limit
+    /// 1 % off the LTCA's with 0.2 % uncertainties each does not agree, one 0.1 % off does;
+    /// two sizes give nothing.
+    #[test]
+    fn the_explicit_fe_limit_recovers_a_known_one() {
+        let (k0, c) = (4.0e8, 2.0e7);
+        let at = |h: f64| k0 + c * h * h;
+        let mut runs = vec![(1.0, true, at(1.0) * 1.5), (0.7, true, at(0.7) * 1.1)];
+        runs.extend([0.7, 0.5, 0.35].map(|h| (h, false, at(h))));
+        let ltca = |value: f64| Reference {
+            value,
+            uncertainty: 0.002 * value,
+            source: String::new(),
+        };
+        let limit = explicit_fe_limit(&runs, &ltca(k0 / 1.01)).unwrap();
+        assert_eq!(limit.flank_mm, [0.7, 0.5, 0.35]);
+        assert!((limit.value_n_per_m / k0 - 1.0).abs() < 1e-9);
+        assert!((limit.order.unwrap() - 2.0).abs() < 1e-6);
+        assert!((limit.rel_to_ltca_limit - 0.01).abs() < 1e-9);
+        let moved = (at(0.35) - k0) / (k0 / 1.01);
+        assert!((limit.combined_uncertainty_rel - (moved + 0.002)).abs() < 1e-9);
+        assert!(!limit.agrees);
+        assert!(explicit_fe_limit(&runs, &ltca(k0 / 1.001)).unwrap().agrees);
+        assert!(explicit_fe_limit(&runs[..3], &ltca(k0)).is_none());
+    }
 
     /// Known answers: f = f₀ + c hᵖ at three sizes of any ratio gives f₀ and p back (no
     /// uncertainty left but the extrapolation's size); oscillating values give the finest

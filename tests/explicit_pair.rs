@@ -7,6 +7,7 @@ use geardyn::case::{Case, Override};
 use geardyn::explicit::pair::{Drive, ExplicitPair, PairIntegrator, PairState, Ramp, Start};
 use geardyn::explicit::scene::{
     run, FineTeeth, History, Keeping, PreparedScene, RunCheckpoint, RunOutcome, TimeStep,
+    KEEP_CHECK_STEPS,
 };
 use geardyn::study;
 
@@ -950,16 +951,27 @@ fn a_run_on_windows_of_fine_teeth_follows_the_whole_scenes_mesh() {
     assert!(remeshing.abs() < 1e-3 * transmitted);
 }
 
-/// A windowed run kept at a checkpoint in its third window and resumed from there (on one
-/// thread) ends with the same history, bit for bit, as the run that went through (on two).
+/// A windowed run keeps checkpoints on one clock across its windows, and one kept in a later
+/// window and resumed from there (on one thread) ends with the same history, bit for bit, as
+/// the run that went through (on two).
+///
+/// The clock counts its own reads, one per look every `KEEP_CHECK_STEPS` steps (and one after
+/// each checkpoint), and a checkpoint is due every 1.3 windows' looks at the scene's first
+/// step, the most a window can have: no window alone reaches it, so a clock restarted at each
+/// window (as before dce9b99) keeps none, and one across the run keeps one every 1.3 windows
+/// or so.
 #[test]
 fn a_run_resumed_in_a_later_window_ends_as_the_whole_run() {
     let output = 2e-6;
     let duration = TWELVE_PITCH_DURATION;
     let p = twelve_pitch_scene(FineTeeth::Window);
+    let looks_per_window = (duration / p.dt).ceil() / 12.0 / KEEP_CHECK_STEPS as f64;
+    let mut kept_windows = Vec::new();
     let mut kept = None;
     let mut keep = |c: &RunCheckpoint, h: &History| {
-        if kept.is_none() && c.window.as_ref().is_some_and(|w| w.index == 2) {
+        let index = c.window.as_ref().expect("a run on windows").index;
+        kept_windows.push(index);
+        if kept.is_none() && index >= 2 {
             kept = Some((c.clone(), h.clone()));
         }
     };
@@ -969,14 +981,25 @@ fn a_run_resumed_in_a_later_window_ends_as_the_whole_run() {
         .unwrap();
     let whole = two
         .install(|| {
+            let mut reads = 0.0;
             let keeping = Keeping {
-                every_s: 0.0,
+                every_s: 1.3 * looks_per_window,
                 keep: &mut keep,
+                clock: Box::new(move || {
+                    reads += 1.0;
+                    reads
+                }),
             };
             run(&p, duration, output, None, Some(keeping), &mut |_| {})
         })
         .unwrap();
-    let (checkpoint, history) = kept.expect("a checkpoint in the third window");
+    assert!(whole.windows >= 12, "{} windows", whole.windows);
+    eprintln!("checkpoints kept in windows {kept_windows:?}");
+    assert!(
+        kept_windows.len() >= 5 && kept_windows.windows(2).all(|w| w[0] < w[1]),
+        "checkpoints kept in windows {kept_windows:?}"
+    );
+    let (checkpoint, history) = kept.expect("a checkpoint in the third window or later");
     let one = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()

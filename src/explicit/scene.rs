@@ -1246,13 +1246,29 @@ enum WindowEnd {
     Switch(Box<Switch>),
 }
 
-/// Where a running scene keeps checkpoints as it goes: every `every_s` seconds of wall time
-/// (checked every [`KEEP_CHECK_STEPS`] steps, on one clock across the run's windows) `keep`
+/// Where a running scene keeps checkpoints as it goes: every `every_s` seconds on its clock, wall
+/// time in use (checked every [`KEEP_CHECK_STEPS`] steps, on one clock across the run's windows) `keep`
 /// gets one, with the history so far, so a process killed outright (SIGKILL, a batch job's time
 /// limit) can go on from the last one.
 pub struct Keeping<'a> {
     pub every_s: f64,
     pub keep: &'a mut dyn FnMut(&RunCheckpoint, &History),
+    /// The clock `every_s` counts on [s], read once at the run's start, at each check and after
+    /// each checkpoint kept: wall time ([`Keeping::every`]); a test gives a counter, which makes
+    /// when a checkpoint is kept deterministic.
+    pub clock: Box<dyn FnMut() -> f64 + 'a>,
+}
+
+impl<'a> Keeping<'a> {
+    /// A checkpoint to `keep` every `every_s` seconds of wall time.
+    pub fn every(every_s: f64, keep: &'a mut dyn FnMut(&RunCheckpoint, &History)) -> Self {
+        let start = Instant::now();
+        Keeping {
+            every_s,
+            keep,
+            clock: Box::new(move || start.elapsed().as_secs_f64()),
+        }
+    }
 }
 
 /// Steps between two looks at the clock for [`Keeping`].
@@ -1429,7 +1445,7 @@ pub fn run(
     }
     // One clock for the whole run: a window shorter than `every_s` must not restart it, or a
     // run on windows would keep no checkpoint after its first.
-    let mut last_kept = Instant::now();
+    let mut last_kept = keeping.as_mut().map_or(0.0, |k| (k.clock)());
     let plan = WindowPlan::of(prepared, duration, output_interval);
     let Some(plan) = plan else {
         if resume.as_ref().is_some_and(|(c, _)| c.window.is_some()) {
@@ -1530,7 +1546,7 @@ fn run_window(
     duration: f64,
     output_interval: f64,
     from: Option<(RunCheckpoint, History, bool)>,
-    (keeping, last_kept): (&mut Option<Keeping>, &mut Instant),
+    (keeping, last_kept): (&mut Option<Keeping>, &mut f64),
     progress: &mut dyn FnMut(f64),
 ) -> Result<WindowEnd, FeError> {
     let (total_steps, every) = step_counts(prepared, duration, output_interval);
@@ -1946,7 +1962,7 @@ fn run_window(
         if let Some(keeping) = keeping.as_mut() {
             if step % KEEP_CHECK_STEPS == 0
                 && step < control.total_steps
-                && last_kept.elapsed().as_secs_f64() >= keeping.every_s
+                && (keeping.clock)() - *last_kept >= keeping.every_s
             {
                 let checkpoint = checkpoint_at(
                     step + 1,
@@ -1960,7 +1976,7 @@ fn run_window(
                     &trusted,
                 );
                 (keeping.keep)(&checkpoint, &history);
-                *last_kept = Instant::now();
+                *last_kept = (keeping.clock)();
             }
         }
         step += 1;

@@ -142,10 +142,7 @@ pub fn fe_run(
             ));
         }
     };
-    let keeping = geardyn::explicit::scene::Keeping {
-        every_s: checkpoint_every(),
-        keep: &mut keep,
-    };
+    let keeping = geardyn::explicit::scene::Keeping::every(checkpoint_every(), &mut keep);
     let result = study::fe::run(
         case,
         scene,

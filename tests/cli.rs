@@ -1360,8 +1360,9 @@ fn compare_reads_a_known_fe_run_and_names_its_lines() {
         assert!(out.join(name).exists(), "{name}");
     }
     // One stiffness run: no limit of the FE's own to hold against the LTCA's (three sizes).
-    assert!(
-        chart["explicit_fe_mean_stiffness_limit"].is_null(),
+    assert_eq!(
+        chart.get("explicit_fe_mean_stiffness_limit"),
+        Some(&serde_json::Value::Null),
         "{chart}"
     );
     let s = read_summary(&out);

@@ -955,11 +955,11 @@ fn a_run_on_windows_of_fine_teeth_follows_the_whole_scenes_mesh() {
 /// window and resumed from there (on one thread) ends with the same history, bit for bit, as
 /// the run that went through (on two).
 ///
-/// The clock counts its own reads, one per look every `KEEP_CHECK_STEPS` steps (and one after
-/// each checkpoint), and a checkpoint is due every 1.3 windows' looks at the scene's first
-/// step, the most a window can have: no window alone reaches it, so a clock restarted at each
-/// window (as before dce9b99) keeps none, and one across the run keeps one every 1.3 windows
-/// or so.
+/// The clock counts its own reads (one at the start, one per look every `KEEP_CHECK_STEPS`
+/// steps, one after each checkpoint), and a checkpoint is due every 1.3 × a twelfth of the
+/// run's looks at the bound step, the smallest: the run turns 12.96 pitches in 13 windows, so
+/// no window alone reaches it, a clock restarted at each window (as before dce9b99) keeps
+/// none, and one across the run keeps one about every 1.4 windows.
 #[test]
 fn a_run_resumed_in_a_later_window_ends_as_the_whole_run() {
     let output = 2e-6;

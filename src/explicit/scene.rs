@@ -1253,9 +1253,10 @@ enum WindowEnd {
 pub struct Keeping<'a> {
     pub every_s: f64,
     pub keep: &'a mut dyn FnMut(&RunCheckpoint, &History),
-    /// The clock `every_s` counts on [s], read once at the run's start, at each check and after
-    /// each checkpoint kept: wall time ([`Keeping::every`]); a test gives a counter, which makes
-    /// when a checkpoint is kept deterministic.
+    /// The clock `every_s` is counted on, in its unit (seconds of wall time in use,
+    /// [`Keeping::every`]), read once at the run's start, at each check and after each
+    /// checkpoint kept; a test gives a counter, which makes when a checkpoint is kept
+    /// deterministic.
     pub clock: Box<dyn FnMut() -> f64 + 'a>,
 }
 

@@ -966,25 +966,31 @@ pub fn write_accuracy_cost(dir: OutputDir, chart: &AccuracyCost) -> Result<Strin
         );
     }
     if let Some(limit) = &chart.explicit_fe_mean_stiffness_limit {
-        table += &format!(
-            "\nThe explicit FE's own k̄ at zero flank size, from {:?} mm: {:.5e} ± {:.2e} N/m ({}), \
-             {:+.2} % from the LTCA's limit, whose and its uncertainties add to {:.2} %: {}.\n",
-            limit.flank_mm,
-            limit.value_n_per_m,
-            limit.uncertainty_n_per_m,
-            limit
-                .order
-                .map_or("not extrapolated: the finest, the levels' spread".into(), |p| {
-                    format!("observed order {p:.2}")
-                }),
-            100.0 * limit.rel_to_ltca_limit,
-            100.0 * limit.combined_uncertainty_rel,
-            if limit.agrees {
-                "the two fidelities meet"
-            } else {
-                "they part by more than that"
-            }
-        );
+        let sizes = format!("{:?} mm", limit.flank_mm);
+        let off = 100.0 * limit.rel_to_ltca_limit;
+        let both = 100.0 * limit.combined_uncertainty_rel;
+        table += &match (limit.order, limit.agrees) {
+            (Some(p), Some(agrees)) => format!(
+                "\nThe explicit FE's own k̄ at zero flank size, extrapolated from {sizes} \
+                 (observed order {p:.2}): {:.5e} ± {:.2e} N/m, {off:+.2} % from the LTCA's \
+                 limit; the two uncertainties add to {both:.2} %: {}.\n",
+                limit.value_n_per_m,
+                limit.uncertainty_n_per_m,
+                if agrees {
+                    "the two limits meet"
+                } else {
+                    "they part by more than that"
+                }
+            ),
+            _ => format!(
+                "\nThe explicit FE's k̄ over {sizes} is not in its asymptotic range (its steps \
+                 change sign, or do not shrink at an order in [0.5, 6]), so it has no limit of \
+                 its own to hold against the LTCA's: its finest, {:.5e} N/m, is {off:+.2} % \
+                 from the LTCA's limit, the levels within {:.2} % of it.\n",
+                limit.value_n_per_m,
+                100.0 * limit.uncertainty_n_per_m / limit.value_n_per_m
+            ),
+        };
     }
     dir.bytes("accuracy_cost.md", table.as_bytes())?;
     Ok(table)

@@ -629,6 +629,9 @@ impl Drawing for LogScatter {
             }
         };
         let (x, mut y) = (range(|p| p.0), range(|p| p.1));
+        // Room right of the rightmost marker for its label (about 20 characters, some 0.7 of a
+        // decade at this width and span).
+        let x = (x.0, x.1 * 4.0);
         for floor in self
             .floors
             .iter()

@@ -1246,10 +1246,10 @@ enum WindowEnd {
     Switch(Box<Switch>),
 }
 
-/// Where a running scene keeps checkpoints as it goes: every `every_s` seconds on its clock, wall
-/// time in use (checked every [`KEEP_CHECK_STEPS`] steps, on one clock across the run's windows) `keep`
-/// gets one, with the history so far, so a process killed outright (SIGKILL, a batch job's time
-/// limit) can go on from the last one.
+/// Where a running scene keeps checkpoints as it goes: every `every_s` seconds on its clock
+/// (wall time in use; checked every [`KEEP_CHECK_STEPS`] steps, on one clock across the run's
+/// windows) `keep` gets one, with the history so far, so a process killed outright (SIGKILL, a
+/// batch job's time limit) can go on from the last one.
 pub struct Keeping<'a> {
     pub every_s: f64,
     pub keep: &'a mut dyn FnMut(&RunCheckpoint, &History),

@@ -356,6 +356,11 @@ pub struct SceneSection {
     pub friction: f64,
     /// Simulated time [s].
     pub duration_s: f64,
+    /// Lengthen the run where `duration_s` is too short for its statistics window to hold one
+    /// base pitch of the driver after the ramp and the mesh mode's settling (a stiffness
+    /// extraction on any pair: the scene's duration in seconds fits one pair's pitch only).
+    #[serde(default)]
+    pub cover_pitch: bool,
     /// Ramp of the load torque, and of the driver speed when starting from rest [s].
     pub ramp_s: f64,
     /// Ramp shape: "linear" (the seed paper's) or "cosine" (no jump in acceleration).
@@ -1183,6 +1188,7 @@ impl Case {
                 relief: sc.relief.clone(),
                 friction: sc.friction,
                 duration: sc.duration_s,
+                cover_pitch: sc.cover_pitch,
                 ramp_time: sc.ramp_s,
                 ramp: sc.ramp,
                 start: sc.start,

@@ -36,6 +36,7 @@ fn short_run(out: &Path, sets: &[&str]) -> Command {
     for set in [
         "scene[stiffness].duration_s=0.004",
         "scene[stiffness].ramp_s=0.002",
+        "scene[stiffness].cover_pitch=false",
     ]
     .iter()
     .chain(sets)
@@ -425,6 +426,8 @@ fn run_closes_the_chain_and_writes_the_report() {
                 "scene[stiffness].duration_s=0.004",
                 "--set",
                 "scene[stiffness].ramp_s=0.002",
+                "--set",
+                "scene[stiffness].cover_pitch=false",
                 "--out",
             ])
             .arg(&out);

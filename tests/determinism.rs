@@ -92,6 +92,8 @@ fn fe_is_bit_identical_across_thread_counts() {
             "scene[stiffness].duration_s=0.004",
             "--set",
             "scene[stiffness].ramp_s=0.002",
+            "--set",
+            "scene[stiffness].cover_pitch=false",
         ],
     );
 }

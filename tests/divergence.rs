@@ -30,6 +30,8 @@ fn an_unstable_explicit_step_is_stopped_and_explained() {
             "scene[stiffness].duration_s=0.004",
             "--set",
             "scene[stiffness].ramp_s=0.002",
+            "--set",
+            "scene[stiffness].cover_pitch=false",
             "--out",
         ])
         .arg(&out)

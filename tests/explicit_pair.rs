@@ -1025,3 +1025,47 @@ fn a_run_resumed_in_a_later_window_ends_as_the_whole_run() {
     );
     assert_eq!(resumed.final_energy, whole.final_energy);
 }
+
+/// The case's stiffness scene lasts 44 ms, one base pitch of the paper pair's driver after the
+/// ramp and the mesh mode's settling. With `cover_pitch` (the case's stiffness scenes) a pair
+/// whose pitch or settling needs longer is prepared for longer: on 24/40 (a 15° driver pitch,
+/// 41.7 ms at 60 rpm) and on the shifted 19/57 (52.6 ms, settling about 21 ms) the statistics
+/// window then starts after the settling and still holds one mesh period and the low-pass
+/// span. The paper pair keeps its duration, and a scene with `cover_pitch` off keeps the
+/// duration it is given, however short.
+#[test]
+fn a_stiffness_scene_covers_a_base_pitch_of_any_pair() {
+    use geardyn::explicit::scene::statistics_start;
+    for name in ["paper36", "24-40", "19-57-shift"] {
+        let case = coarse_matrix_pair(name);
+        let scene = case.scene("stiffness").unwrap();
+        assert!(scene.cover_pitch);
+        let prepared = study::fe::prepare(&case, scene).unwrap();
+        let mesh_period = case.pair.gears[0].angular_pitch() / scene.driver_speed;
+        let start = statistics_start(&prepared, scene);
+        let settled = scene.ramp_time + prepared.settling_time;
+        assert_eq!(prepared.scene_duration, scene.duration, "{name}");
+        if name == "paper36" {
+            assert_eq!(prepared.duration, scene.duration, "{name}");
+        } else {
+            assert!(
+                prepared.duration > 1.2 * scene.duration,
+                "{name}: {}",
+                prepared.duration
+            );
+        }
+        assert!(
+            start >= settled - 1e-12,
+            "{name}: starts at {start} before {settled}"
+        );
+        assert!(
+            prepared.duration - start >= mesh_period + prepared.mesh_mode_period,
+            "{name}: a window of {} s against a mesh period of {mesh_period} s",
+            prepared.duration - start
+        );
+        let mut short = scene.clone();
+        (short.duration, short.cover_pitch) = (0.004, false);
+        let prepared = study::fe::prepare(&case, &short).unwrap();
+        assert_eq!(prepared.duration, 0.004, "{name}");
+    }
+}

@@ -190,8 +190,10 @@ pub struct Scene {
     pub relief: String,
     /// Coulomb friction coefficient μ.
     pub friction: f64,
-    /// Simulated time [s].
+    /// Simulated time [s] (at least; [`Scene::cover_pitch`]).
     pub duration: f64,
+    /// Lengthen the run to [`covering_duration`] where `duration` is shorter ([`prepare`]).
+    pub cover_pitch: bool,
     /// Ramp of the load torque, and of the driver speed when starting from rest [s].
     pub ramp_time: f64,
     pub ramp: Ramp,
@@ -310,6 +312,11 @@ pub fn window_teeth(pair: &GearPair, from: f64, to: f64) -> ([Vec<usize>; 2], Ve
 
 /// A scene ready to run: the pair model and its time step.
 pub struct PreparedScene {
+    /// How long the run lasts [s]: the scene's duration, or the longer [`covering_duration`]
+    /// of a scene that is to cover a base pitch ([`Scene::cover_pitch`]).
+    pub duration: f64,
+    /// The scene's own duration as the case gives it [s].
+    pub scene_duration: f64,
     pub model: ExplicitPair,
     pub drive: Drive,
     /// Critical step of each body (bore fixed, power iteration) and of the contact springs [s].
@@ -442,7 +449,61 @@ impl MassScaling {
 
 /// Meshes the pair (relief `modifications`) for `scene` and assembles it, measures its critical
 /// step; sizes the mesh dashpot with `mesh_stiffness`, the pair's mean mesh stiffness [N/m].
+/// A scene that is to cover a base pitch ([`Scene::cover_pitch`]) and is too short for it is
+/// prepared again for [`covering_duration`]: the teeth that engage depend on how far the
+/// driver turns, the settling time on the prepared model.
 pub fn prepare(
+    pair: &GearPair,
+    modifications: &[FlankModification; 2],
+    material: ExplicitMaterial,
+    scene: &Scene,
+    settings: &FeSettings,
+    mesh_stiffness: f64,
+) -> Result<PreparedScene, FeError> {
+    let prepare_for = |duration: f64| {
+        let scene = Scene {
+            duration,
+            ..scene.clone()
+        };
+        prepare_scene(
+            pair,
+            modifications,
+            material,
+            &scene,
+            settings,
+            mesh_stiffness,
+        )
+    };
+    let prepared = prepare_for(scene.duration)?;
+    if !scene.cover_pitch {
+        return Ok(prepared);
+    }
+    let needed = covering_duration(&prepared, scene, settings.output_interval);
+    if needed <= scene.duration {
+        return Ok(prepared);
+    }
+    let mut longer = prepare_for(needed)?;
+    // Settling and the low-pass span depend on the masses and the damping, not on how far the
+    // driver turns, so the longer model needs no longer still.
+    longer.scene_duration = scene.duration;
+    Ok(longer)
+}
+
+/// The shortest run of `scene` whose statistics window ([`statistics_start`]) holds one base
+/// pitch of the driver and the low-pass's span after the ramp and the mesh mode's settling:
+/// ramp + settling + mesh period + mesh-mode period, and two recorded samples for the bins'
+/// edges [s]. The scene's speed after the ramp sets the mesh period; a scene at rest needs
+/// only the settling.
+pub fn covering_duration(prepared: &PreparedScene, scene: &Scene, output_interval: f64) -> f64 {
+    let settled = scene.ramp_time + prepared.settling_time;
+    if scene.driver_speed <= 0.0 {
+        return settled;
+    }
+    let mesh_period = prepared.model.pair.gears[0].angular_pitch() / scene.driver_speed;
+    settled + mesh_period + prepared.mesh_mode_period + 2.0 * output_interval
+}
+
+fn prepare_scene(
     pair: &GearPair,
     modifications: &[FlankModification; 2],
     material: ExplicitMaterial,
@@ -584,6 +645,8 @@ pub fn prepare(
         0.0
     };
     Ok(PreparedScene {
+        duration: scene.duration,
+        scene_duration: scene.duration,
         dt: settings.step_factor * dt_critical,
         step_factor: settings.step_factor,
         // Undamped, the measured step is marginal where points close and open (module doc).
@@ -625,11 +688,11 @@ pub fn statistics_start(prepared: &PreparedScene, scene: &Scene) -> f64 {
     let ramp = scene.ramp_time;
     let settled = ramp + prepared.settling_time;
     if scene.driver_speed <= 0.0 {
-        return settled.min(scene.duration);
+        return settled.min(prepared.duration);
     }
     let mesh_period = prepared.model.pair.gears[0].angular_pitch() / scene.driver_speed;
     let needed = mesh_period + prepared.mesh_mode_period;
-    settled.min((scene.duration - needed).max(ramp))
+    settled.min((prepared.duration - needed).max(ramp))
 }
 
 /// Recorded time histories of a run: one sample per output interval.

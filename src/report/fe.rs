@@ -323,7 +323,7 @@ pub fn read_checkpoint(dir: &Path) -> Result<Option<(RunCheckpoint, History)>, R
 /// The prepared scene's line for the terminal: model size and time step.
 pub fn prepared_console(case: &Case, prepared: &PreparedScene, scene: &Scene) -> String {
     let settings = &case.fe;
-    let per_window = crate::explicit::scene::run_elements(prepared, scene.duration);
+    let per_window = crate::explicit::scene::run_elements(prepared, prepared.duration);
     format!(
         "{} elements ({} tooth pairs, flank elements {:.2} mm, body {:.2} mm){}; dt_cr = {:.4e} s (bodies {:.4e} / {:.4e}, contact {:.4e}; paper's L/c {:.4e}), dt = {:.4e} s, {} steps{}\n",
         prepared.model.elements(),
@@ -344,11 +344,22 @@ pub fn prepared_console(case: &Case, prepared: &PreparedScene, scene: &Scene) ->
         prepared.dt_contact,
         prepared.dt_paper,
         prepared.dt,
-        (scene.duration / prepared.dt).ceil(),
+        (prepared.duration / prepared.dt).ceil(),
         match prepared.time_step {
             TimeStep::Coupled => " at most (the step then follows the pair's own stable step)",
             TimeStep::Bound => "",
         }
+    ) + &lengthened_line(prepared, scene)
+}
+
+/// Where a scene that is to cover a base pitch was lengthened: by how much and why.
+fn lengthened_line(prepared: &PreparedScene, scene: &Scene) -> String {
+    if prepared.duration <= prepared.scene_duration {
+        return String::new();
+    }
+    format!(
+        "scene {} lengthened from {} s to {:.4} s (cover_pitch): its statistics window holds one base pitch of the driver after the ramp and {:.4} s of settling\n",
+        scene.name, prepared.scene_duration, prepared.duration, prepared.settling_time
     )
 }
 

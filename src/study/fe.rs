@@ -11,9 +11,9 @@ use serde::Serialize;
 use crate::case::{Case, Override};
 use crate::explicit::pair::PairEnergy;
 use crate::explicit::scene::{
-    analyse_dte, bin_difference, binned_stiffness, common_bins, paired_bins, static_te,
-    statistics_start, CoupledStep, DteAnalysis, FeSettings, FineTeeth, History, LowpassDte,
-    MassScaling, PreparedScene, Scene, StaticTe, StepChange, TimeStep,
+    analyse_dte, bin_difference, binned_stiffness, common_bins, covering_duration, paired_bins,
+    static_te, statistics_start, CoupledStep, DteAnalysis, FeSettings, FineTeeth, History,
+    LowpassDte, MassScaling, PreparedScene, Scene, StaticTe, StepChange, TimeStep,
 };
 use crate::fe::{MassLumping, PlaneState};
 use crate::geometry::GearPair;
@@ -34,7 +34,8 @@ pub struct FeShorthands {
     /// Driver speed [rpm] (without --scene: required).
     #[arg(long, value_name = "RPM")]
     pub speed_rpm: Option<f64>,
-    /// Simulated time [s] (without --scene: required); shortens or lengthens a scene.
+    /// Simulated time [s] (without --scene: required); shortens or lengthens a scene (and turns
+    /// its cover_pitch off: the run lasts this long).
     #[arg(long, value_name = "SECONDS")]
     pub duration_s: Option<f64>,
     /// Load torque on the driven gear [N·m]; default: the scene's, or the first operating point.
@@ -122,6 +123,8 @@ fn scene_overrides(
             }
             if let Some(duration) = s.duration_s {
                 overrides.push(Override::set(key("duration_s"), duration));
+                // A duration given on the command line is the run's, not a least one.
+                overrides.push(Override::set(key("cover_pitch"), false));
                 if s.ramp_s.is_none() && scene.ramp_time > 0.5 * duration {
                     overrides.push(Override::set(key("ramp_s"), 0.5 * duration));
                 }
@@ -408,7 +411,10 @@ pub struct DtePeak {
 #[derive(Debug, Clone, Serialize)]
 pub struct FeSummary {
     pub case: String,
+    /// The scene as run: its duration the run's ([`PreparedScene::duration`]).
     pub scene: Scene,
+    /// The case's duration of a scene lengthened to cover a base pitch (`cover_pitch`) [s].
+    pub duration_lengthened_from_s: Option<f64>,
     pub dte_mean_rad: Option<f64>,
     pub dte_max_rad: Option<f64>,
     pub dte_min_rad: Option<f64>,
@@ -511,11 +517,31 @@ pub const FE_LTCA_ERROR_BAND: f64 = 0.30;
 /// which a raw mean over a short window still holds). Each is one check: an error beyond
 /// [`FE_LTCA_ERROR_BAND`], else a warning beyond [`FE_LTCA_WARNING_BAND`]. A quasi-static run
 /// with no comparison (its window holds no bin) gets a warning; a dynamic run, whose DTE is not
-/// the static TE, no check.
-pub fn self_checks(quasi_static: bool, stiffness: Option<&StiffnessDifference>) -> Vec<Check> {
+/// the static TE, no check. With `coverage` (the share of the base pitch the window's bins
+/// cover, and the [`covering_duration`] that would cover it all), a warning where a bin is
+/// missing.
+pub fn self_checks(
+    quasi_static: bool,
+    stiffness: Option<&StiffnessDifference>,
+    coverage: Option<(f64, f64)>,
+) -> Vec<Check> {
     if !quasi_static {
         return Vec::new();
     }
+    // Bins the window misses are interpolated across in k(θ) and in everything fed by it.
+    let covered = coverage.map(|(share, needed)| {
+        Check::new(
+            "fe",
+            "share of the base pitch that k(θ) from the DTE covers (the rest is interpolated)",
+            (share, 1.0),
+            format!(
+                "one whole base pitch: the scene's cover_pitch = true, or a duration_s of at \
+                 least {needed:.4} s"
+            ),
+            (CheckKind::Absolute, 0.0),
+        )
+        .warning()
+    });
     let Some(k) = stiffness else {
         return vec![Check::new(
             "fe",
@@ -525,7 +551,10 @@ pub fn self_checks(quasi_static: bool, stiffness: Option<&StiffnessDifference>) 
             "the LTCA on the run's mesh",
             (CheckKind::Relative, FE_LTCA_WARNING_BAND),
         )
-        .warning()];
+        .warning()]
+        .into_iter()
+        .chain(covered)
+        .collect();
     };
     [
         (
@@ -560,6 +589,7 @@ pub fn self_checks(quasi_static: bool, stiffness: Option<&StiffnessDifference>) 
             error
         }
     })
+    .chain(covered)
     .collect()
 }
 
@@ -600,12 +630,12 @@ pub fn run(
     let settings: &FeSettings = &case.fe;
     crate::resources::check_memory(
         "the explicit run's history and state",
-        &crate::explicit::scene::run_memory(prepared, scene.duration, settings.output_interval),
+        &crate::explicit::scene::run_memory(prepared, prepared.duration, settings.output_interval),
         "shorten the scene (--duration-s) or record it less often (fe.output_interval_us)",
     )?;
     let outcome = crate::explicit::scene::run(
         prepared,
-        scene.duration,
+        prepared.duration,
         settings.output_interval,
         resume,
         keeping,
@@ -708,6 +738,12 @@ pub fn run(
             && outcome.diverged.is_none()
             && outcome.interrupted.is_none(),
         stiffness_same.as_ref().map(|c| &c.summary),
+        analysis.as_ref().map(|a| {
+            (
+                a.pitch_coverage,
+                covering_duration(prepared, scene, settings.output_interval),
+            )
+        }),
     );
     let outcome_mesh = RunMesh {
         windows: outcome.windows,
@@ -715,7 +751,12 @@ pub fn run(
     };
     let summary = FeSummary {
         case: case.name().to_string(),
-        scene: scene.clone(),
+        scene: Scene {
+            duration: prepared.duration,
+            ..scene.clone()
+        },
+        duration_lengthened_from_s: (prepared.duration > prepared.scene_duration)
+            .then_some(prepared.scene_duration),
         dte_mean_rad: get(&|a| a.dte_mean_rad),
         dte_max_rad: get(&|a| a.dte_max_rad),
         dte_min_rad: get(&|a| a.dte_min_rad),
@@ -1015,4 +1056,38 @@ fn compare_stiffness(
         },
         bins: paired_bins(pitch, fe_bins, &reference),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{self_checks, StiffnessDifference};
+
+    /// A quasi-static run's checks: the FE against the LTCA within the bands, and the window's
+    /// share of the base pitch, which fails (as a warning that names the duration to give)
+    /// wherever a bin is missing and passes at a whole pitch; a dynamic run gets none.
+    #[test]
+    fn a_window_short_of_a_base_pitch_is_flagged() {
+        let k = StiffnessDifference {
+            fine_element_mm: 1.0,
+            coarse_element_mm: 3.0,
+            mean_rel: -0.05,
+            max_abs_rel: 0.1,
+            static_te_mean_rel: 0.05,
+            static_te_peak_to_peak_rel: 0.2,
+            bins: 54,
+        };
+        let short = self_checks(true, Some(&k), Some((54.0 / 64.0, 0.0666)));
+        assert_eq!(short.len(), 3);
+        assert!(short[..2].iter().all(|c| c.passed));
+        let coverage = &short[2];
+        assert!(!coverage.passed && coverage.warning_only);
+        assert_eq!(coverage.value, 0.84375);
+        assert!(coverage.reference_source.contains("0.0666 s"));
+        let whole = self_checks(true, Some(&k), Some((1.0, 0.0666)));
+        assert!(whole.iter().all(|c| c.passed));
+        let none = self_checks(true, None, Some((0.0, 0.0666)));
+        assert_eq!(none.len(), 2);
+        assert!(none.iter().all(|c| !c.passed && c.warning_only));
+        assert!(self_checks(false, Some(&k), Some((0.5, 0.0666))).is_empty());
+    }
 }

@@ -231,6 +231,8 @@ pub fn small_fe_check(case: &Path, candidates: &str, out: &Path) -> Command {
         "scene[stiffness].duration_s=0.004",
         "--set",
         "scene[stiffness].ramp_s=0.002",
+        "--set",
+        "scene[stiffness].cover_pitch=false",
         "--out",
     ]);
     command.arg(out);

@@ -184,10 +184,10 @@ fn planned(runs: &[FeRunRequest]) -> Result<Vec<PlannedRun>> {
             } else {
                 eprintln!("timing {} ({})", run.label, run.scene);
                 let prepared = geardyn::study::fe::prepare(&run.case, scene)?;
-                let cost = geardyn::study::fe::CostEstimate::of(&prepared, scene.duration);
+                let cost = geardyn::study::fe::CostEstimate::of(&prepared, prepared.duration);
                 let memory = geardyn::explicit::scene::run_memory(
                     &prepared,
-                    scene.duration,
+                    prepared.duration,
                     run.case.fe.output_interval,
                 );
                 (cost.wall_s, memory.total() + cluster::PROCESS_BYTES)

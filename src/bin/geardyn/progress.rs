@@ -90,9 +90,9 @@ pub fn fe_run(
     let left = checkpoint.as_ref().map_or(1.0, |(c, _)| {
         1.0 - c.next_step.saturating_sub(1) as f64 / c.total_steps.max(1) as f64
     });
-    let cost = study::fe::CostEstimate::of(&prepared, scene.duration * left);
+    let cost = study::fe::CostEstimate::of(&prepared, prepared.duration * left);
     let memory =
-        geardyn::explicit::scene::run_memory(&prepared, scene.duration, case.fe.output_interval);
+        geardyn::explicit::scene::run_memory(&prepared, prepared.duration, case.fe.output_interval);
     view.say(&format!(
         "estimated: {}; the run's history and state {}",
         cost.describe(),

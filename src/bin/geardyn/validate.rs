@@ -223,11 +223,12 @@ pub fn validate_pairs(
 }
 
 /// The coarse settings `validate pairs --run` runs the chain at: the FE stiffness scene
-/// shortened to 4 ms with a 2 ms ramp (a few mesh periods at its low speed; the rest as the
-/// case gives it).
-pub const RUN_COARSE_SETTINGS: [&str; 2] = [
+/// shortened to 4 ms with a 2 ms ramp (a few mesh periods at its low speed, not lengthened to
+/// a base pitch; the rest as the case gives it).
+pub const RUN_COARSE_SETTINGS: [&str; 3] = [
     "scene[stiffness].duration_s=0.004",
     "scene[stiffness].ramp_s=0.002",
+    "scene[stiffness].cover_pitch=false",
 ];
 
 /// `geardyn run` on a matrix pair in `dir`/run (its case written to `dir`/case.toml): the

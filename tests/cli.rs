@@ -1981,8 +1981,15 @@ fn compare_fe_sweep_finds_a_known_resonance() {
     let x_csv = std::fs::read_to_string(out.join("fe_sweep_extrapolated.csv")).unwrap();
     assert_eq!(x_csv.lines().count(), 1 + 3, "{x_csv}");
     assert!(
+        x_csv
+            .lines()
+            .skip(1)
+            .all(|row| row.contains(",1.500,1.000,0.700,")),
+        "{x_csv}"
+    );
+    assert!(
         md.contains(
-            "The FE extrapolated to zero flank size from 1.50 / 1.00 / 0.70 mm on the 3 speeds all three ran"
+            "The FE extrapolated to zero flank size (fe_sweep_extrapolated.csv). On 1.50 / 1.00 / 0.70 mm, over the 3 speeds all three ran"
         ),
         "{md}"
     );

@@ -711,8 +711,8 @@ fn write_fe_sweep(
         let [r1, r2, r3] = x.mesh_resonance_rpm;
         let [p1, p2, p3] = x.mesh_peak_dte_mesh_amplitude_rad.map(um);
         text += &format!(
-            "\n* The FE extrapolated to zero flank size from {h1:.2} / {h2:.2} / {h3:.2} mm on the {} speeds all three ran (fe_sweep_extrapolated.csv). Each mesh's fitted resonance {r1:.0} / {r2:.0} / {r3:.0} rpm and peak {p1:.3} / {p2:.3} / {p3:.3} urad{}, extrapolated: resonance {:.0} ± {:.0} rpm ({}), peak {:.3} ± {:.3} urad ({}); the case's model against it: resonance {:+.2} %, peak {:+.1} %, DTE rms largest difference {:.1} %. Extrapolated speed by speed, {} of the {} speeds converged monotonically (the others carry the finest mesh's value){}",
-            x.speeds.len(),
+            "\n* The FE extrapolated to zero flank size (fe_sweep_extrapolated.csv). On {h1:.2} / {h2:.2} / {h3:.2} mm, over the {} speeds all three ran, each mesh's fitted resonance {r1:.0} / {r2:.0} / {r3:.0} rpm and peak {p1:.3} / {p2:.3} / {p3:.3} urad{}, extrapolated: resonance {:.0} ± {:.0} rpm ({}), peak {:.3} ± {:.3} urad ({}); the case's model against it: resonance {:+.2} %, peak {:+.1} %, DTE rms largest difference {:.1} %. Speed by speed, each from the three finest meshes that ran it: {} of the {} speeds converged monotonically (the others carry the finest mesh's value){}",
+            x.fit_speeds,
             match x.fits_interpolate {
                 true => " (three speeds: each fit interpolates them)",
                 false => "",
@@ -739,8 +739,11 @@ fn write_fe_sweep(
         );
         for s in &x.speeds {
             text += &format!(
-                "\n  * {:.0} rpm: 1st harmonic {:.1} ± {:.1} urad ({}), rms {:.1} ± {:.1} urad ({}); the case's model's rms {:+.1} %",
+                "\n  * {:.0} rpm on {:.2} / {:.2} / {:.2} mm: 1st harmonic {:.1} ± {:.1} urad ({}), rms {:.1} ± {:.1} urad ({}); the case's model's rms {:+.1} %",
                 s.speed_rpm,
+                s.fine_element_mm[0],
+                s.fine_element_mm[1],
+                s.fine_element_mm[2],
                 um(s.mesh_amplitude.value),
                 um(s.mesh_amplitude.uncertainty),
                 order(s.mesh_amplitude.order),
@@ -765,19 +768,22 @@ fn write_fe_sweep(
     Ok(text + "\n")
 }
 
-/// fe_sweep_extrapolated.csv: the FE extrapolated to zero flank size at each speed the three
-/// finest meshes ran, with the three meshes' values and the case's model's rms against it.
+/// fe_sweep_extrapolated.csv: the FE extrapolated to zero flank size at each speed three meshes
+/// ran, from the three finest that ran it (their sizes and values), and the case's model's rms
+/// against it.
 fn write_fe_sweep_extrapolated(
     dir: OutputDir,
     x: &crate::study::fe_sweep::ExtrapolatedFe,
 ) -> Result<(), ReportError> {
     let um = |rad: f64| format!("{:.5}", rad * 1e6);
     let order = |o: Option<f64>| o.map_or(String::new(), |p| format!("{p:.3}"));
-    let [h1, h2, h3] = x.fine_element_mm;
-    let mut header = vec!["driver_rpm".to_string()];
+    // Each speed comes from the three finest meshes that ran it, which need not be another's.
+    let mut header: Vec<String> = ["driver_rpm", "mesh_1_mm", "mesh_2_mm", "mesh_3_mm"]
+        .map(String::from)
+        .to_vec();
     for what in ["mesh_amplitude", "dte_rms"] {
-        for h in [h1, h2, h3] {
-            header.push(format!("fe_{what}_{h:.2}mm_urad"));
+        for level in 1..=3 {
+            header.push(format!("fe_{what}_mesh_{level}_urad"));
         }
         header.extend([
             format!("fe_{what}_extrapolated_urad"),
@@ -792,6 +798,7 @@ fn write_fe_sweep_extrapolated(
         &header,
         x.speeds.iter().map(|s| {
             let mut row = vec![format!("{:.2}", s.speed_rpm)];
+            row.extend(s.fine_element_mm.map(|h| format!("{h:.3}")));
             for (values, e) in [
                 (s.mesh_amplitudes_rad, s.mesh_amplitude),
                 (s.dte_rms_values_rad, s.dte_rms),
@@ -982,7 +989,14 @@ pub fn write_accuracy_cost(dir: OutputDir, chart: &AccuracyCost) -> Result<Strin
                     "they part by more than that"
                 }
             ),
-            _ => format!(
+            (Some(p), None) => format!(
+                "\nThe explicit FE's own k̄ at zero flank size, extrapolated from {sizes} \
+                 (observed order {p:.2}): {:.5e} N/m, {off:+.2} % from the LTCA's limit; no \
+                 verdict, as an uncertainty is not finite ({:.2e} N/m for the FE, {both:.2} % \
+                 for the two).\n",
+                limit.value_n_per_m, limit.uncertainty_n_per_m,
+            ),
+            (None, _) => format!(
                 "\nThe explicit FE's k̄ over {sizes} is not in its asymptotic range (its steps \
                  change sign, or do not shrink at an order in [0.5, 6]), so it has no limit of \
                  its own to hold against the LTCA's: its finest, {:.5e} N/m, is {off:+.2} % \

@@ -507,11 +507,14 @@ impl Extrapolated {
     }
 }
 
-/// The FE at one speed that the three finest meshes all ran, extrapolated to zero flank size.
+/// The FE at one speed, extrapolated to zero flank size from the three finest meshes that ran
+/// it.
 #[derive(Debug, Clone, Serialize)]
 pub struct ExtrapolatedSpeed {
     pub speed_rpm: f64,
-    /// The three meshes' first mesh-harmonic amplitudes and DTE rms [rad], coarsest first.
+    /// Those three meshes' flank sizes [mm], coarsest first.
+    pub fine_element_mm: [f64; 3],
+    /// Their first mesh-harmonic amplitudes and DTE rms [rad], coarsest first.
     pub mesh_amplitudes_rad: [f64; 3],
     pub dte_rms_values_rad: [f64; 3],
     pub mesh_amplitude: Extrapolated,
@@ -521,27 +524,30 @@ pub struct ExtrapolatedSpeed {
     pub case_model_dte_rms_rel_err: f64,
 }
 
-/// The FE sweep extrapolated to zero flank size from the three finest meshes with a recorded
-/// size, on the speeds all three ran: an estimate of the converged FE with its uncertainty
-/// (the finest run at hand is not converged: validation/lumped-twin). Two ways, which agree
-/// only where the response converges smoothly at every speed:
-/// * **fit, then extrapolate** (the headline): each mesh's [`resonance_fit`] over the shared
-///   speeds, its peak's speed and height extrapolated. The resonance moves as the flanks are
+/// The FE sweep extrapolated to zero flank size from the meshes with a recorded size
+/// ([`extrapolate_levels`]): an estimate of the converged FE with its uncertainty (the finest
+/// run at hand is not converged: validation/lumped-twin). Two ways, which agree only where the
+/// response converges smoothly at every speed:
+/// * **fit, then extrapolate** (the headline): each of three meshes' [`resonance_fit`] over the
+///   speeds they share, its peak's speed and height extrapolated. The resonance moves as the flanks are
 ///   refined, so at a fixed speed near it the three values need not converge monotonically; the
 ///   fitted peak moves smoothly.
-/// * **extrapolate, then fit**: each shared speed's values extrapolated, then one fit. Where a
+/// * **extrapolate, then fit**: each speed's values extrapolated (from the three finest meshes
+///   that ran it), then one fit. Where a
 ///   speed does not extrapolate it carries its finest value ([`Extrapolated`]), so the fit mixes
 ///   both; `speeds_extrapolated` counts the speeds that did.
 #[derive(Debug, Clone, Serialize)]
 pub struct ExtrapolatedFe {
-    /// The three meshes' flank sizes [mm], coarsest first.
+    /// The three meshes the resonance fits are on: their flank sizes [mm], coarsest first.
     pub fine_element_mm: [f64; 3],
+    /// How many speeds those three share (the fits' points).
+    pub fit_speeds: usize,
     pub speeds: Vec<ExtrapolatedSpeed>,
     /// How many of `speeds` extrapolated both their first harmonic and their rms (an order in
     /// [0.5, 6] with monotone differences).
     pub speeds_extrapolated: usize,
-    /// Each mesh's [`resonance_fit`] over `speeds`, coarsest first: the peak's speed [rpm] and
-    /// height [rad] (NaN with fewer than three speeds).
+    /// Each of the three meshes' [`resonance_fit`] over the speeds they share, coarsest first:
+    /// the peak's speed [rpm] and height [rad] (NaN with fewer than three speeds).
     pub mesh_resonance_rpm: [f64; 3],
     pub mesh_peak_dte_mesh_amplitude_rad: [f64; 3],
     /// Whether those fits only interpolate: three speeds for the fit's three parameters, so
@@ -564,47 +570,85 @@ pub struct ExtrapolatedFe {
     pub case_model_dte_rms_max_rel_err: f64,
 }
 
-/// The three finest levels of `levels` (coarsest first) that recorded their flank size,
-/// extrapolated to zero flank size on the speeds all three ran ([`ExtrapolatedFe`], without a
-/// model). `None` with fewer than three such levels or no shared speed.
+/// The FE extrapolated to zero flank size ([`ExtrapolatedFe`], without a model) from the
+/// levels of `levels` (coarsest first) that recorded their flank size: every speed that three
+/// or more of them ran, each from the three finest that ran it; the resonance fits on the
+/// finest three levels that share three speeds or more (else on the three finest, whose fits
+/// then have too few speeds). A finer mesh run at one speed only refines that speed, and drops
+/// no other. `None` with fewer than three sized levels or no speed that three of them ran.
 pub fn extrapolate_levels(levels: &[Vec<FeSpeed>]) -> Option<ExtrapolatedFe> {
-    let sized: Vec<&Vec<FeSpeed>> = levels
+    let sized: Vec<(f64, &Vec<FeSpeed>)> = levels
         .iter()
-        .filter(|level| level.first().and_then(|s| s.fine_element_mm).is_some())
+        .filter_map(|level| Some((level.first()?.fine_element_mm?, level)))
         .collect();
-    let [a, b, c] = sized.get(sized.len().checked_sub(3)?..)? else {
+    if sized.len() < 3 {
         return None;
-    };
-    let finest = [*a, *b, *c];
-    let h = finest.map(|level| level[0].fine_element_mm.expect("sized levels"));
+    }
     let at = |level: &Vec<FeSpeed>, rpm: f64| -> Option<FeSpeed> {
         level.iter().find(|s| same_speed(s.speed_rpm, rpm)).cloned()
     };
-    let shared: Vec<[FeSpeed; 3]> = c
-        .iter()
-        .filter_map(|s| Some([at(a, s.speed_rpm)?, at(b, s.speed_rpm)?, s.clone()]))
-        .collect();
-    if shared.is_empty() {
-        return None;
+    let shared = |[a, b, c]: [usize; 3]| -> Vec<[FeSpeed; 3]> {
+        sized[c]
+            .1
+            .iter()
+            .filter_map(|s| {
+                Some([
+                    at(sized[a].1, s.speed_rpm)?,
+                    at(sized[b].1, s.speed_rpm)?,
+                    s.clone(),
+                ])
+            })
+            .collect()
+    };
+    // Triples coarsest first; the last that shares three speeds is the finest such (its
+    // coarsest mesh the finest, then its middle one, then its finest).
+    let n = sized.len();
+    let triples =
+        (0..n).flat_map(|a| (a + 1..n).flat_map(move |b| (b + 1..n).map(move |c| [a, b, c])));
+    let fit_levels =
+        triples
+            .filter(|t| shared(*t).len() >= 3)
+            .last()
+            .unwrap_or([n - 3, n - 2, n - 1]);
+    let fit_runs = shared(fit_levels);
+    let mut rpms: Vec<f64> = Vec::new();
+    for s in sized.iter().flat_map(|(_, level)| level.iter()) {
+        if !rpms.iter().any(|r| same_speed(*r, s.speed_rpm)) {
+            rpms.push(s.speed_rpm);
+        }
     }
-    let speeds: Vec<ExtrapolatedSpeed> = shared
+    rpms.sort_by(f64::total_cmp);
+    let speeds: Vec<ExtrapolatedSpeed> = rpms
         .iter()
-        .map(|runs| {
-            let amplitudes = runs.each_ref().map(|r| r.mesh_amplitude_rad);
-            let rms = runs.each_ref().map(|r| r.dte_rms_rad);
-            ExtrapolatedSpeed {
-                speed_rpm: runs[2].speed_rpm,
+        .filter_map(|&rpm| {
+            let ran: Vec<(f64, FeSpeed)> = sized
+                .iter()
+                .filter_map(|(h, level)| Some((*h, at(level, rpm)?)))
+                .collect();
+            let [(h1, r1), (h2, r2), (h3, r3)] = ran.get(ran.len().checked_sub(3)?..)? else {
+                return None;
+            };
+            let (h, runs) = ([*h1, *h2, *h3], [r1, r2, r3]);
+            let amplitudes = runs.map(|r| r.mesh_amplitude_rad);
+            let rms = runs.map(|r| r.dte_rms_rad);
+            Some(ExtrapolatedSpeed {
+                speed_rpm: rpm,
+                fine_element_mm: h,
                 mesh_amplitudes_rad: amplitudes,
                 dte_rms_values_rad: rms,
                 mesh_amplitude: Extrapolated::of(h, amplitudes),
                 dte_rms: Extrapolated::of(h, rms),
                 case_model_dte_rms_rel_err: f64::NAN,
-            }
+            })
         })
         .collect();
+    if speeds.is_empty() {
+        return None;
+    }
+    let h = fit_levels.map(|i| sized[i].0);
     let nan3 = (f64::NAN, f64::NAN, f64::NAN);
     let fits = [0, 1, 2].map(|i| {
-        let points: Vec<(f64, f64)> = shared
+        let points: Vec<(f64, f64)> = fit_runs
             .iter()
             .map(|runs| (runs[i].speed_rpm, runs[i].mesh_amplitude_rad))
             .collect();
@@ -626,7 +670,8 @@ pub fn extrapolate_levels(levels: &[Vec<FeSpeed>]) -> Option<ExtrapolatedFe> {
             .iter()
             .filter(|s| s.mesh_amplitude.order.is_some() && s.dte_rms.order.is_some())
             .count(),
-        fits_interpolate: shared.len() == 3,
+        fit_speeds: fit_runs.len(),
+        fits_interpolate: fit_runs.len() == 3,
         resonance_rpm: Extrapolated::of(h, mesh_resonance_rpm),
         peak_dte_mesh_amplitude: Extrapolated::of(h, mesh_peak),
         mesh_resonance_rpm,
@@ -641,7 +686,7 @@ pub fn extrapolate_levels(levels: &[Vec<FeSpeed>]) -> Option<ExtrapolatedFe> {
 }
 
 /// [`extrapolate_levels`] with the case's `model` (and its `sweep`) held against it: the
-/// model's response from rest at each shared speed ([`case_model_at`]).
+/// model's response from rest at each of its speeds ([`case_model_at`]).
 fn extrapolated_fe(
     levels: &[Vec<FeSpeed>],
     (model, sweep): (&MeshModel, &ModelSweep),
@@ -1487,6 +1532,75 @@ mod tests {
             .concat(),
         );
         assert!(super::extrapolate_levels(&apart).is_none());
+    }
+
+    /// A finer mesh run at a few speeds refines those and drops no other: on 1.5 / 1.0 / 0.7 mm
+    /// at five speeds, 0.5 mm at three and 0.35 mm at one (all on k₀ + c hᵖ), each speed comes
+    /// from the three finest meshes that ran it and recovers k₀ with order p; the fits go to the
+    /// finest three meshes that share three speeds (1.0 / 0.7 / 0.5, of four such). Where no
+    /// three share three speeds, the fits are on the three finest and have too few points.
+    #[test]
+    fn each_speed_extrapolates_from_the_finest_meshes_that_ran_it() {
+        let p = 2.0;
+        let value = |n: f64, h: f64| (1e-5 * n / 5000.0) * (1.0 + 0.05 * h.powf(p));
+        let speed = |n: f64, h: f64| steady_speed(n, Some(h), value(n, h), 0.7 * value(n, h));
+        let all = [4900.0, 5050.0, 5200.0, 5350.0, 5500.0];
+        let level =
+            |h: f64, rpms: &[f64]| -> Vec<FeSpeed> { rpms.iter().map(|n| speed(*n, h)).collect() };
+        let levels = super::mesh_levels(
+            [
+                level(1.5, &all),
+                level(1.0, &all),
+                level(0.7, &all),
+                level(0.5, &[5050.0, 5200.0, 5350.0]),
+                level(0.35, &[5200.0]),
+            ]
+            .concat(),
+        );
+        let x = super::extrapolate_levels(&levels).unwrap();
+        assert_eq!(x.fine_element_mm, [1.0, 0.7, 0.5]);
+        assert_eq!((x.fit_speeds, x.fits_interpolate), (3, true));
+        assert_eq!(x.speeds.len(), 5);
+        assert_eq!(x.speeds_extrapolated, 5);
+        for s in &x.speeds {
+            let want = match s.speed_rpm {
+                5200.0 => [0.7, 0.5, 0.35],
+                5050.0 | 5350.0 => [1.0, 0.7, 0.5],
+                _ => [1.5, 1.0, 0.7],
+            };
+            assert_eq!(s.fine_element_mm, want, "{}", s.speed_rpm);
+            for (i, h) in want.into_iter().enumerate() {
+                assert_eq!(s.mesh_amplitudes_rad[i], value(s.speed_rpm, h));
+            }
+            let exact = value(s.speed_rpm, 0.0);
+            assert!((s.mesh_amplitude.value / exact - 1.0).abs() < 1e-9);
+            assert!((s.mesh_amplitude.order.unwrap() - p).abs() < 1e-6);
+        }
+        // 0.7 mm at two speeds only: no three meshes share three speeds. The fits go to the
+        // three finest (one speed: no fit); 5 350 rpm still extrapolates, from 1.0 / 0.7 / 0.5.
+        let levels = super::mesh_levels(
+            [
+                level(1.5, &all),
+                level(1.0, &all),
+                level(0.7, &[5200.0, 5350.0]),
+                level(0.5, &[5200.0, 5350.0]),
+                level(0.35, &[5200.0]),
+            ]
+            .concat(),
+        );
+        let x = super::extrapolate_levels(&levels).unwrap();
+        assert_eq!(x.fine_element_mm, [0.7, 0.5, 0.35]);
+        assert_eq!(x.fit_speeds, 1);
+        assert!(x.mesh_resonance_rpm.iter().all(|r| r.is_nan()));
+        let sizes: Vec<(f64, [f64; 3])> = x
+            .speeds
+            .iter()
+            .map(|s| (s.speed_rpm, s.fine_element_mm))
+            .collect();
+        assert_eq!(
+            sizes,
+            [(5200.0, [0.7, 0.5, 0.35]), (5350.0, [1.0, 0.7, 0.5])]
+        );
     }
 
     /// A one-DOF response whose resonance and height move with the flank size as

@@ -474,19 +474,22 @@ pub fn prepare(
             mesh_stiffness,
         )
     };
-    let prepared = prepare_for(scene.duration)?;
+    let mut prepared = prepare_for(scene.duration)?;
     if !scene.cover_pitch {
         return Ok(prepared);
     }
-    let needed = covering_duration(&prepared, scene, settings.output_interval);
-    if needed <= scene.duration {
-        return Ok(prepared);
+    // Settling and the low-pass span depend on the masses and the damping, hardly on how far
+    // the driver turns (a longer run may mesh another tooth fine): a second lengthening, if
+    // any, is a small one.
+    for _ in 0..3 {
+        let needed = covering_duration(&prepared, scene, settings.output_interval);
+        if needed <= prepared.duration {
+            break;
+        }
+        prepared = prepare_for(needed)?;
     }
-    let mut longer = prepare_for(needed)?;
-    // Settling and the low-pass span depend on the masses and the damping, not on how far the
-    // driver turns, so the longer model needs no longer still.
-    longer.scene_duration = scene.duration;
-    Ok(longer)
+    prepared.scene_duration = scene.duration;
+    Ok(prepared)
 }
 
 /// The shortest run of `scene` whose statistics window ([`statistics_start`]) holds one base

@@ -710,24 +710,32 @@ fn write_fe_sweep(
         };
         let [r1, r2, r3] = x.mesh_resonance_rpm;
         let [p1, p2, p3] = x.mesh_peak_dte_mesh_amplitude_rad.map(um);
+        let fits = match x.fit_speeds {
+            0..=2 => format!(
+                "No three meshes share three speeds, so no mesh's resonance is fitted to extrapolate (the three finest, {h1:.2} / {h2:.2} / {h3:.2} mm, share {})",
+                x.fit_speeds
+            ),
+            n => format!(
+                "On {h1:.2} / {h2:.2} / {h3:.2} mm, over the {n} speeds all three ran, each mesh's fitted resonance {r1:.0} / {r2:.0} / {r3:.0} rpm and peak {p1:.3} / {p2:.3} / {p3:.3} urad{}, extrapolated: resonance {:.0} ± {:.0} rpm ({}), peak {:.3} ± {:.3} urad ({}); the case's model against it: resonance {:+.2} %, peak {:+.1} %",
+                match x.fits_interpolate {
+                    true => " (three speeds: each fit interpolates them)",
+                    false => "",
+                },
+                x.resonance_rpm.value,
+                x.resonance_rpm.uncertainty,
+                order(x.resonance_rpm.order),
+                um(x.peak_dte_mesh_amplitude.value),
+                um(x.peak_dte_mesh_amplitude.uncertainty),
+                order(x.peak_dte_mesh_amplitude.order),
+                100.0 * x.case_model_resonance_rpm_rel_err,
+                100.0 * x.case_model_peak_rel_err,
+            ),
+        };
         text += &format!(
-            "\n* The FE extrapolated to zero flank size (fe_sweep_extrapolated.csv). On {h1:.2} / {h2:.2} / {h3:.2} mm, over the {} speeds all three ran, each mesh's fitted resonance {r1:.0} / {r2:.0} / {r3:.0} rpm and peak {p1:.3} / {p2:.3} / {p3:.3} urad{}, extrapolated: resonance {:.0} ± {:.0} rpm ({}), peak {:.3} ± {:.3} urad ({}); the case's model against it: resonance {:+.2} %, peak {:+.1} %, DTE rms largest difference {:.1} %. Speed by speed, each from the three finest meshes that ran it: {} of the {} speeds converged monotonically (the others carry the finest mesh's value){}",
-            x.fit_speeds,
-            match x.fits_interpolate {
-                true => " (three speeds: each fit interpolates them)",
-                false => "",
-            },
-            x.resonance_rpm.value,
-            x.resonance_rpm.uncertainty,
-            order(x.resonance_rpm.order),
-            um(x.peak_dte_mesh_amplitude.value),
-            um(x.peak_dte_mesh_amplitude.uncertainty),
-            order(x.peak_dte_mesh_amplitude.order),
-            100.0 * x.case_model_resonance_rpm_rel_err,
-            100.0 * x.case_model_peak_rel_err,
-            100.0 * x.case_model_dte_rms_max_rel_err,
+            "\n* The FE extrapolated to zero flank size (fe_sweep_extrapolated.csv). {fits}. Speed by speed, each from the three finest meshes that ran it: {} of the {} speeds converged monotonically (the others carry the finest mesh's value), the case's model's DTE rms at most {:.1} % from it{}",
             x.speeds_extrapolated,
             x.speeds.len(),
+            100.0 * x.case_model_dte_rms_max_rel_err,
             match x.pointwise_resonance_rpm.is_finite() {
                 true => format!(
                     "; fitted over them: resonance {:.0} rpm, peak {:.3} urad",

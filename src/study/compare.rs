@@ -1039,15 +1039,17 @@ pub fn resonance_reference(
             let extrapolated = sweep
                 .extrapolated
                 .as_ref()
-                .map(|e| e.resonance_rpm)
-                .filter(|r| r.order.is_some() && r.value.is_finite() && r.uncertainty.is_finite());
+                .map(|e| (e.resonance_rpm, e.fine_element_mm))
+                .filter(|(r, _)| {
+                    r.order.is_some() && r.value.is_finite() && r.uncertainty.is_finite()
+                });
             let zeta = sweep.fitted_damping_ratio_fe;
             match (extrapolated, super::fe_sweep::refinement_shift_rpm(sweep)) {
-                (Some(r), _) => (
+                (Some((r, [h1, h2, h3])), _) => (
                     r.value / (1.0 - 2.0 * zeta * zeta).max(1e-12).sqrt(),
                     jackknife.max(r.uncertainty),
                     format!(
-                        "explicit FE speed sweep on three meshes, the fitted one-DOF responses' resonance extrapolated to zero flank size (observed order {:.2}), made undamped with the headline ({}) mesh's fitted ζ = {zeta:.4}; uncertainty: the larger of the extrapolation's ({:.1} rpm) and the headline fit's leave-one-out jackknife ({jackknife:.1} rpm)",
+                        "explicit FE speed sweep on {h1:.2} / {h2:.2} / {h3:.2} mm flanks, the fitted one-DOF responses' resonance extrapolated to zero flank size (observed order {:.2}), made undamped with the headline ({}) mesh's fitted ζ = {zeta:.4}; uncertainty: the larger of the extrapolation's ({:.1} rpm) and the headline fit's leave-one-out jackknife ({jackknife:.1} rpm)",
                         r.order.unwrap_or(f64::NAN),
                         sweep.fine_element_mm.map_or("unrecorded".into(), |mm| format!("{mm:.2} mm")),
                         r.uncertainty

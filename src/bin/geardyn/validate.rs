@@ -103,20 +103,35 @@ pub fn validate_frequencies(
 
 pub fn validate_mass_scaling(args: &CommonArgs, scene: &str) -> Result<()> {
     let scaled = load(args, Vec::new())?;
-    let unscaled = load(args, vec![Override::set("fe.mass_scaling", false)])?;
     let dir = output_dir(args, "validate-mass-scaling", &scaled)?;
-    let mut runs = Vec::new();
-    for (case, name) in [(&scaled, "scaled"), (&unscaled, "unscaled")] {
-        let out = dir.join(name);
-        runs.push(fe_run(
-            case,
-            study::fe::scene(case, scene)?,
-            &out,
-            false,
-            &RunView::default(),
-        )?);
-        study::validate::check_scaled(&runs[0])?;
-    }
+    let mut runs = vec![fe_run(
+        &scaled,
+        study::fe::scene(&scaled, scene)?,
+        &dir.join("scaled"),
+        false,
+        &RunView::default(),
+    )?];
+    study::validate::check_scaled(&runs[0])?;
+    // The unscaled run settles sooner, so a scene that covers a base pitch would end it
+    // sooner: both over the scaled run's duration, for one window.
+    let unscaled = load(
+        args,
+        vec![
+            Override::set("fe.mass_scaling", false),
+            Override::set(
+                format!("scene[{scene}].duration_s"),
+                runs[0].summary.scene.duration,
+            ),
+            Override::set(format!("scene[{scene}].cover_pitch"), false),
+        ],
+    )?;
+    runs.push(fe_run(
+        &unscaled,
+        study::fe::scene(&unscaled, scene)?,
+        &dir.join("unscaled"),
+        false,
+        &RunView::default(),
+    )?);
     let result = study::validate::mass_scaling(scaled.name(), &scaled.pair, &runs[0], &runs[1])?;
     let table = report::fe::write_mass_scaling(OutputDir(&dir), &scaled, &result)?;
     println!("{table}wrote {}", dir.display());

@@ -600,16 +600,14 @@ pub fn extrapolate_levels(levels: &[Vec<FeSpeed>]) -> Option<ExtrapolatedFe> {
             })
             .collect()
     };
-    // Triples coarsest first; the last that shares three speeds is the finest such (its
-    // coarsest mesh the finest, then its middle one, then its finest).
+    // Triples coarsest first; the last that shares three speeds (the first from the end) is
+    // the finest such: its coarsest mesh the finest, then its middle one, then its finest.
     let n = sized.len();
-    let triples =
+    let mut triples =
         (0..n).flat_map(|a| (a + 1..n).flat_map(move |b| (b + 1..n).map(move |c| [a, b, c])));
-    let fit_levels =
-        triples
-            .filter(|t| shared(*t).len() >= 3)
-            .last()
-            .unwrap_or([n - 3, n - 2, n - 1]);
+    let fit_levels = triples
+        .rfind(|t| shared(*t).len() >= 3)
+        .unwrap_or([n - 3, n - 2, n - 1]);
     let fit_runs = shared(fit_levels);
     let mut rpms: Vec<f64> = Vec::new();
     for s in sized.iter().flat_map(|(_, level)| level.iter()) {

@@ -499,11 +499,20 @@ pub fn prepare(
 /// only the settling.
 pub fn covering_duration(prepared: &PreparedScene, scene: &Scene, output_interval: f64) -> f64 {
     let settled = scene.ramp_time + prepared.settling_time;
-    if scene.driver_speed <= 0.0 {
-        return settled;
+    match pitch_window(prepared, scene) {
+        Some(window) => settled + window + 2.0 * output_interval,
+        None => settled,
     }
-    let mesh_period = prepared.model.pair.gears[0].angular_pitch() / scene.driver_speed;
-    settled + mesh_period + prepared.mesh_mode_period + 2.0 * output_interval
+}
+
+/// What a statistics window needs to cover a base pitch after the ramp: one mesh period (a
+/// driver pitch at the scene's speed) and the low-pass's span, one mesh-mode period [s]; None
+/// for a scene at rest.
+fn pitch_window(prepared: &PreparedScene, scene: &Scene) -> Option<f64> {
+    (scene.driver_speed > 0.0).then(|| {
+        prepared.model.pair.gears[0].angular_pitch() / scene.driver_speed
+            + prepared.mesh_mode_period
+    })
 }
 
 fn prepare_scene(
@@ -690,12 +699,10 @@ fn prepare_scene(
 pub fn statistics_start(prepared: &PreparedScene, scene: &Scene) -> f64 {
     let ramp = scene.ramp_time;
     let settled = ramp + prepared.settling_time;
-    if scene.driver_speed <= 0.0 {
-        return settled.min(prepared.duration);
+    match pitch_window(prepared, scene) {
+        Some(needed) => settled.min((prepared.duration - needed).max(ramp)),
+        None => settled.min(prepared.duration),
     }
-    let mesh_period = prepared.model.pair.gears[0].angular_pitch() / scene.driver_speed;
-    let needed = mesh_period + prepared.mesh_mode_period;
-    settled.min((prepared.duration - needed).max(ramp))
 }
 
 /// Recorded time histories of a run: one sample per output interval.

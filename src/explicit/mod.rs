@@ -1,4 +1,5 @@
-//! Explicit dynamics: corotational Q8 bodies with lumped mass ([`body`]), central-difference
+//! Explicit dynamics: corotational Q8 bodies with lumped mass ([`body`]), the per-DOF
+//! central-difference updates on the CPU's vector width ([`kicks`]), central-difference
 //! integration of one body with its critical step ([`solver`]), the meshing pair on rigid hubs
 //! with penalty/Coulomb contact and its energy account ([`pair`]), its two gears on two threads
 //! in lock-step ([`lockstep`]), the transfer of a run's state between meshes of a gear
@@ -6,6 +7,7 @@
 //! ([`scene`]).
 
 pub mod body;
+pub mod kicks;
 pub mod lockstep;
 pub mod pair;
 pub mod remesh;

@@ -45,6 +45,7 @@ use std::time::Instant;
 
 use crate::contact::{project_on_quadratic_edge, ContactLaw, FrictionState};
 use crate::explicit::body::{ExplicitBody, ExplicitMaterial, ForceOutput};
+use crate::explicit::kicks;
 use crate::explicit::lockstep::Lockstep;
 use crate::explicit::remesh::NodeTransfer;
 use crate::fe::FeError;
@@ -176,6 +177,36 @@ pub struct ExplicitPair {
     pub tooth_pairs: Vec<(usize, usize)>,
     pub friction: f64,
     pub penalty_factor: f64,
+    /// Per gear, the DOFs a step kicks after its serial middle, ascending: those of every
+    /// flank's nodes (contact forces are added to them there, and the contact reads their
+    /// velocities during the force phase) and of the bore nodes (the hubs read their forces).
+    held_dofs: [Vec<usize>; 2],
+    /// Per gear, the runs of the other DOFs, which each gear's thread kicks in the force
+    /// phase right after its element forces ([`PairIntegrator::step`]).
+    body_only_runs: [Vec<std::ops::Range<usize>>; 2],
+}
+
+/// The DOFs of the nodes `held` (any order, repeats allowed) among `dofs`, ascending, and the
+/// runs of the DOFs between them.
+fn split_dofs(
+    dofs: usize,
+    held: impl Iterator<Item = usize>,
+) -> (Vec<usize>, Vec<std::ops::Range<usize>>) {
+    let mut is_held = vec![false; dofs];
+    for n in held {
+        is_held[2 * n] = true;
+        is_held[2 * n + 1] = true;
+    }
+    let held_dofs: Vec<usize> = (0..dofs).filter(|&d| is_held[d]).collect();
+    let mut runs = Vec::new();
+    let mut start = 0;
+    for &d in held_dofs.iter().chain(std::iter::once(&dofs)) {
+        if d > start {
+            runs.push(start..d);
+        }
+        start = d + 1;
+    }
+    (held_dofs, runs)
 }
 
 /// Shape of the ramps from zero.
@@ -407,6 +438,15 @@ impl ExplicitPair {
             .indices(pair);
             add_pair(t1, back, Side::Right, false);
         }
+        let split: [_; 2] = std::array::from_fn(|g| {
+            let flank_nodes = flanks
+                .iter()
+                .filter(|f: &&Flank| f.gear == g)
+                .flat_map(|f| f.nodes.iter().copied());
+            let bore = meshes[g].bore_nodes.iter().copied();
+            split_dofs(2 * meshes[g].nodes.len(), flank_nodes.chain(bore))
+        });
+        let [(held0, runs0), (held1, runs1)] = split;
         Ok(ExplicitPair {
             pair: pair.clone(),
             meshes,
@@ -420,6 +460,8 @@ impl ExplicitPair {
             tooth_pairs,
             friction,
             penalty_factor,
+            held_dofs: [held0, held1],
+            body_only_runs: [runs0, runs1],
         })
     }
 
@@ -604,11 +646,12 @@ impl ExplicitPair {
         }
     }
 
-    /// Contact forces at the state's positions into `force` (added), with the friction history
-    /// and slip from the velocities over `dt`.
+    /// Contact forces at positions `x` into `force` (added), with the friction history and
+    /// slip from the velocities `v` over `dt` (per gear; only the flanks' nodes are read).
     fn contact_forces(
         &self,
-        state: &PairState,
+        x: [&[f64]; 2],
+        v: [&[f64]; 2],
         dt: f64,
         history: &mut [PairHistory],
         force: &mut [Vec<f64>; 2],
@@ -627,7 +670,7 @@ impl ExplicitPair {
         let reject = 0.25 * self.pair.gears[0].module();
         for (index, fp) in self.flank_pairs.iter().enumerate() {
             let node = |f: usize, n: usize| {
-                let x = &state.x[self.flanks[f].gear];
+                let x = x[self.flanks[f].gear];
                 Point2::new(x[2 * n], x[2 * n + 1])
             };
             let [f1, f2] = fp.flanks.map(|f| &self.flanks[f]);
@@ -635,7 +678,7 @@ impl ExplicitPair {
                 .norm()
                 > f1.radius + f2.radius + reject;
             let apart = spheres_apart || {
-                let boxes = [f1, f2].map(|flank| flank.bounding_box(&state.x[flank.gear]));
+                let boxes = [f1, f2].map(|flank| flank.bounding_box(x[flank.gear]));
                 (boxes[0][0] - boxes[1][2])
                     .max(boxes[1][0] - boxes[0][2])
                     .max(boxes[0][1] - boxes[1][3])
@@ -662,13 +705,11 @@ impl ExplicitPair {
                 );
                 let (sg, mg) = (slave.gear, master.gear);
                 let slots = &mut pair_history.passes[pass];
-                let point =
-                    |g: usize, n: usize| Point2::new(state.x[g][2 * n], state.x[g][2 * n + 1]);
-                let velocity =
-                    |g: usize, n: usize| Vector2::new(state.v[g][2 * n], state.v[g][2 * n + 1]);
+                let point = |g: usize, n: usize| Point2::new(x[g][2 * n], x[g][2 * n + 1]);
+                let velocity = |g: usize, n: usize| Vector2::new(v[g][2 * n], v[g][2 * n + 1]);
                 // The master flank's bounding box, widened by the rejection distance: slave
                 // points outside it cannot be in contact.
-                let [x_lo, y_lo, x_hi, y_hi] = master.bounding_box(&state.x[mg]);
+                let [x_lo, y_lo, x_hi, y_hi] = master.bounding_box(x[mg]);
                 let near = [x_lo - reject, y_lo - reject, x_hi + reject, y_hi + reject];
                 let corner_slot = slave.edges.len() * GAUSS_EDGE.len();
                 for (se, slave_edge) in slave.edges.iter().enumerate() {
@@ -1046,6 +1087,9 @@ pub struct PairIntegrator<'a> {
     stamp_id: u64,
     /// Positions of the driver's bore DOFs at the start of the step.
     old_bore_x: Vec<f64>,
+    /// The velocities of the held DOFs ([`ExplicitPair::held_dofs`]) after the drift, for the
+    /// contact, while each gear's thread kicks its other DOFs; other entries are stale.
+    contact_velocity: [Vec<f64>; 2],
     /// The two gears' phases side by side (a partner thread kept for the run) or in series.
     lockstep: Lockstep,
     /// Where the steps' time went.
@@ -1088,10 +1132,13 @@ pub struct PhaseWall {
     pub drift_s: f64,
     /// The force phase: the contact search and forces beside the two bodies' element forces.
     pub forces_s: f64,
-    /// Within the force phase, on their threads: the contact, and each gear's element forces.
+    /// Within the force phase, on their threads: the contact, and each gear's element forces
+    /// with the kick of its DOFs that no contact or hub touches.
     pub contact_s: f64,
     pub body_forces_s: [f64; 2],
-    /// The accelerations and closing half kick, both gears side by side.
+    /// The closing half kick of the flank and bore DOFs and the hubs, serial (until 2026-12-06
+    /// the kick of every DOF, both gears side by side: the others' kick is now in the force
+    /// phase, on each gear's thread).
     pub accelerate_s: f64,
     /// Steps whose contact ran on the thread of gear 1's element forces, of gear 2's (on one
     /// thread the choice is made all the same, and means nothing).
@@ -1378,6 +1425,7 @@ impl<'a> PairIntegrator<'a> {
             ],
             stamp_id: 0,
             old_bore_x: vec![0.0; 2 * model.meshes[0].bore_nodes.len()],
+            contact_velocity: [zeros(0), zeros(1)],
             lockstep: Lockstep::for_current_pool(),
             phase_wall: PhaseWall::default(),
             // Until the first measurement: the gear of fewer elements.
@@ -1402,41 +1450,52 @@ impl<'a> PairIntegrator<'a> {
     }
 
     /// The first phase of a step, per gear and in parallel: the drift x += Δt v after the half
-    /// kick v += ½Δt a (skipped with `dt` = None) and the hub motion of the bore nodes.
+    /// kick v += ½Δt a (skipped with `dt` = None), the hub motion of the bore nodes, and the
+    /// held DOFs' velocities copied for the contact.
     fn drift(&mut self, state: &mut PairState, dt: Option<f64>, bore: [[f64; 3]; 2]) {
         let model = self.model;
         let [x0, x1] = &mut state.x;
         let [v0, v1] = &mut state.v;
         let [a0, a1] = &mut state.a;
-        let gear = |g: usize, x: &mut [f64], v: &mut [f64], a: &mut [f64]| {
+        let [c0, c1] = &mut self.contact_velocity;
+        let gear = |g: usize, x: &mut [f64], v: &mut [f64], a: &mut [f64], held_v: &mut [f64]| {
             if let Some(dt) = dt {
-                for ((x, v), a) in x.iter_mut().zip(v.iter_mut()).zip(a.iter()) {
-                    *v += 0.5 * dt * a;
-                    *x += dt * *v;
-                }
+                kicks::drift(dt, x, v, a);
             }
             model.place_bore(g, x, v, a, bore[g]);
+            for &d in &model.held_dofs[g] {
+                held_v[d] = v[d];
+            }
         };
         self.lockstep
-            .join(|| gear(0, x0, v0, a0), || gear(1, x1, v1, a1));
+            .join(|| gear(0, x0, v0, a0, c0), || gear(1, x1, v1, a1, c1));
     }
 
     /// The middle phase, on both threads at once: the contact forces (into `contact_force`,
     /// with their bookkeeping) beside the bodies' internal and damping forces (into `force`,
-    /// whose contact forces are not yet added; `force` is zero here: `accelerate` clears it as
-    /// it reads it).
+    /// whose contact forces are not yet added; `force` is zero here: the kicks clear it as they
+    /// read it). Right after its element forces each gear's thread kicks the DOFs no contact
+    /// and no hub touches ([`ExplicitPair::body_only_runs`], with `half` = ½Δt, zero at the
+    /// start), while their forces are fresh in its cache; the contact reads only the held DOFs'
+    /// positions and their velocities' copy. (The kick was a phase of its own until
+    /// 2026-12-06: one more hand-over between the threads a step, validation/performance.)
     /// The contact goes with the gear whose thread then finishes first by the last
     /// [`BALANCE_EVERY`] steps' times ([`PairIntegrator::contact_beside`]). Splitting a body
     /// between the threads to balance them gained nothing (validation/performance): its nodes'
     /// cache lines then move between the cores at every step.
     ///
-    /// Returns the bodies' forces and energies and the phase's times [s]: the contact's, each
-    /// gear's element forces'.
-    fn contact_and_body_forces(&mut self, state: &PairState) -> ([ForceOutput; 2], [f64; 3]) {
+    /// Returns the bodies' forces and energies, the mass damping's power in the kicked DOFs,
+    /// and the phase's times [s]: the contact's, each gear's element forces and kick.
+    fn contact_and_body_forces(
+        &mut self,
+        state: &mut PairState,
+        half: f64,
+    ) -> ([ForceOutput; 2], f64, [f64; 3]) {
         let PairIntegrator {
             model,
             dt,
             beta_k,
+            mass_damping,
             force,
             contact_force,
             previous_contact,
@@ -1447,15 +1506,23 @@ impl<'a> PairIntegrator<'a> {
             last_contact,
             lockstep,
             contact_beside,
+            contact_velocity,
             ..
         } = self;
-        let (model, dt, beta) = (*model, *dt, *beta_k);
+        let (model, dt, beta, alpha) = (*model, *dt, *beta_k, *mass_damping);
         let [f0, f1] = force;
-        let forces = |g: usize, f: &mut [f64]| {
+        let PairState { x, v, a, .. } = state;
+        let [v0, v1] = v;
+        let [a0, a1] = a;
+        let x: [&[f64]; 2] = [&x[0], &x[1]];
+        let forces = |g: usize, f: &mut [f64], v: &mut [f64], a: &mut [f64]| {
             let started = Instant::now();
-            let out = model.bodies[g].internal_forces(&state.x[g], &state.v[g], beta, f);
-            (out, started.elapsed().as_secs_f64())
+            let out = model.bodies[g].internal_forces(x[g], v, beta, f);
+            let w = &model.inverse_mass[g];
+            let power = kicks::kick(alpha, half, &model.body_only_runs[g], w, a, v, f);
+            (out, power, started.elapsed().as_secs_f64())
         };
+        let held_v: [&[f64]; 2] = [&contact_velocity[0], &contact_velocity[1]];
         let mut contact = || {
             let started = Instant::now();
             // After the swap, `contact_force` holds the forces of two steps ago, on the flanks
@@ -1468,19 +1535,25 @@ impl<'a> PairIntegrator<'a> {
                     current[d] = 0.0
                 });
             }
-            model.contact_forces(state, dt, history, contact_force, last_contact);
+            model.contact_forces(x, held_v, dt, history, contact_force, last_contact);
             searched.swap(0, 1);
             searched[1].copy_from_slice(&last_contact.searched);
             started.elapsed().as_secs_f64()
         };
-        let ((o0, t0), (o1, t1), t_contact) = if *contact_beside == 0 {
-            let ((c, b0), b1) = lockstep.join(|| (contact(), forces(0, f0)), || forces(1, f1));
+        let ((o0, p0, t0), (o1, p1, t1), t_contact) = if *contact_beside == 0 {
+            let ((c, b0), b1) = lockstep.join(
+                || (contact(), forces(0, f0, v0, a0)),
+                || forces(1, f1, v1, a1),
+            );
             (b0, b1, c)
         } else {
-            let (b0, (c, b1)) = lockstep.join(|| forces(0, f0), || (contact(), forces(1, f1)));
+            let (b0, (c, b1)) = lockstep.join(
+                || forces(0, f0, v0, a0),
+                || (contact(), forces(1, f1, v1, a1)),
+            );
             (b0, b1, c)
         };
-        ([o0, o1], [t_contact, t0, t1])
+        ([o0, o1], p0 + p1, [t_contact, t0, t1])
     }
 
     /// Books a step's force-phase times and, every [`BALANCE_EVERY`] steps, puts the contact
@@ -1559,10 +1632,13 @@ impl<'a> PairIntegrator<'a> {
         alpha * model.hub_inertia * state.hub[1] * state.hub[1] - mesh_torque * state.hub[1]
     }
 
-    /// The last phase, per gear and in parallel: accelerations a = f/m (− α v) of the free
-    /// DOFs, the closing half kick v += ½Δt a (skipped with `dt` = None) and the hub motion of
-    /// the bore nodes. Returns the mass-damping power of the free nodes.
-    fn accelerate(&mut self, state: &mut PairState, dt: Option<f64>, bore: [[f64; 3]; 2]) -> f64 {
+    /// The last phase, per gear and in parallel: the kick of the held DOFs
+    /// ([`ExplicitPair::held_dofs`]: the flanks', now with their contact forces, and the
+    /// bore's, whose w = 0 gives a = 0), then the hub motion of the bore nodes. With `dt` = None
+    /// no half kick. Returns the mass damping's power in the held DOFs. (On each gear's own
+    /// thread: done serially, the partner's cache lines of a few hundred scattered DOFs made it
+    /// slower than the hand-over.)
+    fn kick_held(&mut self, state: &mut PairState, dt: Option<f64>, bore: [[f64; 3]; 2]) -> f64 {
         let (model, alpha) = (self.model, self.mass_damping);
         let half = 0.5 * dt.unwrap_or(0.0);
         let [x0, x1] = &mut state.x;
@@ -1572,25 +1648,8 @@ impl<'a> PairIntegrator<'a> {
         let gear = |g: usize, x: &mut [f64], v: &mut [f64], a: &mut [f64], f: &mut [f64]| {
             let w = &model.inverse_mass[g];
             let mut power = 0.0;
-            // The bore DOFs have w = 0: a = 0 and v unchanged here, then set by their hub. The
-            // force is cleared for the next step's accumulation in the same pass.
-            if alpha > 0.0 {
-                for (((a, v), f), w) in a.iter_mut().zip(v.iter_mut()).zip(f.iter_mut()).zip(w) {
-                    if *w > 0.0 {
-                        *a = *f * w - alpha * *v;
-                        power += alpha * *v * *v / w;
-                    } else {
-                        *a = 0.0;
-                    }
-                    *v += half * *a;
-                    *f = 0.0;
-                }
-            } else {
-                for (((a, v), f), w) in a.iter_mut().zip(v.iter_mut()).zip(f.iter_mut()).zip(w) {
-                    *a = *f * w;
-                    *v += half * *a;
-                    *f = 0.0;
-                }
+            for &d in &model.held_dofs[g] {
+                power += kicks::kick_one(alpha, half, w[d], &mut a[d], &mut v[d], &mut f[d]);
             }
             model.place_bore(g, x, v, a, bore[g]);
             power
@@ -1606,9 +1665,9 @@ impl<'a> PairIntegrator<'a> {
         let (theta, rate, accel) = self.drive.driver_motion(state.time);
         let [phi, phi_rate, _] = state.hub;
         self.drift(state, None, [[theta, rate, accel], [phi, phi_rate, 0.0]]);
-        let (body, _) = self.contact_and_body_forces(state);
+        let (body, _, _) = self.contact_and_body_forces(state, 0.0);
         self.contact_and_hubs(state);
-        self.accelerate(state, None, [[theta, rate, accel], state.hub]);
+        self.kick_held(state, None, [[theta, rate, accel], state.hub]);
         self.energy.strain = body[0].strain_energy + body[1].strain_energy;
         self.energy.kinetic = self.kinetic(state);
         // A start at speed: the initial kinetic energy is work done on the pair before t = 0.
@@ -1626,14 +1685,22 @@ impl<'a> PairIntegrator<'a> {
         let before = self.energy.kinetic + self.energy.strain;
         let (theta, rate, accel) = self.drive.driver_motion(state.time);
         self.drift(state, None, [[theta, rate, accel], state.hub]);
-        let (model, beta) = (self.model, self.beta_k);
+        let (model, beta, alpha) = (self.model, self.beta_k, self.mass_damping);
         let [f0, f1] = &mut self.force;
-        let (o0, o1) = self.lockstep.join(
-            || model.bodies[0].internal_forces(&state.x[0], &state.v[0], beta, f0),
-            || model.bodies[1].internal_forces(&state.x[1], &state.v[1], beta, f1),
-        );
+        let PairState { x, v, a, .. } = &mut *state;
+        let [v0, v1] = v;
+        let [a0, a1] = a;
+        let gear = |g: usize, f: &mut [f64], v: &mut [f64], a: &mut [f64]| {
+            let out = model.bodies[g].internal_forces(&x[g], v, beta, f);
+            let w = &model.inverse_mass[g];
+            kicks::kick(alpha, 0.0, &model.body_only_runs[g], w, a, v, f);
+            out
+        };
+        let (o0, o1) = self
+            .lockstep
+            .join(|| gear(0, f0, v0, a0), || gear(1, f1, v1, a1));
         self.contact_and_hubs(state);
-        self.accelerate(state, None, [[theta, rate, accel], state.hub]);
+        self.kick_held(state, None, [[theta, rate, accel], state.hub]);
         self.energy.strain = o0.strain_energy + o1.strain_energy;
         self.energy.kinetic = self.kinetic(state);
         let added = self.energy.kinetic + self.energy.strain - before;
@@ -1656,10 +1723,14 @@ impl<'a> PairIntegrator<'a> {
     /// One central-difference step (no allocation):
     /// ```text
     /// v ← v + ½Δt a;  x ← x + Δt v;  hubs → bore DOFs            per gear, parallel
-    /// f = −f_int(x) − f_damp(v) per gear;  f_contact(x, v)          3 tasks on 2 threads
+    /// f = −f_int(x) − f_damp(v), then a = f/m;  v ← v + ½Δt a
+    ///   on the DOFs no contact or hub touches, per gear;
+    ///   f_contact(x, v) beside them                                3 tasks on 2 threads
     /// f += f_contact;  driven hub: φ̈ = M/I_h;  driver reactions     serial
-    /// a = f/m;  v ← v + ½Δt a;  hubs → bore DOFs                    per gear, parallel
+    /// a = f/m;  v ← v + ½Δt a on the flank and bore DOFs;  hubs     per gear, parallel
     /// ```
+    /// Every DOF gets the same arithmetic as in a separate kick phase, so the results are the
+    /// bits of the three-phase step ([`kicks`]).
     /// The parallel phases go through [`Lockstep`]: with one thread they run one after the
     /// other, with the same arithmetic.
     /// The energy account's kinetic and strain parts are state functions, updated by
@@ -1686,12 +1757,13 @@ impl<'a> PairIntegrator<'a> {
         self.drift(state, Some(dt), [[theta, rate, accel], state.hub]);
         self.phase_wall.drift_s += phase.elapsed().as_secs_f64();
         let phase = Instant::now();
-        let (body, times) = self.contact_and_body_forces(state);
+        let (body, body_node_power, times) = self.contact_and_body_forces(state, 0.5 * dt);
         self.book_force_phase(phase.elapsed().as_secs_f64(), times);
         let hub_power = self.contact_and_hubs(state);
         state.hub[1] += 0.5 * dt * state.hub[2];
         let phase = Instant::now();
-        let node_power = self.accelerate(state, Some(dt), [[theta, rate, accel], state.hub]);
+        let node_power =
+            body_node_power + self.kick_held(state, Some(dt), [[theta, rate, accel], state.hub]);
         self.phase_wall.accelerate_s += phase.elapsed().as_secs_f64();
         let strain = body[0].strain_energy + body[1].strain_energy;
         let damping_power = body[0].damping_power + body[1].damping_power + hub_power + node_power;
@@ -1763,7 +1835,15 @@ impl<'a> PairIntegrator<'a> {
             // The friction history as it stands at `state`, for every evaluation.
             let mut history = self.history.clone();
             let mut out = ContactOutput::default();
-            model.contact_forces(probe, self.dt, &mut history, &mut f, &mut out);
+            let (x, v) = (&probe.x, &probe.v);
+            model.contact_forces(
+                [&x[0], &x[1]],
+                [&v[0], &v[1]],
+                self.dt,
+                &mut history,
+                &mut f,
+                &mut out,
+            );
             f
         };
         let base = forces(state);

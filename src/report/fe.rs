@@ -496,7 +496,7 @@ pub fn console(study: &FeStudy) -> String {
         String::new()
     };
     text.push_str(&format!(
-        "a step's {:.1} us: drift {:.1}, forces {:.1} (contact {:.1}{beside}; element forces gear 1 {:.1}, gear 2 {:.1}), accelerations {:.1}, serial {:.1}\n",
+        "a step's {:.1} us: drift {:.1}, forces {:.1} (contact {:.1}{beside}; element forces and kick gear 1 {:.1}, gear 2 {:.1}), flank and bore kick {:.1}, serial {:.1}\n",
         phases.step,
         phases.drift,
         phases.forces,

@@ -35,6 +35,7 @@ fn explicit(c: &mut Criterion) {
                     fine_size: settings.fine_size,
                     coarse_size: settings.coarse_size,
                     fine_teeth: (0..gear.teeth() as usize).collect(),
+                    layout: settings.tooth_layout,
                 },
             ),
         ),

@@ -177,6 +177,7 @@ pub fn paper36_gear_mesh(fine_size: f64, coarse_size: f64) -> crate::mesh::GearM
         fine_size,
         coarse_size,
         fine_teeth: vec![0, 1, gear.teeth() as usize - 1],
+        layout: crate::mesh::ToothLayout::Graded,
     };
     crate::mesh::mesh_gear(gear, &modification, &spec)
 }

@@ -184,16 +184,27 @@ fn sector_prototypes_give_the_same_forces() {
     // An unequal pair's two gears (24 and 40 teeth), with the paper's relief.
     let case = samples::matrix_pair("24-40").unwrap().case().unwrap();
     let relief = case.relief_variant("tip20-root10").unwrap();
-    for (gear, modification) in case.pair.gears.iter().zip(&relief.modifications) {
+    let layouts = [
+        geardyn::mesh::ToothLayout::Graded,
+        geardyn::mesh::ToothLayout::StableStep,
+    ];
+    for ((gear, modification), layout) in case
+        .pair
+        .gears
+        .iter()
+        .zip(&relief.modifications)
+        .flat_map(|g| layouts.map(|l| (g, l)))
+    {
         let z = gear.teeth() as usize;
         let spec = geardyn::mesh::MeshSpec {
             fine_size: 0.8e-3,
             coarse_size: 2.0e-3,
             fine_teeth: vec![0, 1, z - 1],
+            layout,
         };
         let mesh = geardyn::mesh::mesh_gear(gear, modification, &spec);
         let prototypes = assert_sector_prototypes_give_the_same_forces(&mesh);
-        // Fewer teeth, fewer copies of each layout: 137 of 1 344 (24), 199 of 3 495 (40).
+        // Fewer teeth, fewer copies of each layout: 137 of 1 344 (24), 199 of 3 495 (40), graded.
         assert!(
             prototypes * 5 < mesh.elements.len(),
             "{z} teeth: {prototypes} prototypes"

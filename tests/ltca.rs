@@ -265,6 +265,7 @@ fn the_periodicity_check_catches_a_missing_pair() {
         fine_size: 0.4e-3,
         coarse_size: case.file.mesh.coarse_element_mm * 1e-3,
         fine_teeth: teeth,
+        layout: geardyn::mesh::ToothLayout::Graded,
     };
     let m = LtcaModel::new(
         &case.pair,

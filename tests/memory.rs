@@ -93,6 +93,7 @@ fn ltca_body_memory_estimates_against_the_heap() {
             fine_size,
             coarse_size,
             fine_teeth: teeth.clone(),
+            layout: geardyn::mesh::ToothLayout::Graded,
         };
         let counted = assembly_memory(mesh_size(gear, &none, &spec)).total();
         let (assembled, assembly_peak) = peak_of(|| {

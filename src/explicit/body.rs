@@ -1077,6 +1077,7 @@ mod tests {
                 fine_size: 1.5e-3,
                 coarse_size: 3.0e-3,
                 fine_teeth: vec![0, 1, 2, 33, 34, 35],
+                layout: crate::mesh::ToothLayout::Graded,
             },
         );
         let three_fine = crate::samples::paper36_gear_mesh(1.5e-3, 3.0e-3);

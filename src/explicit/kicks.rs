@@ -183,35 +183,133 @@ mod tests {
         ]
     }
 
-    /// The dispatched passes give the bits of the one-DOF form, with and without mass damping,
-    /// over lengths that leave vector remainders.
+    /// The three-phase step's closing kick before 2026-12-06 (`PairIntegrator::accelerate`),
+    /// verbatim but for the bore placement: the reference every variant must give bit for bit.
+    fn old_kick(
+        alpha: f64,
+        half: f64,
+        w: &[f64],
+        a: &mut [f64],
+        v: &mut [f64],
+        f: &mut [f64],
+    ) -> f64 {
+        let mut power = 0.0;
+        if alpha > 0.0 {
+            for (((a, v), f), w) in a.iter_mut().zip(v.iter_mut()).zip(f.iter_mut()).zip(w) {
+                if *w > 0.0 {
+                    *a = *f * w - alpha * *v;
+                    power += alpha * *v * *v / w;
+                } else {
+                    *a = 0.0;
+                }
+                *v += half * *a;
+                *f = 0.0;
+            }
+        } else {
+            for (((a, v), f), w) in a.iter_mut().zip(v.iter_mut()).zip(f.iter_mut()).zip(w) {
+                *a = *f * w;
+                *v += half * *a;
+                *f = 0.0;
+            }
+        }
+        power
+    }
+
+    /// Every variant this CPU runs (portable, AVX2, AVX-512, and the dispatch) gives the bits of
+    /// the old kick over runs with gaps (the gaps untouched), and of the old drift, with and
+    /// without mass damping, over lengths that leave vector remainders.
     #[test]
-    fn the_dispatched_passes_match_the_one_dof_form() {
-        for n in [0, 1, 7, 8, 17, 1001] {
-            for alpha in [0.0, 37.5] {
-                let [w, a0, v0, f0] = arrays(n);
-                let (mut a, mut v, mut f) = (a0.clone(), v0.clone(), f0.clone());
-                // Runs with gaps between them, as the force phase's (the gaps stay as they were).
-                let runs = [(0, n / 3), (n / 3 + 1, n / 2), (n / 2 + 3, n)].map(|(a, b)| {
+    fn every_variant_gives_the_old_passes_bits() {
+        type KickFn =
+            fn(f64, f64, &[Range<usize>], &[f64], &mut [f64], &mut [f64], &mut [f64]) -> f64;
+        type DriftFn = fn(f64, &mut [f64], &mut [f64], &[f64]);
+        let mut variants: Vec<(&str, KickFn, DriftFn)> = vec![
+            (
+                "portable",
+                |al, h, r, w, a, v, f| kick_runs(al, h, r, w, a, v, f),
+                |dt, x, v, a| drift_body(dt, x, v, a),
+            ),
+            ("dispatched", kick, drift),
+        ];
+        #[cfg(target_arch = "x86_64")]
+        {
+            if Kernel::Avx2.available() {
+                // SAFETY: the CPU has AVX2 and FMA (checked above).
+                variants.push((
+                    "avx2",
+                    |al, h, r, w, a, v, f| unsafe { kick_avx2(al, h, r, w, a, v, f) },
+                    |dt, x, v, a| unsafe { drift_avx2(dt, x, v, a) },
+                ));
+            }
+            if Kernel::Avx512.available() {
+                // SAFETY: the CPU has AVX-512 F and DQ, AVX2 and FMA (checked above).
+                variants.push((
+                    "avx512",
+                    |al, h, r, w, a, v, f| unsafe { kick_avx512(al, h, r, w, a, v, f) },
+                    |dt, x, v, a| unsafe { drift_avx512(dt, x, v, a) },
+                ));
+            }
+        }
+        for (name, kick_variant, drift_variant) in variants {
+            for n in [0, 1, 7, 8, 17, 1001] {
+                let gapped = [(0, n / 3), (n / 3 + 1, n / 2), (n / 2 + 3, n)].map(|(a, b)| {
                     let start = a.min(n);
                     start..b.max(start)
                 });
-                let power = kick(alpha, 0.5e-8, &runs, &w, &mut a, &mut v, &mut f);
-                let (mut a1, mut v1, mut f1) = (a0.clone(), v0.clone(), f0.clone());
-                let mut power1 = 0.0;
-                for d in runs.iter().flat_map(|r| r.clone()) {
-                    power1 += kick_one(alpha, 0.5e-8, w[d], &mut a1[d], &mut v1[d], &mut f1[d]);
+                // One run over the whole array: the old kick's own extent.
+                #[allow(clippy::single_range_in_vec_init)]
+                let whole = [0..n];
+                for (runs, alpha) in [
+                    (&gapped[..], 0.0),
+                    (&gapped[..], 37.5),
+                    (&whole[..], 0.0),
+                    (&whole[..], 37.5),
+                ] {
+                    let [w, a0, v0, f0] = arrays(n);
+                    let (mut a, mut v, mut f) = (a0.clone(), v0.clone(), f0.clone());
+                    let power = kick_variant(alpha, 0.5e-8, runs, &w, &mut a, &mut v, &mut f);
+                    let (mut a1, mut v1, mut f1) = (a0.clone(), v0.clone(), f0.clone());
+                    let mut power1 = 0.0;
+                    for r in runs {
+                        let r = r.clone();
+                        power1 += old_kick(
+                            alpha,
+                            0.5e-8,
+                            &w[r.clone()],
+                            &mut a1[r.clone()],
+                            &mut v1[r.clone()],
+                            &mut f1[r],
+                        );
+                    }
+                    let bits = |x: &[f64]| x.iter().map(|y| y.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(bits(&a), bits(&a1), "{name}: a, n {n}, alpha {alpha}");
+                    assert_eq!(bits(&v), bits(&v1), "{name}: v, n {n}, alpha {alpha}");
+                    assert_eq!(bits(&f), bits(&f1), "{name}: f, n {n}, alpha {alpha}");
+                    // The power's sum over several runs is one running sum; over the whole
+                    // array it is the old one's.
+                    if runs.len() == 1 {
+                        assert_eq!(power.to_bits(), power1.to_bits(), "{name}: power");
+                    }
+                    // The one-DOF form of the held DOFs, too.
+                    let (mut a2, mut v2, mut f2) = (a0.clone(), v0.clone(), f0.clone());
+                    for d in runs.iter().flat_map(|r| r.clone()) {
+                        kick_one(alpha, 0.5e-8, w[d], &mut a2[d], &mut v2[d], &mut f2[d]);
+                    }
+                    assert_eq!(bits(&v2), bits(&v1), "{name}: kick_one, n {n}");
                 }
-                assert_eq!((a, v, f), (a1, v1, f1), "kick, n {n}, alpha {alpha}");
-                assert_eq!(power.to_bits(), power1.to_bits());
-            }
-            let [x0, a0, v0, _] = arrays(n);
-            let (mut x, mut v) = (x0.clone(), v0.clone());
-            drift(1e-8, &mut x, &mut v, &a0);
-            for d in 0..n {
-                let vd = v0[d] + 0.5 * 1e-8 * a0[d];
-                assert_eq!(v[d].to_bits(), vd.to_bits());
-                assert_eq!(x[d].to_bits(), (x0[d] + 1e-8 * vd).to_bits());
+                let [x0, a0, v0, _] = arrays(n);
+                let (mut x, mut v) = (x0.clone(), v0.clone());
+                drift_variant(1e-8, &mut x, &mut v, &a0);
+                for d in 0..n {
+                    // The old drift: v += ½Δt a; x += Δt v.
+                    let vd = v0[d] + 0.5 * 1e-8 * a0[d];
+                    assert_eq!(v[d].to_bits(), vd.to_bits(), "{name}: drift v");
+                    assert_eq!(
+                        x[d].to_bits(),
+                        (x0[d] + 1e-8 * vd).to_bits(),
+                        "{name}: drift x"
+                    );
+                }
             }
         }
     }

@@ -1136,8 +1136,8 @@ pub struct PhaseWall {
     /// with the kick of its DOFs that no contact or hub touches.
     pub contact_s: f64,
     pub body_forces_s: [f64; 2],
-    /// The closing half kick of the flank and bore DOFs and the hubs, serial (until 2026-12-06
-    /// the kick of every DOF, both gears side by side: the others' kick is now in the force
+    /// The closing half kick of the flank and bore DOFs and the bores' placement, each gear on
+    /// its thread (until 2026-12-06 the kick of every DOF: the others' kick is now in the force
     /// phase, on each gear's thread).
     pub accelerate_s: f64,
     /// Steps whose contact ran on the thread of gear 1's element forces, of gear 2's (on one
@@ -1729,8 +1729,9 @@ impl<'a> PairIntegrator<'a> {
     /// f += f_contact;  driven hub: φ̈ = M/I_h;  driver reactions     serial
     /// a = f/m;  v ← v + ½Δt a on the flank and bore DOFs;  hubs     per gear, parallel
     /// ```
-    /// Every DOF gets the same arithmetic as in a separate kick phase, so the results are the
-    /// bits of the three-phase step ([`kicks`]).
+    /// Every DOF gets the same arithmetic as in a separate kick phase, so the state is the bits
+    /// of the three-phase step ([`kicks`]); with mass damping (dynamic relaxation only) the
+    /// damping energy's sum is grouped otherwise, equal to round-off.
     /// The parallel phases go through [`Lockstep`]: with one thread they run one after the
     /// other, with the same arithmetic.
     /// The energy account's kinetic and strain parts are state functions, updated by
@@ -1971,6 +1972,33 @@ mod tests {
     /// One spring alone: the bound is its frequency, k Σ N²/m over its six nodes; two equal
     /// springs on the same nodes along the same normal: twice that in ω² (rank one, so the
     /// eigenvalues add) — exact both times.
+    /// Held DOFs and runs cover every DOF exactly once, in order, the held ones those of the
+    /// nodes given (repeats allowed), at either end and side by side.
+    #[test]
+    fn split_dofs_covers_every_dof_once() {
+        for (nodes, held) in [
+            (10, vec![0, 3, 3, 4, 9]),
+            (5, vec![]),
+            (4, vec![0, 1, 2, 3]),
+            (6, vec![5, 2]),
+        ] {
+            let dofs = 2 * nodes;
+            let (held_dofs, runs) = split_dofs(dofs, held.iter().copied());
+            let mut seen = vec![0; dofs];
+            held_dofs.iter().for_each(|&d| seen[d] += 1);
+            runs.iter()
+                .flat_map(|r| r.clone())
+                .for_each(|d| seen[d] += 1);
+            assert!(
+                seen.iter().all(|&k| k == 1),
+                "{nodes} nodes, held {held:?}: {seen:?}"
+            );
+            let expected: Vec<usize> = (0..dofs).filter(|d| held.contains(&(d / 2))).collect();
+            assert_eq!(held_dofs, expected);
+            assert!(runs.iter().all(|r| !r.is_empty()));
+        }
+    }
+
     #[test]
     fn the_springs_bound_is_exact_for_one_spring_and_for_two_alike() {
         let inverse_mass = masses(8, 0.3);

@@ -258,6 +258,7 @@ mod tests {
             fine_size: 1.5e-3,
             coarse_size: 3e-3,
             fine_teeth,
+            layout: crate::mesh::ToothLayout::Graded,
         };
         let m = FlankModification::default();
         (

@@ -174,7 +174,7 @@ use crate::explicit::solver::critical_step;
 use crate::fe::{FeError, MassLumping};
 use crate::geometry::engagement::{self, ToothPair};
 use crate::geometry::{FlankModification, GearPair};
-use crate::mesh::mesh_gear;
+use crate::mesh::{mesh_gear, ToothLayout};
 use crate::resources::MemoryEstimate;
 use crate::stiffness::{MeshStiffness, PeriodicTable};
 
@@ -224,6 +224,8 @@ pub struct FeSettings {
     pub coarse_size: f64,
     /// Which teeth get fine flanks: those of the current window or those of the whole scene.
     pub fine_teeth: FineTeeth,
+    /// How the teeth are laid out (the case's `fe.tooth_layout`).
+    pub tooth_layout: ToothLayout,
 }
 
 /// Which teeth a run meshes fine (the case's `fe.fine_teeth`; module doc, "Model no more than
@@ -355,6 +357,7 @@ pub struct PreparedScene {
     pub fine_size: f64,
     pub coarse_size: f64,
     pub fine_teeth: FineTeeth,
+    pub tooth_layout: ToothLayout,
 }
 
 /// Ringing of the mesh mode, over the static response, at which a run counts as settled.
@@ -539,6 +542,7 @@ fn prepare_scene(
         fine_size: settings.fine_size,
         coarse_size: settings.coarse_size,
         fine_teeth: fine[g].clone(),
+        layout: settings.tooth_layout,
     };
     let meshes = [
         mesh_gear(&pair.gears[0], &modifications[0], &spec(0)),
@@ -599,7 +603,10 @@ fn prepare_scene(
             &model,
             modifications,
             material,
-            [settings.fine_size, settings.coarse_size],
+            (
+                [settings.fine_size, settings.coarse_size],
+                settings.tooth_layout,
+            ),
             &mass_scaling,
             &plan.window(pair, 0, 0.0, &[]),
         )?;
@@ -688,6 +695,7 @@ fn prepare_scene(
         fine_size: settings.fine_size,
         coarse_size: settings.coarse_size,
         fine_teeth: settings.fine_teeth,
+        tooth_layout: settings.tooth_layout,
     })
 }
 
@@ -1243,20 +1251,23 @@ fn window_model(prepared: &PreparedScene, window: &Window) -> Result<ExplicitPai
         &prepared.model,
         &prepared.modifications,
         prepared.material,
-        [prepared.fine_size, prepared.coarse_size],
+        (
+            [prepared.fine_size, prepared.coarse_size],
+            prepared.tooth_layout,
+        ),
         &prepared.mass_scaling,
         window,
     )
 }
 
 /// [`window_model`] of the scene's model `scene` (its pair, friction and penalty), meshed with
-/// `modifications` at element sizes `sizes` (fine, coarse) [m], masses scaled as the scene's
+/// `modifications` at element sizes `sizes` (fine, coarse) [m] and `layout`, masses scaled as the scene's
 /// (`mass_scaling`: the same factor, or the same target step).
 fn window_model_of(
     scene: &ExplicitPair,
     modifications: &[FlankModification; 2],
     material: ExplicitMaterial,
-    sizes: [f64; 2],
+    (sizes, layout): ([f64; 2], ToothLayout),
     mass_scaling: &MassScaling,
     window: &Window,
 ) -> Result<ExplicitPair, FeError> {
@@ -1265,6 +1276,7 @@ fn window_model_of(
         fine_size: sizes[0],
         coarse_size: sizes[1],
         fine_teeth: window.fine_teeth[g].clone(),
+        layout,
     };
     let meshes = [
         mesh_gear(&pair.gears[0], &modifications[0], &spec(0)),
@@ -1300,6 +1312,7 @@ pub fn run_elements(prepared: &PreparedScene, duration: f64) -> usize {
                     fine_size: prepared.fine_size,
                     coarse_size: prepared.coarse_size,
                     fine_teeth: window.fine_teeth[g].clone(),
+                    layout: prepared.tooth_layout,
                 },
             )
             .elements
@@ -1458,8 +1471,8 @@ pub fn recorded_samples(prepared: &PreparedScene, duration: f64, output_interval
 /// The memory [`run`] adds to the prepared scene [bytes]: the history, reserved up front for
 /// every sample (time, eight signals, the flank pairs' forces, the energies, the active contact
 /// count and the penetration), and per node of both bodies the integrator's arrays (position,
-/// velocity, acceleration, internal, contact and previous contact force on two DOFs, a search
-/// stamp and flag) and those of the coupled stable-step check (eight more per DOF:
+/// velocity, acceleration, internal, contact and previous contact force, and the velocities'
+/// copy for the contact, on two DOFs; a search stamp and flag) and those of the coupled stable-step check (eight more per DOF:
 /// [`PairIntegrator::coupled_critical_step`]).
 pub fn run_memory(prepared: &PreparedScene, duration: f64, output_interval: f64) -> MemoryEstimate {
     let samples = recorded_samples(prepared, duration, output_interval) as f64;
@@ -1476,7 +1489,7 @@ pub fn run_memory(prepared: &PreparedScene, duration: f64, output_interval: f64)
     MemoryEstimate::part("history", samples * per_sample as f64)
         .and(MemoryEstimate::part(
             "integrator state",
-            nodes * (6.0 * 2.0 * 8.0 + 9.0),
+            nodes * (7.0 * 2.0 * 8.0 + 9.0),
         ))
         .and(MemoryEstimate::part(
             "stable-step check",

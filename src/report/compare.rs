@@ -92,6 +92,11 @@ pub fn read_fe_run(dir: &Path) -> Result<FeDte, String> {
         speed_rpm: speed * 60.0 / std::f64::consts::TAU,
         torque_nm: number(&["scene", "torque"])?,
         fine_element_mm: summary.get("fine_element_mm").and_then(|v| v.as_f64()),
+        tooth_layout: match summary.get("tooth_layout") {
+            None => crate::mesh::ToothLayout::Graded,
+            Some(value) => serde_json::from_value(value.clone())
+                .map_err(|e| format!("{shown}/summary.json: tooth_layout: {e}"))?,
+        },
         dt,
         dte,
         back_flank_force: back,

@@ -68,6 +68,9 @@ pub struct FeDte {
     pub torque_nm: f64,
     /// The explicit mesh's flank element size [mm] (`None`: not recorded, e.g. a synthetic run).
     pub fine_element_mm: Option<f64>,
+    /// The explicit mesh's tooth layout (graded where the run does not record it: every run
+    /// before 2026-12-06).
+    pub tooth_layout: crate::mesh::ToothLayout,
     /// Uniform sampling interval [s] and the angular DTE of the driven gear [rad].
     pub dt: f64,
     pub dte: Vec<f64>,
@@ -548,6 +551,18 @@ pub fn run(
     if positions == 0 {
         return Err(StudyError::Input("--positions must be at least 1".into()));
     }
+    // The FE modal and the same-mesh LTCA are of the case's layout: runs of another would be
+    // read against a mesh they did not run on, and mesh levels would mix two meshes of a size.
+    if let Some(run) = input
+        .fe_runs
+        .iter()
+        .find(|r| r.tooth_layout != case.fe.tooth_layout)
+    {
+        return Err(StudyError::Input(format!(
+            "the FE run {} was meshed with fe.tooth_layout = {:?}, the case's is {:?}: give runs of one layout and set the case's to it (--set fe.tooth_layout=...)",
+            run.source, run.tooth_layout, case.fe.tooth_layout
+        )));
+    }
     if !input.fe_sweep_rpm.is_empty() {
         fe_sweep_runs(&input.fe_runs, &input.fe_sweep_rpm)?;
     }
@@ -561,7 +576,8 @@ pub fn run(
     // The unmodified pair, whatever the case names its variants (the FE runs are of it).
     let unmodified = [crate::geometry::FlankModification::none(); 2];
     let (fine, coarse) = (case.fe.fine_size, case.fe.coarse_size);
-    let model = super::ltca::model_with_sizes(case, &unmodified, fine, coarse)?;
+    let model =
+        super::ltca::model_with_layout(case, &unmodified, (fine, coarse), case.fe.tooth_layout)?;
 
     // (c) FE modal analysis, and the LTCA's secant and tangent stiffness at the same positions.
     let modal =
@@ -1211,6 +1227,47 @@ pub fn label_line(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An FE run meshed with another tooth layout than the case's is refused before anything
+    /// runs, with both layouts named.
+    #[test]
+    fn runs_of_another_tooth_layout_are_refused() {
+        use crate::mesh::ToothLayout;
+        let case = crate::samples::paper36_case();
+        let run = |layout| FeDte {
+            source: "a run".into(),
+            speed_rpm: 3000.0,
+            torque_nm: 143.6,
+            fine_element_mm: Some(1.0),
+            tooth_layout: layout,
+            dt: 1e-5,
+            dte: Vec::new(),
+            back_flank_force: Vec::new(),
+            ramp_end_s: 0.0,
+            statistics_start_s: 0.0,
+            wall_s: 0.0,
+            stiffness_damping_beta_s: None,
+        };
+        let input = |layout| CompareInput {
+            fe_runs: vec![run(layout)],
+            fe_sweep_rpm: Vec::new(),
+            fe_stiffness: MeshStiffness::constant("constant", 0.17, 4e8),
+        };
+        let message = |layout| match run_compare(&case, &input(layout)) {
+            Err(StudyError::Input(message)) => message,
+            other => panic!("expected an input error, got {:?}", other.map(|_| ())),
+        };
+        let refused = message(ToothLayout::StableStep);
+        assert!(
+            refused.contains("StableStep") && refused.contains("Graded"),
+            "{refused}"
+        );
+    }
+
+    fn run_compare(case: &Case, input: &CompareInput) -> Result<CompareSummary, StudyError> {
+        let progress: Progress = &|_: &str, _: usize, _: usize| {};
+        run(case, input, 2, false, progress)
+    }
 
     /// The FE-stiffness twin's tables carry the FE's k(θ) at the design load at the law's
     /// positions, the FE's table read from its own origin (here 0.31 of a period before the

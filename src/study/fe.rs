@@ -18,6 +18,7 @@ use crate::explicit::scene::{
 use crate::fe::{MassLumping, PlaneState};
 use crate::geometry::GearPair;
 use crate::ltca::PositionResult;
+use crate::mesh::ToothLayout;
 use crate::signal;
 use crate::stiffness::PeriodicTable;
 
@@ -268,11 +269,11 @@ pub fn duration_words(seconds: f64) -> String {
 pub fn prepare(case: &Case, scene: &Scene) -> Result<PreparedScene, StudyError> {
     let variant = super::relief_variant(case, Some(&scene.relief))?;
     let settings = &case.fe;
-    let model = super::ltca::model_with_sizes(
+    let model = super::ltca::model_with_layout(
         case,
         &variant.modifications,
-        settings.fine_size,
-        settings.coarse_size,
+        (settings.fine_size, settings.coarse_size),
+        settings.tooth_layout,
     )?;
     let results = model.run(64, scene.torque, &|_| {})?;
     let mesh_stiffness = results.iter().map(|r| r.mesh_stiffness).sum::<f64>() / 64.0;
@@ -497,6 +498,8 @@ pub struct FeSummary {
     pub mesh_damping_ratio: f64,
     pub fine_element_mm: f64,
     pub coarse_element_mm: f64,
+    /// How the explicit mesh laid out the teeth (`fe.tooth_layout`).
+    pub tooth_layout: ToothLayout,
     /// The run's checks of its own answer against the LTCA on its own mesh ([`self_checks`]).
     pub self_checks: Vec<Check>,
 }
@@ -650,13 +653,15 @@ pub fn run(
     );
     // The LTCA on the run's mesh gives the relief's geometric unloaded TE (exact profiles) and
     // the same-discretization reference; on the case's mesh, the converged reference.
-    let same = ltca_cycle(case, scene, fine_mm, coarse_mm)?;
-    let converged =
-        if (case_mesh.0 - fine_mm).abs() > 1e-9 || (case_mesh.1 - coarse_mm).abs() > 1e-9 {
-            Some(ltca_cycle(case, scene, case_mesh.0, case_mesh.1)?)
-        } else {
-            None
-        };
+    let same = ltca_cycle(case, scene, (fine_mm, coarse_mm), settings.tooth_layout)?;
+    let converged = if (case_mesh.0 - fine_mm).abs() > 1e-9
+        || (case_mesh.1 - coarse_mm).abs() > 1e-9
+        || settings.tooth_layout != ToothLayout::Graded
+    {
+        Some(ltca_cycle(case, scene, case_mesh, ToothLayout::Graded)?)
+    } else {
+        None
+    };
     let rb2 = case.pair.gears[1].base_radius;
     let pitch = case.pair.gears[0].angular_pitch();
     let unloaded_te = unloaded_te_table(&same, rb2, pitch);
@@ -822,6 +827,7 @@ pub fn run(
         mesh_damping_ratio: settings.mesh_damping_ratio,
         fine_element_mm: fine_mm,
         coarse_element_mm: coarse_mm,
+        tooth_layout: settings.tooth_layout,
         self_checks: fe_checks,
     };
     Ok(FeStudy {
@@ -914,19 +920,20 @@ fn model_description(case: &Case, prepared: &PreparedScene, mesh: &RunMesh) -> S
 /// transition is placed within half a bin).
 pub const LTCA_POSITIONS: usize = 128;
 
-/// The LTCA cycle of the scene's relief and torque on a mesh of `fine_mm` / `coarse_mm`.
+/// The LTCA cycle of the scene's relief and torque on a mesh of `fine_mm` / `coarse_mm`, teeth
+/// laid out as `layout`.
 fn ltca_cycle(
     case: &Case,
     scene: &Scene,
-    fine_mm: f64,
-    coarse_mm: f64,
+    (fine_mm, coarse_mm): (f64, f64),
+    layout: ToothLayout,
 ) -> Result<Vec<PositionResult>, StudyError> {
     let variant = super::relief_variant(case, Some(&scene.relief))?;
-    let model = super::ltca::model_with_sizes(
+    let model = super::ltca::model_with_layout(
         case,
         &variant.modifications,
-        fine_mm * 1e-3,
-        coarse_mm * 1e-3,
+        (fine_mm * 1e-3, coarse_mm * 1e-3),
+        layout,
     )?;
     Ok(model.run(LTCA_POSITIONS, scene.torque, &|_| {})?)
 }

@@ -1310,6 +1310,7 @@ mod tests {
             speed_rpm: rpm,
             torque_nm: 1.0,
             fine_element_mm: None,
+            tooth_layout: crate::mesh::ToothLayout::Graded,
             dt,
             dte: (0..30_000)
                 .map(|k| {

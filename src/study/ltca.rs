@@ -17,6 +17,7 @@ use crate::strength::safety;
 
 use super::checks::{Check, CheckKind};
 use super::{load_torque, Progress, StudyError};
+use crate::mesh::ToothLayout;
 use crate::signal::largest;
 
 /// Both gear bodies of the case for the LTCA, meshed fine on the engaging teeth with the case's
@@ -41,13 +42,34 @@ pub fn model_with_sizes(
     model_on_flank(case, modifications, (fine_size, coarse_size), Flank::Drive)
 }
 
+/// [`model_with_sizes`] on teeth laid out as `layout`: the LTCA on an explicit run's mesh
+/// (the case's `fe.tooth_layout`), its same-discretization reference.
+pub fn model_with_layout(
+    case: &Case,
+    modifications: &[FlankModification; 2],
+    sizes: (f64, f64),
+    layout: ToothLayout,
+) -> Result<LtcaModel, StudyError> {
+    model_laid_out(case, modifications, sizes, layout, Flank::Drive)
+}
+
 /// The LTCA bodies meshed fine on the teeth whose `flank` engages, loading that flank
 /// ([`Flank::Back`]: the back flanks under the reversed torque, `modifications` theirs), with
 /// flank elements `fine_size` and the rest `coarse_size` [m].
 pub fn model_on_flank(
     case: &Case,
     modifications: &[FlankModification; 2],
+    sizes: (f64, f64),
+    flank: Flank,
+) -> Result<LtcaModel, StudyError> {
+    model_laid_out(case, modifications, sizes, ToothLayout::Graded, flank)
+}
+
+fn model_laid_out(
+    case: &Case,
+    modifications: &[FlankModification; 2],
     (fine_size, coarse_size): (f64, f64),
+    layout: ToothLayout,
     flank: Flank,
 ) -> Result<LtcaModel, StudyError> {
     let teeth = engaging_teeth_on(&case.pair, flank);
@@ -55,6 +77,7 @@ pub fn model_on_flank(
         fine_size,
         coarse_size,
         fine_teeth,
+        layout,
     };
     let specs = [spec(teeth[0].clone()), spec(teeth[1].clone())];
     check_memory(case, modifications, &specs)?;

@@ -345,8 +345,9 @@ fn the_stable_step_layout_keeps_the_flanks_and_lengthens_the_teeths_step() {
                 let (s_graded, s_stable) = (teeth_step(&graded), teeth_step(&stable));
                 eprintln!("{label}: teeth's element step {s_graded:.3e} -> {s_stable:.3e} s");
                 // The paper's teeth gain what the layout was made for; elsewhere it may find the
-                // least element in a place it does not change (24/40's 24-tooth gear: a 0.40 mm
-                // row 2 mm above the root, 2.30e-8 s either way), but never loses.
+                // least element in a place it does not change (24/40's 24-tooth gear: the
+                // flank's first row, 0.40 mm, even in roll angle near the base circle; 2.30e-8 s
+                // either way), but never loses.
                 let gain = if gear.teeth() == 36 { 1.25 } else { 1.0 - 1e-9 };
                 assert!(
                     s_stable >= gain * s_graded,

@@ -62,7 +62,9 @@ pub enum ToothLayout {
     /// and even at the tip, blended between them along the tooth, and the upper fillet's rows
     /// of equal arc length. On the paper's teeth at 1 mm flanks Irons' bound of the least
     /// tooth element goes from 2.17e-8 to 2.92e-8 s; on 24/40's 24-tooth gear the least is a
-    /// row it leaves as it is (tests/gear_mesh.rs). Not for the static meshes: on the LTCA's
+    /// row it leaves as it is: the flank's first, 0.40 mm long, because the flank's rows are
+    /// even in roll angle ξ and a row's length r_b ξ Δξ is short near the base circle (a
+    /// small form roll angle; tests/gear_mesh.rs). Not for the static meshes: on the LTCA's
     /// 0.2 mm flanks the even tip columns are 2.5–3.5 × wider beside the flank, and the mesh
     /// stiffness of a first version (the fillet in one row) rose by 0.4 %.
     StableStep,

@@ -913,7 +913,12 @@ fn model_description(case: &Case, prepared: &PreparedScene, mesh: &RunMesh) -> S
             "during the scene".to_string()
         },
         settings.coarse_size * 1e3
-    ) + &mass_scaling
+    ) + match settings.tooth_layout {
+        ToothLayout::Graded => "",
+        ToothLayout::StableStep => {
+            "; teeth laid out for the stable step (columns even at the tip, the upper fillet's rows of equal length; fe.tooth_layout)"
+        }
+    } + &mass_scaling
 }
 
 /// LTCA positions per base pitch of the references (twice the stiffness bins, so a contact

@@ -201,6 +201,7 @@ fn mesh_size_counts_exactly_what_mesh_gear_builds() {
                     ((1.0e-3, 3.0e-3), ToothLayout::Graded),
                     ((1.0e-3, 3.0e-3), ToothLayout::StableStep),
                     ((0.4e-3, 1.5e-3), ToothLayout::Graded),
+                    ((0.6e-3, 0.6e-3), ToothLayout::Graded),
                     ((0.6e-3, 0.6e-3), ToothLayout::StableStep),
                 ] {
                     if fine_teeth.len() == z && fine_size < coarse_size {

@@ -1477,8 +1477,8 @@ impl<'a> PairIntegrator<'a> {
     /// read it). Right after its element forces each gear's thread kicks the DOFs no contact
     /// and no hub touches ([`ExplicitPair::body_only_runs`], with `half` = ½Δt, zero at the
     /// start), while their forces are fresh in its cache; the contact reads only the held DOFs'
-    /// positions and their velocities' copy. (The kick was a phase of its own until
-    /// 2026-12-06: one more hand-over between the threads a step, validation/performance.)
+    /// positions and their velocities' copy. (Until 2026-12-06 the kick of every DOF waited for
+    /// the serial middle; now only the flank and bore DOFs' does: validation/performance.)
     /// The contact goes with the gear whose thread then finishes first by the last
     /// [`BALANCE_EVERY`] steps' times ([`PairIntegrator::contact_beside`]). Splitting a body
     /// between the threads to balance them gained nothing (validation/performance): its nodes'
@@ -1969,9 +1969,6 @@ mod tests {
         })
     }
 
-    /// One spring alone: the bound is its frequency, k Σ N²/m over its six nodes; two equal
-    /// springs on the same nodes along the same normal: twice that in ω² (rank one, so the
-    /// eigenvalues add) — exact both times.
     /// Held DOFs and runs cover every DOF exactly once, in order, the held ones those of the
     /// nodes given (repeats allowed), at either end and side by side.
     #[test]
@@ -1999,6 +1996,9 @@ mod tests {
         }
     }
 
+    /// One spring alone: the bound is its frequency, k Σ N²/m over its six nodes; two equal
+    /// springs on the same nodes along the same normal: twice that in ω² (rank one, so the
+    /// eigenvalues add) — exact both times.
     #[test]
     fn the_springs_bound_is_exact_for_one_spring_and_for_two_alike() {
         let inverse_mass = masses(8, 0.3);

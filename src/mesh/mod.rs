@@ -70,6 +70,16 @@ pub enum ToothLayout {
     StableStep,
 }
 
+impl ToothLayout {
+    /// The case file's name of the layout (`fe.tooth_layout`).
+    pub fn name(self) -> &'static str {
+        match self {
+            ToothLayout::Graded => "graded",
+            ToothLayout::StableStep => "stable-step",
+        }
+    }
+}
+
 /// The nodes of one flank (form point to tip corner, root to tip) with their roll angles.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FlankNodes {

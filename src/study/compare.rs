@@ -539,6 +539,22 @@ pub fn primary_run(case: &Case, runs: &[FeDte]) -> Option<usize> {
     )
 }
 
+/// Refuses FE runs meshed with another tooth layout than the case's (`fe.tooth_layout`): the
+/// FE modal and the same-mesh LTCA are of the case's layout, so runs of another would be read
+/// against a mesh they did not run on, and mesh levels would mix two meshes of one size.
+pub fn runs_of_the_case_layout(case: &Case, runs: &[FeDte]) -> Result<(), StudyError> {
+    match runs.iter().find(|r| r.tooth_layout != case.fe.tooth_layout) {
+        Some(run) => Err(StudyError::Input(format!(
+            "the FE run {} was meshed with fe.tooth_layout = \"{}\", the case's is \"{}\": give runs of one layout and set the case's to it (--set fe.tooth_layout={})",
+            run.source,
+            run.tooth_layout.name(),
+            case.fe.tooth_layout.name(),
+            run.tooth_layout.name()
+        ))),
+        None => Ok(()),
+    }
+}
+
 /// Runs the comparison.
 pub fn run(
     case: &Case,
@@ -551,18 +567,7 @@ pub fn run(
     if positions == 0 {
         return Err(StudyError::Input("--positions must be at least 1".into()));
     }
-    // The FE modal and the same-mesh LTCA are of the case's layout: runs of another would be
-    // read against a mesh they did not run on, and mesh levels would mix two meshes of a size.
-    if let Some(run) = input
-        .fe_runs
-        .iter()
-        .find(|r| r.tooth_layout != case.fe.tooth_layout)
-    {
-        return Err(StudyError::Input(format!(
-            "the FE run {} was meshed with fe.tooth_layout = {:?}, the case's is {:?}: give runs of one layout and set the case's to it (--set fe.tooth_layout=...)",
-            run.source, run.tooth_layout, case.fe.tooth_layout
-        )));
-    }
+    runs_of_the_case_layout(case, &input.fe_runs)?;
     if !input.fe_sweep_rpm.is_empty() {
         fe_sweep_runs(&input.fe_runs, &input.fe_sweep_rpm)?;
     }
@@ -1259,7 +1264,7 @@ mod tests {
         };
         let refused = message(ToothLayout::StableStep);
         assert!(
-            refused.contains("StableStep") && refused.contains("Graded"),
+            refused.contains("\"stable-step\"") && refused.contains("\"graded\""),
             "{refused}"
         );
     }

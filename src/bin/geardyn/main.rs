@@ -400,6 +400,7 @@ fn compare(args: &CommonArgs, ask: &CompareAsk) -> Result<()> {
     let given_rpm = cmp::given_rpm_on_case_mesh(&case, &runs);
     let fe_sweep = ask.sweep_speeds(&given_rpm);
     // A bad set of given runs is refused before any FE run is made for it.
+    cmp::runs_of_the_case_layout(&case, &runs)?;
     if !fe_sweep.is_empty() {
         cmp::fe_sweep_runs(&runs, &fe_sweep)?;
     }

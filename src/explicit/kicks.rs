@@ -24,10 +24,10 @@ pub fn drift(dt: f64, x: &mut [f64], v: &mut [f64], a: &[f64]) {
     match Kernel::best() {
         #[cfg(target_arch = "x86_64")]
         // SAFETY: `best` returns a kernel this CPU runs (AVX-512 F and DQ, AVX2, FMA).
-        Kernel::Avx512 => unsafe { drift_avx512(dt, x, v, a) },
+        Kernel::Avx512 => unsafe { on_avx512(|| drift_body(dt, x, v, a)) },
         #[cfg(target_arch = "x86_64")]
         // SAFETY: as above, AVX2 and FMA.
-        Kernel::Avx2 => unsafe { drift_avx2(dt, x, v, a) },
+        Kernel::Avx2 => unsafe { on_avx2(|| drift_body(dt, x, v, a)) },
         _ => drift_body(dt, x, v, a),
     }
 }
@@ -49,10 +49,10 @@ pub fn kick(
     match Kernel::best() {
         #[cfg(target_arch = "x86_64")]
         // SAFETY: `best` returns a kernel this CPU runs (AVX-512 F and DQ, AVX2, FMA).
-        Kernel::Avx512 => unsafe { kick_avx512(alpha, half, runs, w, a, v, f) },
+        Kernel::Avx512 => unsafe { on_avx512(|| kick_runs(alpha, half, runs, w, a, v, f)) },
         #[cfg(target_arch = "x86_64")]
         // SAFETY: as above, AVX2 and FMA.
-        Kernel::Avx2 => unsafe { kick_avx2(alpha, half, runs, w, a, v, f) },
+        Kernel::Avx2 => unsafe { on_avx2(|| kick_runs(alpha, half, runs, w, a, v, f)) },
         _ => kick_runs(alpha, half, runs, w, a, v, f),
     }
 }
@@ -119,44 +119,19 @@ fn kick_runs(
     power
 }
 
+/// Runs `body` in a function built for AVX-512 (F and DQ), AVX2 and FMA: the body, inlined,
+/// is compiled for those units. Safety: the CPU must have them.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512dq,avx2,fma")]
-unsafe fn drift_avx512(dt: f64, x: &mut [f64], v: &mut [f64], a: &[f64]) {
-    drift_body(dt, x, v, a)
+unsafe fn on_avx512<R>(body: impl FnOnce() -> R) -> R {
+    body()
 }
 
+/// [`on_avx512`] for AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn drift_avx2(dt: f64, x: &mut [f64], v: &mut [f64], a: &[f64]) {
-    drift_body(dt, x, v, a)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512dq,avx2,fma")]
-unsafe fn kick_avx512(
-    alpha: f64,
-    half: f64,
-    runs: &[Range<usize>],
-    w: &[f64],
-    a: &mut [f64],
-    v: &mut [f64],
-    f: &mut [f64],
-) -> f64 {
-    kick_runs(alpha, half, runs, w, a, v, f)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn kick_avx2(
-    alpha: f64,
-    half: f64,
-    runs: &[Range<usize>],
-    w: &[f64],
-    a: &mut [f64],
-    v: &mut [f64],
-    f: &mut [f64],
-) -> f64 {
-    kick_runs(alpha, half, runs, w, a, v, f)
+unsafe fn on_avx2<R>(body: impl FnOnce() -> R) -> R {
+    body()
 }
 
 #[cfg(test)]
@@ -237,16 +212,16 @@ mod tests {
                 // SAFETY: the CPU has AVX2 and FMA (checked above).
                 variants.push((
                     "avx2",
-                    |al, h, r, w, a, v, f| unsafe { kick_avx2(al, h, r, w, a, v, f) },
-                    |dt, x, v, a| unsafe { drift_avx2(dt, x, v, a) },
+                    |al, h, r, w, a, v, f| unsafe { on_avx2(|| kick_runs(al, h, r, w, a, v, f)) },
+                    |dt, x, v, a| unsafe { on_avx2(|| drift_body(dt, x, v, a)) },
                 ));
             }
             if Kernel::Avx512.available() {
                 // SAFETY: the CPU has AVX-512 F and DQ, AVX2 and FMA (checked above).
                 variants.push((
                     "avx512",
-                    |al, h, r, w, a, v, f| unsafe { kick_avx512(al, h, r, w, a, v, f) },
-                    |dt, x, v, a| unsafe { drift_avx512(dt, x, v, a) },
+                    |al, h, r, w, a, v, f| unsafe { on_avx512(|| kick_runs(al, h, r, w, a, v, f)) },
+                    |dt, x, v, a| unsafe { on_avx512(|| drift_body(dt, x, v, a)) },
                 ));
             }
         }

@@ -865,6 +865,25 @@ impl ExplicitPair {
         }
     }
 
+    /// Gear `g`'s internal and damping forces into `f` (β = `beta`), then the closing kick of
+    /// its DOFs that no contact or hub touches ([`ExplicitPair::body_only_runs`], mass damping
+    /// α = `alpha`, half step `half`): one gear's share of a force phase. Returns the body's
+    /// forces and energies and the kicked DOFs' mass-damping power.
+    fn body_forces_and_kick(
+        &self,
+        g: usize,
+        (beta, alpha, half): (f64, f64, f64),
+        x: &[f64],
+        v: &mut [f64],
+        a: &mut [f64],
+        f: &mut [f64],
+    ) -> (ForceOutput, f64) {
+        let out = self.bodies[g].internal_forces(x, v, beta, f);
+        let w = &self.inverse_mass[g];
+        let power = kicks::kick(alpha, half, &self.body_only_runs[g], w, a, v, f);
+        (out, power)
+    }
+
     /// Empty friction history for [`ExplicitPair::contact_forces`].
     fn new_history(&self) -> Vec<PairHistory> {
         self.flank_pairs
@@ -1517,9 +1536,7 @@ impl<'a> PairIntegrator<'a> {
         let x: [&[f64]; 2] = [&x[0], &x[1]];
         let forces = |g: usize, f: &mut [f64], v: &mut [f64], a: &mut [f64]| {
             let started = Instant::now();
-            let out = model.bodies[g].internal_forces(x[g], v, beta, f);
-            let w = &model.inverse_mass[g];
-            let power = kicks::kick(alpha, half, &model.body_only_runs[g], w, a, v, f);
+            let (out, power) = model.body_forces_and_kick(g, (beta, alpha, half), x[g], v, a, f);
             (out, power, started.elapsed().as_secs_f64())
         };
         let held_v: [&[f64]; 2] = [&contact_velocity[0], &contact_velocity[1]];
@@ -1691,10 +1708,9 @@ impl<'a> PairIntegrator<'a> {
         let [v0, v1] = v;
         let [a0, a1] = a;
         let gear = |g: usize, f: &mut [f64], v: &mut [f64], a: &mut [f64]| {
-            let out = model.bodies[g].internal_forces(&x[g], v, beta, f);
-            let w = &model.inverse_mass[g];
-            kicks::kick(alpha, 0.0, &model.body_only_runs[g], w, a, v, f);
-            out
+            model
+                .body_forces_and_kick(g, (beta, alpha, 0.0), &x[g], v, a, f)
+                .0
         };
         let (o0, o1) = self
             .lockstep

@@ -252,10 +252,11 @@ pub struct FeSection {
     /// that engages anywhere in the scene, for the whole run). See [`crate::explicit::scene`].
     #[serde(default)]
     pub fine_teeth: FineTeeth,
-    /// How the explicit meshes lay out the teeth: "graded" (default: the LTCA's layout, on
-    /// which every explicit result in validation/ was measured) or "stable-step" (columns even
-    /// at the tip, the upper fillet's rows of equal length: on the paper's teeth the thinnest
-    /// elements go and the 3000 rpm scene steps 1.2 × longer; not yet on every pair). See
+    /// How the explicit meshes lay out the teeth: "stable-step" (default since 2026-12-06:
+    /// columns even at the tip, the upper fillet's rows of equal length; on the paper's teeth
+    /// the thinnest elements go and the 3000 rpm scene steps 1.24 × longer, and k(θ) and the
+    /// 60 rpm DTE come out nearer the converged references) or "graded" (the LTCA's layout, on
+    /// which the explicit results in validation/ before that date were measured). See
     /// [`crate::mesh::ToothLayout`].
     #[serde(default = "default_tooth_layout")]
     pub tooth_layout: ToothLayout,
@@ -327,10 +328,10 @@ impl Default for FeSection {
 fn default_step_factor() -> f64 {
     0.9
 }
-/// The explicit meshes' layout (`fe.tooth_layout`): the validated one until the stable-step
-/// layout gains on every pair (validation/performance, lever 2c).
+/// The explicit meshes' layout (`fe.tooth_layout`): the one with the longer stable step, no
+/// less accurate against the converged references (validation/performance, lever 2c).
 fn default_tooth_layout() -> ToothLayout {
-    ToothLayout::Graded
+    ToothLayout::StableStep
 }
 
 fn default_penalty_factor() -> f64 {

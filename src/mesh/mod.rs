@@ -54,10 +54,12 @@ pub enum ToothLayout {
     /// Columns graded from both flanks at the chord and at the tip alike (so the column at a
     /// flank narrows towards the tip by the tip land over the chord, to a third on the seed
     /// paper's teeth), the upper fillet's rows placed by its parameter: the static meshes'
-    /// (LTCA, modal) layout, and the explicit runs' by default; validation/ was measured on it.
+    /// (LTCA, modal) layout, and the explicit runs' until 2026-12-06 (`fe.tooth_layout =
+    /// "graded"`). The default of a layout not given (static meshes, older run summaries).
     #[default]
     Graded,
-    /// For the explicit FE, whose stable step its thinnest elements set (validation/
+    /// The explicit runs' default (`fe.tooth_layout`), for the explicit FE, whose stable step
+    /// its thinnest elements set (validation/
     /// performance, "Which elements make the 3000 rpm step"): the columns graded at the chord
     /// and even at the tip, blended between them along the tooth, and the upper fillet's rows
     /// of equal arc length. On the paper's teeth at 1 mm flanks Irons' bound of the least

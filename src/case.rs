@@ -254,8 +254,8 @@ pub struct FeSection {
     pub fine_teeth: FineTeeth,
     /// How the explicit meshes lay out the teeth: "stable-step" (default since 2026-12-06:
     /// columns even at the tip, the upper fillet's rows of equal length; on the paper's teeth
-    /// the thinnest elements go and the 3000 rpm scene steps 1.24 × longer, and k(θ) and the
-    /// 60 rpm DTE come out nearer the converged references) or "graded" (the LTCA's layout, on
+    /// the thinnest elements go and the 3000 rpm scene steps 1.24 × longer, as near the
+    /// converged references as graded or nearer on most measures) or "graded" (the LTCA's layout, on
     /// which the explicit results in validation/ before that date were measured). See
     /// [`crate::mesh::ToothLayout`].
     #[serde(default = "default_tooth_layout")]
@@ -328,8 +328,8 @@ impl Default for FeSection {
 fn default_step_factor() -> f64 {
     0.9
 }
-/// The explicit meshes' layout (`fe.tooth_layout`): the one with the longer stable step, no
-/// less accurate against the converged references (validation/performance, lever 2c).
+/// The explicit meshes' layout (`fe.tooth_layout`): the one with the longer stable step, as
+/// accurate against the converged references on balance (validation/performance, lever 2c).
 fn default_tooth_layout() -> ToothLayout {
     ToothLayout::StableStep
 }

@@ -511,15 +511,19 @@ fn a_tooth_entering_mesh_books_no_energy() {
 }
 
 /// The entering-tooth scene with the scenes' damping (element ζ = 0.05 at ω_max, mesh ζ = 0.05)
-/// at step factor `factor`, on the pair's own step and on the bound's.
+/// at step factor `factor`, on the pair's own step and on the bound's. On the graded tooth
+/// layout, whose contact springs' bound lies well below the pair's own step (1.94e-8 against
+/// 2.52e-8 s for the bodies alone): the stable-step layout's wider tip columns soften the
+/// penalty, and its bound (2.60e-8 s) comes within a few percent of the pair's own step, which
+/// leaves a raised step little room to differ from the bound's.
 fn entering_with_damping(factor: f64) -> (PreparedScene, RunOutcome, RunOutcome) {
-    let case = Case::embedded_default().unwrap();
+    let mut case = Case::embedded_default().unwrap();
+    case.fe.tooth_layout = geardyn::mesh::ToothLayout::Graded;
     let (duration, ramp) = (0.8e-3, 0.5e-3);
     let mut scene = case.scene("low-unmodified").unwrap().clone();
     scene.driver_speed = 300.0 * std::f64::consts::TAU / 60.0;
     scene.duration = duration;
     scene.ramp_time = ramp;
-    let mut case = case.clone();
     case.fe.mass_scaling_margin = None;
     case.fe.step_factor = factor;
     let mut p = study::fe::prepare(&case, &scene).unwrap();

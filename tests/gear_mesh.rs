@@ -231,7 +231,7 @@ fn mesh_size_counts_exactly_what_mesh_gear_builds() {
     assert!(checked >= 32, "{checked} meshes checked");
 }
 
-/// The explicit meshes' optional tooth layout (`ToothLayout::StableStep`: columns even at the
+/// The explicit meshes' default tooth layout (`ToothLayout::StableStep`: columns even at the
 /// tip, the upper fillet's rows of equal length) against the graded one on the same gear: valid elements,
 /// the same area to the quadratic edges' accuracy, the flank nodes in the same places (so the
 /// contact sees the same profile), and a longer stable step for the teeth, Irons' element
@@ -282,6 +282,9 @@ fn the_stable_step_layout_keeps_the_flanks_and_lengthens_the_teeths_step() {
                 let (graded, stable) = (mesh(ToothLayout::Graded), mesh(ToothLayout::StableStep));
                 let label = format!("z = {}, {fine_size:e}/{coarse_size:e} m", gear.teeth());
                 check_elements(&stable.nodes, &stable.elements).expect(&label);
+                // The layout moves nodes only: the same rows and columns.
+                assert_eq!(stable.elements.len(), graded.elements.len(), "{label}");
+                assert_eq!(stable.nodes.len(), graded.nodes.len(), "{label}");
                 let area = |m: &geardyn::mesh::GearMesh| -> f64 {
                     m.elements
                         .iter()
@@ -314,8 +317,8 @@ fn the_stable_step_layout_keeps_the_flanks_and_lengthens_the_teeths_step() {
                 // and 5.8e-5 more on the 17-tooth pinion near its undercut limit, whose long,
                 // curved fillet both layouts follow least well (-3.08e-4 against -2.50e-4 at
                 // 1 mm; its mesh stiffness on the run's mesh moves by +0.07 %, the LTCA on each
-                // layout). A missing or misplaced element would be off by its own area, 1e-4 to
-                // 5e-4 of a gear's at these sizes.
+                // layout). The element and node counts above are checked exactly; this bound
+                // checks how well the fillet is followed, not completeness.
                 assert!(
                     e_stable.abs() < 1.3 * e_graded.abs() + 2e-5,
                     "{label}: area error {e_stable:.2e} (graded {e_graded:.2e})"
@@ -335,8 +338,9 @@ fn the_stable_step_layout_keeps_the_flanks_and_lengthens_the_teeths_step() {
                 if fine_size < 0.5e-3 * scale {
                     continue; // the static meshes' sizes: validity only
                 }
-                // The teeth's least element step (centroid above the root circle).
-                let teeth_step = |m: &geardyn::mesh::GearMesh| {
+                // The teeth's least element step (centroid above the root circle), and that
+                // element's nodes.
+                let teeth_least = |m: &geardyn::mesh::GearMesh| {
                     let elements: Vec<[usize; 8]> = m
                         .elements
                         .iter()
@@ -350,23 +354,41 @@ fn the_stable_step_layout_keeps_the_flanks_and_lengthens_the_teeths_step() {
                             c.norm() > gear.root_radius
                         })
                         .collect();
-                    ExplicitBody::new(&m.nodes, &elements, material)
+                    let steps = ExplicitBody::new(&m.nodes, &elements, material)
                         .unwrap()
-                        .element_eigen_critical_step()
+                        .element_critical_steps();
+                    let least = (0..steps.len())
+                        .min_by(|&a, &b| steps[a].total_cmp(&steps[b]))
+                        .unwrap();
+                    (steps[least], elements[least])
                 };
-                let (s_graded, s_stable) = (teeth_step(&graded), teeth_step(&stable));
-                eprintln!("{label}: teeth's element step {s_graded:.3e} -> {s_stable:.3e} s");
-                // The paper's teeth (and their copies at module 8 and on the thin rim) gain what
-                // the layout was made for, most others 1.2-1.6 x; some find the least element
-                // in a place it does not change (the flank's first row, even in roll angle and
-                // so short near the base circle: 24/40's 24-tooth gear, 0.40 mm, 2.30e-8 s
-                // either way; the 17-tooth pinion; the high contact ratio pairs' 32- and
-                // 40-tooth gears), but none loses (measured 2026-12-06).
-                let gain = if gear.teeth() == 36 { 1.25 } else { 1.0 - 1e-9 };
+                let ((s_graded, _), (s_stable, least)) =
+                    (teeth_least(&graded), teeth_least(&stable));
+                // The layout leaves the flank's rows as they are: a least element there is the
+                // flank's first row, at the form point.
+                let first_row = stable.flanks.iter().any(|f| least.contains(&f.nodes[0]));
+                eprintln!(
+                    "{label}: teeth's element step {s_graded:.3e} -> {s_stable:.3e} s{}",
+                    if first_row {
+                        " (the flank's first row)"
+                    } else {
+                        ""
+                    }
+                );
+                // Where the layout's rows and columns set the step it gains (measured 1.19-1.65 x
+                // on every such gear of the matrix, the paper's 1.35 x at 1 mm); where the
+                // flank's first row does (even in roll angle and so short near the base circle:
+                // 24/40's 24-tooth gear, 0.40 mm, 2.30e-8 s either way; the 17-tooth pinion;
+                // the high contact ratio pairs' 32- and 40-tooth gears) it cannot, but none
+                // loses (measured 2026-12-06).
+                let gain = if first_row { 1.0 - 1e-9 } else { 1.15 };
                 assert!(
                     s_stable >= gain * s_graded,
                     "{label}: teeth's element step {s_stable:.3e} s against {s_graded:.3e} s graded"
                 );
+                if gear.teeth() == 36 {
+                    assert!(s_stable >= 1.25 * s_graded, "{label}: the paper's teeth");
+                }
             }
         }
     }

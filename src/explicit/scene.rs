@@ -1525,7 +1525,8 @@ pub fn run(
             return Err(FeError::Resume(
                 "it was made on another scene (its step, duration, drive, damping, friction \
                  or mesh differ): resume with the scene, case file, --set and flags of the \
-                 interrupted run"
+                 interrupted run (a checkpoint from before 2026-12-06 was meshed with the \
+                 graded tooth layout, then the default: add --set fe.tooth_layout=graded)"
                     .to_string(),
             ));
         }

@@ -48,15 +48,18 @@ pub struct MeshSpec {
 
 /// How the tooth block's rows and columns are laid out. The flank's nodes (form point to tip
 /// corner) are the same in both.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+///
+/// No `Default`: the case's (`fe.tooth_layout`, stable-step) and a summary's without the key
+/// (graded, [`crate::report::compare::summary_tooth_layout`]) differ, so each is named where
+/// it is used.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ToothLayout {
     /// Columns graded from both flanks at the chord and at the tip alike (so the column at a
     /// flank narrows towards the tip by the tip land over the chord, to a third on the seed
     /// paper's teeth), the upper fillet's rows placed by its parameter: the static meshes'
     /// (LTCA, modal) layout, and the explicit runs' until 2026-12-06 (`fe.tooth_layout =
-    /// "graded"`). The default of a layout not given (static meshes, older run summaries).
-    #[default]
+    /// "graded"`); the layout of older run summaries without the key.
     Graded,
     /// The explicit runs' default (`fe.tooth_layout`), for the explicit FE, whose stable step
     /// its thinnest elements set (validation/

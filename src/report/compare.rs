@@ -18,6 +18,19 @@ pub fn fe_summary(dir: &Path) -> Result<serde_json::Value, String> {
     serde_json::from_str(&text).map_err(|e| format!("{shown}/summary.json: {e}"))
 }
 
+/// The tooth layout an FE run's summary says it was meshed with (`tooth_layout`); a summary
+/// without the key is from before the key existed, when every explicit mesh was graded.
+pub fn summary_tooth_layout(
+    summary: &serde_json::Value,
+    dir: &Path,
+) -> Result<crate::mesh::ToothLayout, String> {
+    match summary.get("tooth_layout") {
+        None => Ok(crate::mesh::ToothLayout::Graded),
+        Some(value) => serde_json::from_value(value.clone())
+            .map_err(|e| format!("{}/summary.json: tooth_layout: {e}", dir.display())),
+    }
+}
+
 pub(crate) fn summary_number(
     summary: &serde_json::Value,
     dir: &Path,
@@ -92,11 +105,7 @@ pub fn read_fe_run(dir: &Path) -> Result<FeDte, String> {
         speed_rpm: speed * 60.0 / std::f64::consts::TAU,
         torque_nm: number(&["scene", "torque"])?,
         fine_element_mm: summary.get("fine_element_mm").and_then(|v| v.as_f64()),
-        tooth_layout: match summary.get("tooth_layout") {
-            None => crate::mesh::ToothLayout::Graded,
-            Some(value) => serde_json::from_value(value.clone())
-                .map_err(|e| format!("{shown}/summary.json: tooth_layout: {e}"))?,
-        },
+        tooth_layout: summary_tooth_layout(&summary, dir)?,
         dt,
         dte,
         back_flank_force: back,
@@ -1021,4 +1030,29 @@ pub fn write_accuracy_cost(dir: OutputDir, chart: &AccuracyCost) -> Result<Strin
     }
     dir.bytes("accuracy_cost.md", table.as_bytes())?;
     Ok(table)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::ToothLayout;
+
+    /// A summary names its layout; one without the key is from before it existed, when every
+    /// explicit mesh was graded; a name that is no layout is an error naming the file.
+    #[test]
+    fn a_summary_without_a_tooth_layout_is_graded() {
+        let dir = Path::new("run");
+        let layout = |text: &str| summary_tooth_layout(&serde_json::from_str(text).unwrap(), dir);
+        assert_eq!(layout("{}"), Ok(ToothLayout::Graded));
+        assert_eq!(
+            layout(r#"{"tooth_layout": "graded"}"#),
+            Ok(ToothLayout::Graded)
+        );
+        assert_eq!(
+            layout(r#"{"tooth_layout": "stable-step"}"#),
+            Ok(ToothLayout::StableStep)
+        );
+        let bad = layout(r#"{"tooth_layout": "even"}"#).unwrap_err();
+        assert!(bad.contains("run/summary.json: tooth_layout"), "{bad}");
+    }
 }

@@ -1269,7 +1269,11 @@ mod tests {
         };
         let refused = message(other);
         assert!(
-            refused.contains("\"stable-step\"") && refused.contains("\"graded\""),
+            refused.contains(&format!("fe.tooth_layout = \"{}\"", other.name()))
+                && refused.contains(&format!(
+                    "the case's is \"{}\"",
+                    case.fe.tooth_layout.name()
+                )),
             "{refused}"
         );
     }

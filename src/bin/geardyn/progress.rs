@@ -252,9 +252,17 @@ pub fn run_state(case: &Case, dir: &Path) -> RunState {
 const ENDED_UNFINISHED: [(&str, &str); 2] =
     [("diverged", "diverged"), ("interrupted", "was interrupted")];
 
-/// The folder's case.toml is `case` (as TOML values: comments and `--set` headers aside).
+/// The folder's case.toml is `case` (as TOML values: comments and `--set` headers aside), and
+/// a summary there was meshed with the case's tooth layout: a run from before the default
+/// layout changed (2026-12-06) has the same case file but a graded mesh.
 fn holds_case(case: &Case, dir: &Path) -> bool {
-    std::fs::read_to_string(dir.join("case.toml")).is_ok_and(|text| case.is_same_case(&text))
+    let layout_matches = match report::compare::fe_summary(dir) {
+        Ok(summary) => report::compare::summary_tooth_layout(&summary, dir)
+            .is_ok_and(|layout| layout == case.fe.tooth_layout),
+        Err(_) => true,
+    };
+    layout_matches
+        && std::fs::read_to_string(dir.join("case.toml")).is_ok_and(|text| case.is_same_case(&text))
 }
 
 /// A run folder's verdict as a study takes it, whichever executor ran the run or found it

@@ -171,25 +171,28 @@ fn no_element_below_the_teeth_sets_the_explicit_step() {
     }
 }
 
+/// A shifted 19:53 pair (+0.3 / −0.2) with `more` overrides.
+fn shifted_19_53(more: &[geardyn::case::Override]) -> geardyn::case::Case {
+    use geardyn::case::{Case, Override};
+    let mut overrides = vec![
+        Override::set("gear1.teeth", 19),
+        Override::set("gear1.profile_shift", 0.3),
+        Override::set("gear2.teeth", 53),
+        Override::set("gear2.profile_shift", -0.2),
+    ];
+    overrides.extend_from_slice(more);
+    Case::load_with(None, &overrides).unwrap()
+}
+
 /// The counts the resource check reads before meshing are the mesh's own, exactly: over two
 /// pairs (the paper's and a shifted 19:53 pair with a small bore), both gears, fine teeth at the
 /// mesh, none and all, and element sizes from a coarse mesh to fine = coarse.
 #[test]
 fn mesh_size_counts_exactly_what_mesh_gear_builds() {
-    use geardyn::case::{Case, Override};
+    use geardyn::case::Override;
     use geardyn::geometry::FlankModification;
     use geardyn::mesh::{mesh_gear, mesh_size, MeshSpec, ToothLayout};
-    let shifted = Case::load_with(
-        None,
-        &[
-            Override::set("gear1.teeth", 19),
-            Override::set("gear1.profile_shift", 0.3),
-            Override::set("gear2.teeth", 53),
-            Override::set("gear2.profile_shift", -0.2),
-            Override::set("gear1.bore_radius_mm", 8.0),
-        ],
-    )
-    .unwrap();
+    let shifted = shifted_19_53(&[Override::set("gear1.bore_radius_mm", 8.0)]);
     let mut checked = 0;
     for case in [samples::paper36_case(), shifted] {
         let teeth = geardyn::ltca::engaging_teeth(&case.pair);
@@ -245,20 +248,10 @@ fn mesh_size_counts_exactly_what_mesh_gear_builds() {
 /// and the 24-tooth gear nothing (validation/performance, lever 2c).
 #[test]
 fn the_stable_step_layout_keeps_the_flanks_and_lengthens_the_teeths_step() {
-    use geardyn::case::{Case, Override};
     use geardyn::explicit::body::ExplicitBody;
     use geardyn::geometry::FlankModification;
     use geardyn::mesh::{mesh_gear, MeshSpec, ToothLayout};
-    let shifted = Case::load_with(
-        None,
-        &[
-            Override::set("gear1.teeth", 19),
-            Override::set("gear1.profile_shift", 0.3),
-            Override::set("gear2.teeth", 53),
-            Override::set("gear2.profile_shift", -0.2),
-        ],
-    )
-    .unwrap();
+    let shifted = shifted_19_53(&[]);
     let material = samples::paper36_explicit_material();
     let matrix = samples::PAIR_MATRIX.iter().map(|p| p.case().unwrap());
     for case in matrix.chain([shifted]) {

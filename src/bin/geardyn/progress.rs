@@ -64,9 +64,10 @@ pub fn fe_run(
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let checkpoint = if resume {
         anyhow::ensure!(
-            holds_case(case, dir),
-            "{} holds no run of this case (its case.toml differs or is missing): resume with \
-             the same case file and --set as the interrupted run",
+            holds_case(case, dir, report::compare::fe_summary(dir).ok().as_ref()),
+            "{} holds no run of this case (its case.toml differs or is missing, or its \
+             summary names another fe.tooth_layout): resume with the same case file and --set \
+             as the interrupted run",
             dir.display()
         );
         let checkpoint = report::fe::read_checkpoint(dir)?.with_context(|| {
@@ -237,12 +238,11 @@ pub fn run_state(case: &Case, dir: &Path) -> RunState {
             .iter()
             .all(|(key, _)| summary.get(key).is_none_or(|v| v.is_null()))
     };
-    match (holds_case(case, dir), interrupted) {
+    let summary = report::compare::fe_summary(dir).ok();
+    match (holds_case(case, dir, summary.as_ref()), interrupted) {
         (false, _) => RunState::Other,
         (true, true) => RunState::Interrupted,
-        (true, false) if report::compare::fe_summary(dir).is_ok_and(ended_well) => {
-            RunState::Finished
-        }
+        (true, false) if summary.is_some_and(ended_well) => RunState::Finished,
         (true, false) => RunState::Other,
     }
 }
@@ -253,14 +253,13 @@ const ENDED_UNFINISHED: [(&str, &str); 2] =
     [("diverged", "diverged"), ("interrupted", "was interrupted")];
 
 /// The folder's case.toml is `case` (as TOML values: comments and `--set` headers aside), and
-/// a summary there was meshed with the case's tooth layout: a run from before the default
-/// layout changed (2026-12-06) has the same case file but a graded mesh.
-fn holds_case(case: &Case, dir: &Path) -> bool {
-    let layout_matches = match report::compare::fe_summary(dir) {
-        Ok(summary) => report::compare::summary_tooth_layout(&summary, dir)
-            .is_ok_and(|layout| layout == case.fe.tooth_layout),
-        Err(_) => true,
-    };
+/// its `summary`, if any, was meshed with the case's tooth layout: a run from before the
+/// default layout changed (2026-12-06) has the same case file but a graded mesh.
+fn holds_case(case: &Case, dir: &Path, summary: Option<&serde_json::Value>) -> bool {
+    let layout_matches = summary.is_none_or(|summary| {
+        report::compare::summary_tooth_layout(summary, dir)
+            .is_ok_and(|layout| layout == case.fe.tooth_layout)
+    });
     layout_matches
         && std::fs::read_to_string(dir.join("case.toml")).is_ok_and(|text| case.is_same_case(&text))
 }
@@ -272,7 +271,7 @@ fn holds_case(case: &Case, dir: &Path) -> bool {
 pub fn folder_verdict(case: &Case, dir: &Path) -> Option<std::result::Result<(), String>> {
     let summary = report::compare::fe_summary(dir)
         .ok()
-        .filter(|_| holds_case(case, dir))?;
+        .filter(|summary| holds_case(case, dir, Some(summary)))?;
     let shown = dir.display();
     for (key, what) in ENDED_UNFINISHED {
         if let Some(message) = summary.get(key).and_then(|m| m.as_str()) {

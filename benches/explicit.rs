@@ -133,5 +133,118 @@ fn pair_step(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, explicit, pair_step);
+/// What a reduced far block would save a step (issue 31): the 3000 rpm scene's window mesh of
+/// the driver (six fine teeth, explicit sizes), its other thirty sectors' elements through the
+/// element kernel (damped, one core) against the same block reduced by Craig–Bampton at an
+/// 80 kHz cutoff ([`geardyn::explicit::reduced`]): its accelerations with the hub turned at a
+/// prescribed rate (the driver) and with a free hub (the driven gear).
+fn reduced_block(c: &mut Criterion) {
+    use geardyn::explicit::reduced::{FrameMotion, ReducedBlock};
+    use geardyn::mesh::MeshSpec;
+    let case = samples::paper36_case();
+    let gear = &case.pair.gears[0];
+    let mods = case.relief_variant("none").unwrap().modifications;
+    let settings = case.fe;
+    let mesh = mesh_gear(
+        gear,
+        &mods[0],
+        &MeshSpec {
+            fine_size: settings.fine_size,
+            coarse_size: settings.coarse_size,
+            fine_teeth: vec![0, 1, 2, 3, 4, 5],
+            layout: settings.tooth_layout,
+        },
+    );
+    let material = samples::paper36_explicit_material();
+    let whole = ExplicitBody::new(&mesh.nodes, &mesh.elements, material).unwrap();
+    let in_block: Vec<bool> = mesh.element_fine.iter().map(|f| !f).collect();
+    let block_elements: Vec<[usize; 8]> = mesh
+        .elements
+        .iter()
+        .zip(&in_block)
+        .filter(|(_, &b)| b)
+        .map(|(e, _)| *e)
+        .collect();
+    let elements = ExplicitBody::with_symmetry(
+        &mesh.nodes,
+        &block_elements,
+        material,
+        Some(gear.teeth() as usize),
+    )
+    .unwrap();
+    let block = ReducedBlock::new(
+        &mesh.nodes,
+        &mesh.elements,
+        &in_block,
+        &mesh.bore_nodes,
+        &whole.mass,
+        &material,
+        80e3,
+    )
+    .unwrap();
+    eprintln!(
+        "reduced block: {} of {} elements, {} interface nodes, {} internal nodes, {} modes, {} reduced DOFs",
+        block_elements.len(),
+        mesh.elements.len(),
+        block.interface.len(),
+        block.internal.len(),
+        block.mode_frequencies_hz.len(),
+        block.dofs()
+    );
+    let mut group = c.benchmark_group("reduced_block_paper36_window");
+    let (s, co) = 0.3_f64.sin_cos();
+    let x: Vec<f64> = mesh
+        .nodes
+        .iter()
+        .flat_map(|p| [co * p.x - s * p.y + 1e-7, s * p.x + co * p.y])
+        .collect();
+    let v = vec![1e-3; x.len()];
+    let mut force = vec![0.0; x.len()];
+    group.bench_function("block_elements_damped", |b| {
+        b.iter(|| {
+            force.iter_mut().for_each(|f| *f = 0.0);
+            elements.internal_forces(black_box(&x), &v, 1.3e-9, &mut force)
+        })
+    });
+    let mut state = block.rest();
+    state
+        .eta
+        .iter_mut()
+        .enumerate()
+        .for_each(|(k, z)| *z = 1e-9 * (k as f64).sin());
+    state
+        .rate
+        .iter_mut()
+        .enumerate()
+        .for_each(|(k, z)| *z = 1e-4 * (k as f64).cos());
+    let interface_force = vec![10.0; block.interface_dofs()];
+    let mut scratch = block.scratch();
+    let frame = FrameMotion {
+        rate: 314.0,
+        accel: 10.0,
+    };
+    group.bench_function("reduced_prescribed", |b| {
+        b.iter(|| {
+            block.interface_motion(black_box(&state), &mut scratch);
+            block.accelerate_prescribed(&mut state, frame, 1.3e-9, &interface_force, &mut scratch)
+        })
+    });
+    group.bench_function("reduced_free", |b| {
+        b.iter(|| {
+            block.interface_motion(black_box(&state), &mut scratch);
+            block.accelerate_free(
+                &mut state,
+                3e-3,
+                314.0,
+                100.0,
+                1.3e-9,
+                &interface_force,
+                &mut scratch,
+            )
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, explicit, pair_step, reduced_block);
 criterion_main!(benches);

@@ -10,6 +10,7 @@ pub mod body;
 pub mod kicks;
 pub mod lockstep;
 pub mod pair;
+pub mod reduced;
 pub mod remesh;
 pub mod scene;
 pub mod solver;

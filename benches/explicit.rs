@@ -136,8 +136,9 @@ fn pair_step(c: &mut Criterion) {
 /// What a reduced far block would save a step (issue 31): the 3000 rpm scene's window mesh of
 /// the driver (six fine teeth, explicit sizes), its other thirty sectors' elements through the
 /// element kernel (damped, one core) against the same block reduced by Craig–Bampton at an
-/// 80 kHz cutoff ([`geardyn::explicit::reduced`]): its accelerations with the hub turned at a
-/// prescribed rate (the driver) and with a free hub (the driven gear).
+/// 80 kHz cutoff ([`geardyn::explicit::reduced`]): its interface motion and accelerations with
+/// the hub turned at a prescribed rate (the driver) and with a free hub (the driven gear); the
+/// whole gear's and the six fine sectors' elements for scale.
 fn reduced_block(c: &mut Criterion) {
     use geardyn::explicit::reduced::{FrameMotion, ReducedBlock};
     use geardyn::mesh::MeshSpec;
@@ -165,13 +166,20 @@ fn reduced_block(c: &mut Criterion) {
         .filter(|(_, &b)| b)
         .map(|(e, _)| *e)
         .collect();
-    let elements = ExplicitBody::with_symmetry(
-        &mesh.nodes,
-        &block_elements,
-        material,
-        Some(gear.teeth() as usize),
-    )
-    .unwrap();
+    let body_of = |elements: &[[usize; 8]]| {
+        ExplicitBody::with_symmetry(&mesh.nodes, elements, material, Some(gear.teeth() as usize))
+            .unwrap()
+    };
+    let elements = body_of(&block_elements);
+    let fine_elements: Vec<[usize; 8]> = mesh
+        .elements
+        .iter()
+        .zip(&in_block)
+        .filter(|(_, &b)| !b)
+        .map(|(e, _)| *e)
+        .collect();
+    let fine = body_of(&fine_elements);
+    let whole_symmetric = body_of(&mesh.elements);
     let block = ReducedBlock::new(
         &mesh.nodes,
         &mesh.elements,
@@ -200,12 +208,18 @@ fn reduced_block(c: &mut Criterion) {
         .collect();
     let v = vec![1e-3; x.len()];
     let mut force = vec![0.0; x.len()];
-    group.bench_function("block_elements_damped", |b| {
-        b.iter(|| {
-            force.iter_mut().for_each(|f| *f = 0.0);
-            elements.internal_forces(black_box(&x), &v, 1.3e-9, &mut force)
-        })
-    });
+    for (name, body) in [
+        ("whole_gear_damped", &whole_symmetric),
+        ("block_elements_damped", &elements),
+        ("fine_elements_damped", &fine),
+    ] {
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                force.iter_mut().for_each(|f| *f = 0.0);
+                body.internal_forces(black_box(&x), &v, 1.3e-9, &mut force)
+            })
+        });
+    }
     let mut state = block.rest();
     state
         .eta

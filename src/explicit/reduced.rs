@@ -18,7 +18,9 @@
 //! (J turns a node's vector by +90°: J(a, b) = (−b, a)). The reduced matrices are
 //! K_red = Tᵀ K T and M_red = Tᵀ M T, K the block's stiffness and M its lumped masses (the
 //! interface nodes' whole masses, their other elements' shares included; none on the held
-//! nodes, which ride on the hub and are its inertia). A static interface load gives the full
+//! nodes). The contract with the rest of the mesh: it counts neither the interface nodes'
+//! masses nor the held nodes' (in its accelerations, kinetic energy and momentum), and the
+//! hub's inertia holds the held nodes' whole masses, as the explicit pair's rigid hubs do. A static interface load gives the full
 //! model's interface displacements exactly (the constraint modes span every static state
 //! without internal loads); with the residual vectors so do the steady centrifugal and
 //! angular-acceleration loads on a held interface. The reduced frequencies are Rayleigh–Ritz
@@ -42,8 +44,9 @@
 //! Q_z holds the forces F_b = R(θ)ᵀ f_b the rest of the mesh puts on the interface nodes (hub
 //! frame) in its first 2·|b| entries, τ_b = Σ_b y_b × F_b is their moment about the centre, τ_hub
 //! the hub's torque on the block, and β K_red ż the stiffness-proportional damping of the
-//! explicit bodies (on the velocity relative to the hub frame, as the corotational elements
-//! take it relative to theirs). With the hub turned at a prescribed rate the first equation
+//! explicit bodies on the velocity relative to the hub frame (the corotational elements take
+//! theirs relative to the element's translation, whose spin K removes to first order: they
+//! differ by β ω K J u, about 4e-7 of the elastic force at 3000 rpm). With the hub turned at a prescribed rate the first equation
 //! gives z̈ and the second the torque the hub must apply; with a free hub of inertia I_h under
 //! a torque τ the two are solved together with I_h ω̇ = τ − τ_hub. The energy account:
 //! T above, V = ½ zᵀ K_red z, damping power β żᵀ K_red ż; the angular momentum about the
@@ -291,6 +294,10 @@ impl ReducedBlock {
     ) -> Result<Self, FeError> {
         assert_eq!(in_block.len(), elements.len(), "one flag per element");
         assert_eq!(mass.len(), nodes.len(), "one mass per node");
+        assert!(
+            in_block.iter().any(|b| *b) && in_block.iter().any(|b| !*b),
+            "a block and a rest of the mesh"
+        );
         let n = nodes.len();
         let mut block_node = vec![false; n];
         let mut outside_node = vec![false; n];
@@ -770,10 +777,10 @@ impl ReducedBlock {
         &self.basis_internal * z
     }
 
-    /// The reduced coordinates closest to the displacements `interface` and `internal`
-    /// (hub frame, x and y per node in the block's orders): u_b as given and the rest by
-    /// the M-orthogonal projection of u_i − Ψ_i u_b on the modes and residual vectors (exact
-    /// when u lies in T's span).
+    /// Reduced coordinates z of the displacements `interface` and `internal` (hub frame, x
+    /// and y per node in the block's orders): u_b as given, the rest the M_ii-orthogonal
+    /// projection of u_i − Ψ_i u_b on the modes and residual vectors (M_ii-closest with u_b
+    /// held; exact when u lies in T's span).
     pub fn project(&self, interface: &[f64], internal: &[f64]) -> DVector<f64> {
         let nb = self.interface_dofs();
         assert!(interface.len() == nb && internal.len() == self.basis_internal.nrows());
@@ -941,9 +948,34 @@ mod tests {
         assert!(worst < 1e-8 * scale, "worst {worst:.3e} m of {scale:.3e} m");
     }
 
+    /// A field in T's span projected back gives its reduced coordinates, and the modal state
+    /// of z gives z back.
+    #[test]
+    fn a_reduced_field_projects_back_to_its_coordinates() {
+        let (mesh, body, in_block) = window_mesh();
+        let block = block_of(&mesh, &body, &in_block, 20e3);
+        let z = DVector::from_fn(block.dofs(), |k, _| 1e-7 * (0.3 + 0.71 * k as f64).sin());
+        let nb = block.interface_dofs();
+        let internal = block.internal_displacements(&z);
+        let back = block.project(&z.as_slice()[..nb], internal.as_slice());
+        assert!(
+            (&back - &z).amax() < 1e-9 * z.amax(),
+            "{:.3e}",
+            (&back - &z).amax()
+        );
+        let state = block.state_of(&z, &z);
+        let again = block.coordinates(&state.eta);
+        assert!(
+            (&again - &z).amax() < 1e-9 * z.amax(),
+            "{:.3e}",
+            (&again - &z).amax()
+        );
+    }
+
     /// The centrifugal load at 3000 rpm on a held interface: the residual vector holds the
-    /// full block's static response, (K_ii − ω² M_ii) u = ω² M_ii X, to the spin softening's
-    /// share of it, (ω/ω₁)² ≈ 1.4e-5 (ω₁ the first fixed-interface mode).
+    /// full block's static response, (K_ii − ω² M_ii) u = ω² M_ii X, to within the spin
+    /// softening's share of it, (ω/ω₁)² ≈ 1.4e-5 at most (ω₁ the first fixed-interface mode;
+    /// measured: 3.2e-14 m of a 7.8e-8 m stretch, 4e-7, as the modes carry most of it).
     #[test]
     fn the_centrifugal_load_gives_the_full_blocks_stretch() {
         let (mesh, body, in_block) = window_mesh();
@@ -979,8 +1011,12 @@ mod tests {
             .flat_map(|(k, &node)| (0..2).map(move |c| (k, node, c)))
             .map(|(k, node, c)| (internal[2 * k + c] - u[2 * node + c]).abs())
             .fold(0.0_f64, f64::max);
+        eprintln!("centrifugal stretch {scale:.3e} m, worst difference {worst:.3e} m");
         assert!(scale > 1e-8, "a stretch of {scale:.3e} m");
-        assert!(worst < 1e-4 * scale, "worst {worst:.3e} m of {scale:.3e} m");
+        assert!(
+            worst < 1.4e-5 * scale,
+            "worst {worst:.3e} m of {scale:.3e} m"
+        );
     }
 
     /// The block with its interface free (held at the bore only): the reduced frequencies are
@@ -1055,7 +1091,10 @@ mod tests {
     /// A free hub carrying the block, spun and released with a deformed block and no torque:
     /// the angular momentum s(z)ᵀż + (I_h + I(z)) ω and the energy stay what they were, to
     /// the central difference's order: its velocity terms (Coriolis, the hub's) taken at the
-    /// half step make the momentum's error O(Δt) and leave the energy's O(Δt²). Measured at a
+    /// half step make the momentum's error O(Δt) and leave the energy's O(Δt²). This checks
+    /// the coupled hub solve and the Euler and centrifugal terms' consistency with the energy;
+    /// the Coriolis term does no work and conserves the momentum whatever its sign, so the
+    /// full-body comparison checks it. Measured at a
     /// step of 1/40 of the highest reduced mode's period over 0.4 ms: 1.0e-6 and 1.9e-6, at
     /// half the step 5.1e-7 and 5.1e-7; asserted: below 2e-6 / 4e-6, and halving the step
     /// divides them by 2 / 4 within 20 %.
@@ -1064,7 +1103,8 @@ mod tests {
         let (mesh, body, in_block) = window_mesh();
         let block = block_of(&mesh, &body, &in_block, 20e3);
         let hub_inertia = 1e-3;
-        // An initial deformation: the centrifugal residual vector and an interface shear.
+        // An initial deformation: the last residual vector (the angular acceleration's) and an
+        // interface shear.
         let last = block.dofs() - 1;
         let mut z = DVector::zeros(block.dofs());
         z[last] = 2e-4 * block.mass[(last, last)].sqrt().recip();
@@ -1127,19 +1167,29 @@ mod tests {
         }
     }
 
-    /// The window mesh turning at 3000 rpm about its held bore, undeformed at the start (so
-    /// the centrifugal load rings), loaded on a fine flank by a force raised smoothly to 2 kN
-    /// over 0.1 ms: the fine sectors integrated as the explicit pair does (velocity Verlet,
-    /// corotational elements, stiffness-proportional damping) with the block reduced (80 kHz
-    /// cutoff), against all elements integrated so. The loaded node's and an interface node's
-    /// displacements in the hub frame and the hub's torque over 0.3 ms agree within 0.5 % of
-    /// their largest values (measured: 0.056 %, 0.15 %, 0.024 %; the corotational elements
-    /// against the block's one frame, the modes above the cutoff).
-    #[test]
-    fn the_reduced_block_turns_and_rings_as_the_full_body() {
+    /// How the hub turns in [`turning_comparison`]: θ = ω₀ t + ½ ω̇ t².
+    #[derive(Clone, Copy)]
+    struct Turning {
+        rpm: f64,
+        accel: f64,
+        /// Coriolis sign of the reduced block's equations (1: as derived; −1 flips it, to show
+        /// the comparison sees it).
+        coriolis: f64,
+    }
+
+    /// The window mesh turning about its held bore as `turning` says, undeformed at the start
+    /// (so the centrifugal load rings), loaded on a fine flank by a force raised smoothly to
+    /// 2 kN over 0.1 ms: the fine sectors integrated as the explicit pair does (velocity
+    /// Verlet, corotational elements, stiffness-proportional damping) with the block reduced
+    /// (80 kHz cutoff), against all elements integrated so. Returns the largest differences
+    /// over 0.3 ms, relative to the largest values, of the loaded node's and an interface
+    /// node's displacement in the hub frame and of the hub's torque. The bore nodes ride on
+    /// the hub with their whole masses in both (the block leaves them out).
+    fn turning_comparison(turning: Turning) -> [f64; 3] {
         use crate::explicit::solver::critical_step;
         let (mesh, full, in_block) = window_mesh();
-        let block = block_of(&mesh, &full, &in_block, 80e3);
+        let mut block = block_of(&mesh, &full, &in_block, 80e3);
+        block.modal_gyroscopic *= turning.coriolis;
         let fine_elements: Vec<[usize; 8]> = mesh
             .elements
             .iter()
@@ -1154,10 +1204,16 @@ mod tests {
         let fixed: Vec<bool> = (0..2 * n).map(|d| bore[d / 2]).collect();
         let dt = 0.8 * critical_step(&full, &fixed, 200);
         let beta = 1.3e-9;
-        let omega = 3000.0 * std::f64::consts::TAU / 60.0;
+        let omega0 = turning.rpm * std::f64::consts::TAU / 60.0;
+        let motion = |t: f64| FrameMotion {
+            rate: omega0 + turning.accel * t,
+            accel: turning.accel,
+        };
+        let angle = |t: f64| omega0 * t + 0.5 * turning.accel * t * t;
         let flank = &mesh.flanks.iter().find(|f| f.tooth == 2).unwrap().nodes;
         let loaded = flank[flank.len() / 2];
-        let watched = block.interface[block.interface.len() / 3];
+        let watched = block.interface.len() / 3;
+        let watched_node = block.interface[watched];
         let x_ref = mesh.nodes[loaded];
         // Against the turning, along the tangent at the loaded node, in the hub frame.
         let direction = [
@@ -1177,15 +1233,11 @@ mod tests {
             [c * p[0] - s * p[1], s * p[0] + c * p[1]]
         };
         let steps = (3e-4 / dt).round() as usize;
-        let rigid = |theta: f64| -> (Vec<f64>, Vec<f64>) {
-            let x: Vec<f64> = mesh
-                .nodes
-                .iter()
-                .flat_map(|p| turn(theta, [p.x, p.y]))
-                .collect();
+        let rigid = || -> (Vec<f64>, Vec<f64>) {
+            let x: Vec<f64> = mesh.nodes.iter().flat_map(|p| [p.x, p.y]).collect();
             let v = x
                 .chunks_exact(2)
-                .flat_map(|p| [-omega * p[1], omega * p[0]])
+                .flat_map(|p| [-omega0 * p[1], omega0 * p[0]])
                 .collect();
             (x, v)
         };
@@ -1193,58 +1245,67 @@ mod tests {
             let p = turn(-theta, [x[2 * node], x[2 * node + 1]]);
             [p[0] - mesh.nodes[node].x, p[1] - mesh.nodes[node].y]
         };
-        let place_bore = |theta: f64, x: &mut [f64], v: &mut [f64], a: &mut [f64]| {
+        // x = R X, v = ω J x, a = ω̇ J x − ω² x.
+        let place_bore = |t: f64, x: &mut [f64], v: &mut [f64], a: &mut [f64]| {
+            let (theta, m) = (angle(t), motion(t));
             for &i in &mesh.bore_nodes {
                 let p = turn(theta, [mesh.nodes[i].x, mesh.nodes[i].y]);
-                x[2 * i] = p[0];
-                x[2 * i + 1] = p[1];
-                v[2 * i] = -omega * p[1];
-                v[2 * i + 1] = omega * p[0];
-                a[2 * i] = -omega * omega * p[0];
-                a[2 * i + 1] = -omega * omega * p[1];
+                x[2 * i..2 * i + 2].copy_from_slice(&p);
+                v[2 * i] = -m.rate * p[1];
+                v[2 * i + 1] = m.rate * p[0];
+                a[2 * i] = -m.accel * p[1] - m.rate * m.rate * p[0];
+                a[2 * i + 1] = m.accel * p[0] - m.rate * m.rate * p[1];
             }
         };
-        // The hub's torque: the moment of the bore reactions, m a − f on the bore nodes.
-        let bore_torque = |x: &[f64], a: &[f64], f: &[f64], mass: &[f64]| -> f64 {
+        // The hub's torque on the bore nodes, m a − f (whole masses), about the centre.
+        let bore_torque = |x: &[f64], a: &[f64], f: &[f64]| -> f64 {
             mesh.bore_nodes
                 .iter()
                 .map(|&i| {
-                    let r = [
-                        mass[i] * a[2 * i] - f[2 * i],
-                        mass[i] * a[2 * i + 1] - f[2 * i + 1],
-                    ];
+                    let m = full.mass[i];
+                    let r = [m * a[2 * i] - f[2 * i], m * a[2 * i + 1] - f[2 * i + 1]];
                     x[2 * i] * r[1] - x[2 * i + 1] * r[0]
                 })
                 .sum()
         };
+        let load = |t: f64, f: &mut [f64]| {
+            let p = turn(angle(t), direction.map(|c| c * force(t)));
+            f[2 * loaded] += p[0];
+            f[2 * loaded + 1] += p[1];
+        };
 
         // All elements.
-        let (mut x, mut v) = rigid(0.0);
+        let (mut x, mut v) = rigid();
         let mut a = vec![0.0; 2 * n];
         let mut f = vec![0.0; 2 * n];
+        place_bore(0.0, &mut x, &mut v, &mut a);
         let mut full_history = Vec::with_capacity(steps);
         for step in 1..=steps {
             let t = step as f64 * dt;
-            let theta = omega * t;
             for d in (0..2 * n).filter(|&d| !fixed[d]) {
                 v[d] += 0.5 * dt * a[d];
                 x[d] += dt * v[d];
             }
-            place_bore(theta, &mut x, &mut v, &mut a);
+            place_bore(t, &mut x, &mut v, &mut a);
             f.iter_mut().for_each(|fi| *fi = 0.0);
             full.internal_forces(&x, &v, beta, &mut f);
-            let p = turn(theta, direction.map(|c| c * force(t)));
-            f[2 * loaded] += p[0];
-            f[2 * loaded + 1] += p[1];
+            load(t, &mut f);
             for d in (0..2 * n).filter(|&d| !fixed[d]) {
                 a[d] = f[d] / full.mass[d / 2];
                 v[d] += 0.5 * dt * a[d];
             }
-            let torque = bore_torque(&x, &a, &f, &full.mass);
-            full_history.push((local(&x, theta, loaded), local(&x, theta, watched), torque));
+            let torque = bore_torque(&x, &a, &f);
+            let theta = angle(t);
+            full_history.push((
+                local(&x, theta, loaded),
+                local(&x, theta, watched_node),
+                torque,
+            ));
         }
 
-        // The fine sectors with the block reduced.
+        // The fine sectors with the block reduced; the block's η̈ at the start from its
+        // equations (the full body's free nodes start at a = 0 in the inertial frame, so
+        // ü = ω² X in the hub frame: the same state).
         let mut owned = vec![false; n];
         fine_elements
             .iter()
@@ -1256,27 +1317,32 @@ mod tests {
             .chain(&mesh.bore_nodes)
             .for_each(|&i| owned[i] = false);
         let owned_dofs: Vec<usize> = (0..2 * n).filter(|&d| owned[d / 2]).collect();
-        let (mut x, mut v) = rigid(0.0);
+        let (mut x, mut v) = rigid();
         let mut a = vec![0.0; 2 * n];
+        place_bore(0.0, &mut x, &mut v, &mut a);
         let mut state = block.rest();
         let mut scratch = block.scratch();
         let nb = block.interface_dofs();
         let mut interface_force = vec![0.0; nb];
-        let frame = FrameMotion {
-            rate: omega,
-            accel: 0.0,
-        };
+        block.interface_motion(&state, &mut scratch);
+        block.accelerate_prescribed(
+            &mut state,
+            motion(0.0),
+            beta,
+            &interface_force,
+            &mut scratch,
+        );
         let mut worst = [0.0_f64; 3];
         let mut largest = [0.0_f64; 3];
         for (step, expected) in (1..=steps).zip(&full_history) {
             let t = step as f64 * dt;
-            let theta = omega * t;
+            let (theta, frame) = (angle(t), motion(t));
             for &d in &owned_dofs {
                 v[d] += 0.5 * dt * a[d];
                 x[d] += dt * v[d];
             }
             drift(dt, &mut state);
-            place_bore(theta, &mut x, &mut v, &mut a);
+            place_bore(t, &mut x, &mut v, &mut a);
             block.interface_motion(&state, &mut scratch);
             let (u_b, rate_b) = (scratch.interface_displacement(), scratch.interface_rate());
             for (k, (&i, p)) in block
@@ -1287,18 +1353,15 @@ mod tests {
             {
                 let y = [p.x + u_b[2 * k], p.y + u_b[2 * k + 1]];
                 let u = [
-                    rate_b[2 * k] - omega * y[1],
-                    rate_b[2 * k + 1] + omega * y[0],
+                    rate_b[2 * k] - frame.rate * y[1],
+                    rate_b[2 * k + 1] + frame.rate * y[0],
                 ];
-                let (xg, vg) = (turn(theta, y), turn(theta, u));
-                x[2 * i..2 * i + 2].copy_from_slice(&xg);
-                v[2 * i..2 * i + 2].copy_from_slice(&vg);
+                x[2 * i..2 * i + 2].copy_from_slice(&turn(theta, y));
+                v[2 * i..2 * i + 2].copy_from_slice(&turn(theta, u));
             }
             f.iter_mut().for_each(|fi| *fi = 0.0);
             fine.internal_forces(&x, &v, beta, &mut f);
-            let p = turn(theta, direction.map(|c| c * force(t)));
-            f[2 * loaded] += p[0];
-            f[2 * loaded + 1] += p[1];
+            load(t, &mut f);
             for &d in &owned_dofs {
                 a[d] = f[d] / full.mass[d / 2];
                 v[d] += 0.5 * dt * a[d];
@@ -1315,13 +1378,12 @@ mod tests {
                 &mut scratch,
             );
             kick(dt, &mut state);
+            let torque = bore_torque(&x, &a, &f) + block_torque;
             block.interface_motion(&state, &mut scratch);
             let u_b = scratch.interface_displacement();
-            let torque = bore_torque(&x, &a, &f, &fine.mass) + block_torque;
-            let watched_k = block.interface.iter().position(|&i| i == watched).unwrap();
             let got = (
                 local(&x, theta, loaded),
-                [u_b[2 * watched_k], u_b[2 * watched_k + 1]],
+                [u_b[2 * watched], u_b[2 * watched + 1]],
                 torque,
             );
             let pairs = [
@@ -1340,14 +1402,56 @@ mod tests {
                 largest[k] = largest[k].max(size);
             }
         }
-        let relative: Vec<f64> = worst.iter().zip(&largest).map(|(w, l)| w / l).collect();
         eprintln!(
-            "{steps} steps of {dt:.3e} s: loaded node {:.3e} of {:.3e} m, interface node {:.3e} of {:.3e} m, torque {:.3e} of {:.3e} N m",
-            worst[0], largest[0], worst[1], largest[1], worst[2], largest[2]
+            "{:.0} rpm, {:.1e} rad/s², Coriolis {:+}: {steps} steps of {dt:.3e} s: loaded node {:.3e} of {:.3e} m, interface node {:.3e} of {:.3e} m, torque {:.3e} of {:.3e} N m",
+            turning.rpm, turning.accel, turning.coriolis, worst[0], largest[0], worst[1], largest[1], worst[2], largest[2]
         );
+        std::array::from_fn(|k| worst[k] / largest[k])
+    }
+
+    /// [`turning_comparison`] at 3000 rpm: the loaded node, the interface node and the hub's
+    /// torque within 0.5 % of the full body's (measured: 0.055 %, 0.18 %, 0.024 %; the
+    /// corotational elements against the block's one frame, the modes above the cutoff). The
+    /// same with the Coriolis term's sign flipped misses the torque by 1.06 % (the test sees
+    /// the term, which is about 2ω/Ω₁ ≈ 1 % of the elastic forces here; at 12 000 rpm the
+    /// flipped sign misses it by 65 %, the right one by 0.17 %).
+    #[test]
+    fn the_reduced_block_turns_and_rings_as_the_full_body() {
+        let turning = Turning {
+            rpm: 3000.0,
+            accel: 0.0,
+            coriolis: 1.0,
+        };
+        let errors = turning_comparison(turning);
         assert!(
-            relative.iter().all(|r| *r < 5e-3),
-            "relative errors {relative:?}"
+            errors.iter().all(|e| *e < 5e-3),
+            "relative errors {errors:?}"
+        );
+        let flipped = turning_comparison(Turning {
+            coriolis: -1.0,
+            ..turning
+        });
+        assert!(
+            flipped[2] > 5e-3,
+            "the flipped Coriolis term unseen: {flipped:?}"
+        );
+    }
+
+    /// The hub spun up from 3000 rpm at 2e5 rad/s² (to 3570 rpm in 0.3 ms), the step of ω̇ at
+    /// the start ringing through every mode: the Euler terms, the block's share of the hub
+    /// torque (I ω̇ and s·η̈) and the bore's inertia as in [`turning_comparison`]'s contract,
+    /// within 0.5 % (measured: 0.086 %, 0.12 %, 0.33 %: the torque's ringing in the modes above
+    /// the cutoff, which the reduced block leaves out).
+    #[test]
+    fn the_reduced_block_spins_up_as_the_full_body() {
+        let errors = turning_comparison(Turning {
+            rpm: 3000.0,
+            accel: 2e5,
+            coriolis: 1.0,
+        });
+        assert!(
+            errors.iter().all(|e| *e < 5e-3),
+            "relative errors {errors:?}"
         );
     }
 

@@ -243,6 +243,9 @@ fn reduced_block(c: &mut Criterion) {
             block.accelerate_prescribed(&mut state, frame, 1.3e-9, &interface_force, &mut scratch)
         })
     });
+    group.bench_function("reduced_interface_motion_only", |b| {
+        b.iter(|| block.interface_motion(black_box(&state), &mut scratch))
+    });
     group.bench_function("reduced_free", |b| {
         b.iter(|| {
             block.interface_motion(black_box(&state), &mut scratch);

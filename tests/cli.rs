@@ -1240,7 +1240,8 @@ fn write_stiffness_run(dir: &Path, stiffness: &Path) -> std::path::PathBuf {
     std::fs::copy(stiffness, run.join("stiffness.csv")).unwrap();
     std::fs::write(
         run.join("summary.json"),
-        r#"{"fine_element_mm": 0.5, "total_wall_s": 100.0, "mass_scaling": {"factor": 1.0}}"#,
+        r#"{"fine_element_mm": 0.5, "total_wall_s": 100.0, "mass_scaling": {"factor": 1.0},
+            "tooth_layout": "stable-step"}"#,
     )
     .unwrap();
     run
@@ -1318,6 +1319,46 @@ fn compare_reads_a_known_fe_run_and_names_its_lines() {
             .arg("--out")
             .arg(&out),
     );
+    // A chart run or a stiffness file of another tooth layout than the case's is refused
+    // before anything is computed, naming it (a summary without the key is graded).
+    let graded = dir.path().join("graded-run");
+    std::fs::create_dir_all(&graded).unwrap();
+    std::fs::copy(&stiffness, graded.join("stiffness.csv")).unwrap();
+    std::fs::write(
+        graded.join("summary.json"),
+        r#"{"fine_element_mm": 0.5, "total_wall_s": 100.0, "mass_scaling": {"factor": 1.0}}"#,
+    )
+    .unwrap();
+    for (stiffness_file, chart_run) in [
+        (stiffness.clone(), graded.clone()),
+        (graded.join("stiffness.csv"), stiffness_run.clone()),
+    ] {
+        let output = geardyn()
+            .args([
+                "compare",
+                "--speed-rpm",
+                "3000",
+                "--positions",
+                "2",
+                "--fe-run",
+            ])
+            .arg(&run)
+            .arg("--fe-stiffness")
+            .arg(&stiffness_file)
+            .arg("--chart")
+            .arg("--chart-fe-run")
+            .arg(&chart_run)
+            .arg("--out")
+            .arg(dir.path().join("refused"))
+            .output()
+            .unwrap();
+        assert!(!output.status.success());
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(
+            stderr.contains("graded-run") && stderr.contains("fe.tooth_layout = \"graded\""),
+            "{stderr}"
+        );
+    }
     // The chart: each question against its own reference. The DTE's is the FE run's own
     // first mesh harmonic (the synthetic 2e-5 rad); the
     // resonance's, without an FE sweep, the driver-held FE modal on the case's mesh; k̄ and the

@@ -31,6 +31,25 @@ pub fn summary_tooth_layout(
     }
 }
 
+/// The tooth layout of the FE run in folder `dir` (its summary.json).
+pub fn run_tooth_layout(dir: &Path) -> Result<crate::mesh::ToothLayout, String> {
+    summary_tooth_layout(&fe_summary(dir)?, dir)
+}
+
+/// The tooth layout of the FE run whose folder holds the stiffness file `file` (its
+/// summary.json beside it), or None for a file without one (k(θ) from elsewhere: nothing to
+/// check).
+pub fn stiffness_file_layout(file: &Path) -> Result<Option<crate::mesh::ToothLayout>, String> {
+    let dir = match file.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir,
+        _ => Path::new("."),
+    };
+    if !dir.join("summary.json").is_file() {
+        return Ok(None);
+    }
+    run_tooth_layout(dir).map(Some)
+}
+
 pub(crate) fn summary_number(
     summary: &serde_json::Value,
     dir: &Path,
@@ -877,6 +896,8 @@ pub fn read_fe_stiffness_run(dir: &Path, period: f64) -> Result<FeStiffnessRun, 
     let summary = fe_summary(dir)?;
     let number = |path: &[&str]| summary_number(&summary, dir, path);
     Ok(FeStiffnessRun {
+        source: dir.display().to_string(),
+        tooth_layout: summary_tooth_layout(&summary, dir)?,
         fine_mm: number(&["fine_element_mm"])?,
         mass_scaling_factor: number(&["mass_scaling", "factor"]).unwrap_or(1.0),
         stiffness: super::stiffness_csv::read_stiffness_csv(&dir.join("stiffness.csv"), period)?,
@@ -1054,5 +1075,21 @@ mod tests {
         );
         let bad = layout(r#"{"tooth_layout": "even"}"#).unwrap_err();
         assert!(bad.contains("run/summary.json: tooth_layout"), "{bad}");
+    }
+
+    /// A stiffness file in an FE run's folder has that run's layout; one without a
+    /// summary.json beside it has none to check.
+    #[test]
+    fn a_stiffness_file_has_its_runs_layout() {
+        let dir = std::env::temp_dir().join(format!("geardyn-layout-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("stiffness.csv");
+        std::fs::write(&file, "angle_rad,stiffness_n_per_m\n").unwrap();
+        assert_eq!(stiffness_file_layout(&file), Ok(None));
+        std::fs::write(dir.join("summary.json"), r#"{"tooth_layout": "graded"}"#).unwrap();
+        assert_eq!(stiffness_file_layout(&file), Ok(Some(ToothLayout::Graded)));
+        std::fs::write(dir.join("summary.json"), "{}").unwrap();
+        assert_eq!(stiffness_file_layout(&file), Ok(Some(ToothLayout::Graded)));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -51,6 +51,10 @@ use crate::explicit::scene::static_te;
 /// An explicit FE stiffness run read from its folder.
 #[derive(Debug, Clone)]
 pub struct FeStiffnessRun {
+    /// The run's folder (for messages).
+    pub source: String,
+    /// How its mesh laid out the teeth (`fe.tooth_layout`; the chart takes the case's only).
+    pub tooth_layout: crate::mesh::ToothLayout,
     pub fine_mm: f64,
     pub mass_scaling_factor: f64,
     pub stiffness: MeshStiffness,
@@ -375,6 +379,13 @@ pub fn run(
     resonance: ResonanceReference,
     progress: Progress,
 ) -> Result<AccuracyCost, StudyError> {
+    super::compare::layouts_of_the_case(
+        case,
+        fe_runs
+            .iter()
+            .map(|r| (r.source.as_str(), r.tooth_layout))
+            .chain([(dte_run.source.as_str(), dte_run.tooth_layout)]),
+    )?;
     let torque = dte_run.torque_nm;
     let speed_rpm = dte_run.speed_rpm;
     // The unmodified pair, whatever the case names its variants (the runs are of it).

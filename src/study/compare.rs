@@ -543,13 +543,27 @@ pub fn primary_run(case: &Case, runs: &[FeDte]) -> Option<usize> {
 /// FE modal and the same-mesh LTCA are of the case's layout, so runs of another would be read
 /// against a mesh they did not run on, and mesh levels would mix two meshes of one size.
 pub fn runs_of_the_case_layout(case: &Case, runs: &[FeDte]) -> Result<(), StudyError> {
-    match runs.iter().find(|r| r.tooth_layout != case.fe.tooth_layout) {
-        Some(run) => Err(StudyError::Input(format!(
-            "the FE run {} was meshed with fe.tooth_layout = \"{}\", the case's is \"{}\": give runs of one layout and set the case's to it (--set fe.tooth_layout={})",
-            run.source,
-            run.tooth_layout.name(),
+    layouts_of_the_case(
+        case,
+        runs.iter().map(|r| (r.source.as_str(), r.tooth_layout)),
+    )
+}
+
+/// [`runs_of_the_case_layout`] for any FE runs, given as (where it is, its layout): the speed
+/// runs, the stiffness run compare reads k(θ) from, the accuracy chart's stiffness runs.
+pub fn layouts_of_the_case<'a>(
+    case: &Case,
+    runs: impl IntoIterator<Item = (&'a str, crate::mesh::ToothLayout)>,
+) -> Result<(), StudyError> {
+    match runs
+        .into_iter()
+        .find(|(_, layout)| *layout != case.fe.tooth_layout)
+    {
+        Some((source, layout)) => Err(StudyError::Input(format!(
+            "the FE run {source} was meshed with fe.tooth_layout = \"{}\", the case's is \"{}\": give runs of one layout and set the case's to it (--set fe.tooth_layout={})",
+            layout.name(),
             case.fe.tooth_layout.name(),
-            run.tooth_layout.name()
+            layout.name()
         ))),
         None => Ok(()),
     }
@@ -1274,6 +1288,27 @@ mod tests {
                     "the case's is \"{}\"",
                     case.fe.tooth_layout.name()
                 )),
+            "{refused}"
+        );
+    }
+
+    /// Any FE run given as (where, layout): the first of another layout than the case's is
+    /// named in the refusal.
+    #[test]
+    fn layouts_of_the_case_name_the_run_of_another() {
+        let case = crate::samples::paper36_case();
+        let own = case.fe.tooth_layout;
+        let other = match own {
+            crate::mesh::ToothLayout::Graded => crate::mesh::ToothLayout::StableStep,
+            crate::mesh::ToothLayout::StableStep => crate::mesh::ToothLayout::Graded,
+        };
+        assert!(layouts_of_the_case(&case, [("a", own), ("b", own)]).is_ok());
+        let refused = layouts_of_the_case(&case, [("a", own), ("chart/fe-0.7mm", other)])
+            .unwrap_err()
+            .to_string();
+        assert!(refused.contains("chart/fe-0.7mm"), "{refused}");
+        assert!(
+            refused.contains(&format!("fe.tooth_layout={}", other.name())),
             "{refused}"
         );
     }

@@ -399,8 +399,23 @@ fn compare(args: &CommonArgs, ask: &CompareAsk) -> Result<()> {
     let mut runs = given_fe_runs(ask.fe_runs)?;
     let given_rpm = cmp::given_rpm_on_case_mesh(&case, &runs);
     let fe_sweep = ask.sweep_speeds(&given_rpm);
-    // A bad set of given runs is refused before any FE run is made for it.
+    // A bad set of given runs is refused before any FE run is made for it: the speed runs, the
+    // stiffness file's run (if it comes from one) and the chart's stiffness runs must all be
+    // of the case's tooth layout.
     cmp::runs_of_the_case_layout(&case, &runs)?;
+    let mut given: Vec<(String, geardyn::mesh::ToothLayout)> = Vec::new();
+    if let Some(file) = ask.fe_stiffness {
+        if let Some(layout) =
+            report::compare::stiffness_file_layout(file).map_err(anyhow::Error::msg)?
+        {
+            given.push((file.display().to_string(), layout));
+        }
+    }
+    for folder in ask.chart.unwrap_or_default() {
+        let layout = report::compare::run_tooth_layout(folder).map_err(anyhow::Error::msg)?;
+        given.push((folder.display().to_string(), layout));
+    }
+    cmp::layouts_of_the_case(&case, given.iter().map(|(s, l)| (s.as_str(), *l)))?;
     if !fe_sweep.is_empty() {
         cmp::fe_sweep_runs(&runs, &fe_sweep)?;
     }

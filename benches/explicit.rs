@@ -8,12 +8,22 @@ use geardyn::mesh::mesh_gear;
 use geardyn::samples;
 use std::hint::black_box;
 
+/// A mesh's nodes turned by 0.3 rad and shifted by 0.1 µm, a uniform velocity, a zero force.
+fn turned_state(mesh: &geardyn::mesh::GearMesh) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let (s, co) = 0.3_f64.sin_cos();
+    let x: Vec<f64> = mesh
+        .nodes
+        .iter()
+        .flat_map(|p| [co * p.x - s * p.y + 1e-7, s * p.x + co * p.y])
+        .collect();
+    let n = x.len();
+    (x, vec![1e-3; n], vec![0.0; n])
+}
+
 fn explicit(c: &mut Criterion) {
-    use geardyn::mesh::MeshSpec;
     let case = samples::paper36_case();
     let gear = &case.pair.gears[0];
     let mods = case.relief_variant("none").unwrap().modifications;
-    let settings = case.fe;
     // The LTCA's mesh (0.2 mm flanks on the three engaging teeth: few congruent copies, so the
     // element matrices stream from memory) and the 3000 rpm scenes' body (the explicit sizes,
     // every tooth fine: each matrix serves 36 elements).
@@ -28,16 +38,7 @@ fn explicit(c: &mut Criterion) {
         ),
         (
             "high_scene_body",
-            mesh_gear(
-                gear,
-                &mods[0],
-                &MeshSpec {
-                    fine_size: settings.fine_size,
-                    coarse_size: settings.coarse_size,
-                    fine_teeth: (0..gear.teeth() as usize).collect(),
-                    layout: settings.tooth_layout,
-                },
-            ),
+            samples::paper36_explicit_driver_mesh((0..gear.teeth() as usize).collect()),
         ),
     ];
     let material = samples::paper36_explicit_material();
@@ -59,14 +60,7 @@ fn explicit(c: &mut Criterion) {
             body.paper_critical_step(),
             body.element_eigen_critical_step()
         );
-        let (s, co) = 0.3_f64.sin_cos();
-        let x: Vec<f64> = mesh
-            .nodes
-            .iter()
-            .flat_map(|p| [co * p.x - s * p.y + 1e-7, s * p.x + co * p.y])
-            .collect();
-        let v = vec![1e-3; x.len()];
-        let mut force = vec![0.0; x.len()];
+        let (x, v, mut force) = turned_state(mesh);
         group.throughput(Throughput::Elements(mesh.elements.len() as u64));
         for (label, beta_k) in [("undamped", 0.0), ("damped", 1e-8)] {
             group.bench_function(format!("{name}/{label}"), |b| {
@@ -141,21 +135,9 @@ fn pair_step(c: &mut Criterion) {
 /// whole gear's and the six fine sectors' elements for scale.
 fn reduced_block(c: &mut Criterion) {
     use geardyn::explicit::reduced::{FrameMotion, ReducedBlock};
-    use geardyn::mesh::MeshSpec;
     let case = samples::paper36_case();
     let gear = &case.pair.gears[0];
-    let mods = case.relief_variant("none").unwrap().modifications;
-    let settings = case.fe;
-    let mesh = mesh_gear(
-        gear,
-        &mods[0],
-        &MeshSpec {
-            fine_size: settings.fine_size,
-            coarse_size: settings.coarse_size,
-            fine_teeth: vec![0, 1, 2, 3, 4, 5],
-            layout: settings.tooth_layout,
-        },
-    );
+    let mesh = samples::paper36_explicit_driver_mesh((0..6).collect());
     let material = samples::paper36_explicit_material();
     let whole = ExplicitBody::new(&mesh.nodes, &mesh.elements, material).unwrap();
     let in_block: Vec<bool> = mesh.element_fine.iter().map(|f| !f).collect();
@@ -200,14 +182,7 @@ fn reduced_block(c: &mut Criterion) {
         block.dofs()
     );
     let mut group = c.benchmark_group("reduced_block_paper36_window");
-    let (s, co) = 0.3_f64.sin_cos();
-    let x: Vec<f64> = mesh
-        .nodes
-        .iter()
-        .flat_map(|p| [co * p.x - s * p.y + 1e-7, s * p.x + co * p.y])
-        .collect();
-    let v = vec![1e-3; x.len()];
-    let mut force = vec![0.0; x.len()];
+    let (x, v, mut force) = turned_state(&mesh);
     for (name, body) in [
         ("whole_gear_damped", &whole_symmetric),
         ("block_elements_damped", &elements),

@@ -32,6 +32,23 @@ pub fn shifted_24_40(inverse: bool) -> Case {
     .expect("the shifted 24/40 pair is a valid case")
 }
 
+/// The paper's driver meshed as the explicit runs mesh it (the case's explicit sizes and tooth
+/// layout, unmodified), fine on `fine_teeth`: e.g. teeth 0–5, a window of the 3000 rpm scene.
+pub fn paper36_explicit_driver_mesh(fine_teeth: Vec<usize>) -> crate::mesh::GearMesh {
+    let case = paper36_case();
+    let settings = case.fe;
+    crate::mesh::mesh_gear(
+        &case.pair.gears[0],
+        &crate::geometry::FlankModification::none(),
+        &crate::mesh::MeshSpec {
+            fine_size: settings.fine_size,
+            coarse_size: settings.coarse_size,
+            fine_teeth,
+            layout: settings.tooth_layout,
+        },
+    )
+}
+
 /// The explicit bodies' material of the paper's pair (steel, plane strain, 25.4 mm face width,
 /// the case's mass lumping, corner-twelfth).
 pub fn paper36_explicit_material() -> crate::explicit::body::ExplicitMaterial {

@@ -1300,8 +1300,9 @@ fn compare_reads_a_known_fe_run_and_names_its_lines() {
     // A stiffness run folder for the chart: the same cosine k(θ), unscaled, 0.5 mm.
     let stiffness_run = write_stiffness_run(dir.path(), &stiffness);
     let out = dir.path().join("cmp");
-    run_ok(
-        geardyn()
+    let compare = |stiffness: &Path, chart_run: &Path, out: &Path| {
+        let mut command = geardyn();
+        command
             .args([
                 "compare",
                 "--speed-rpm",
@@ -1312,13 +1313,15 @@ fn compare_reads_a_known_fe_run_and_names_its_lines() {
             ])
             .arg(&run)
             .arg("--fe-stiffness")
-            .arg(&stiffness)
+            .arg(stiffness)
             .arg("--chart")
             .arg("--chart-fe-run")
-            .arg(&stiffness_run)
+            .arg(chart_run)
             .arg("--out")
-            .arg(&out),
-    );
+            .arg(out);
+        command
+    };
+    run_ok(&mut compare(&stiffness, &stiffness_run, &out));
     // A chart run or a stiffness file of another tooth layout than the case's is refused
     // before anything is computed, naming it (a summary without the key is graded).
     let graded = dir.path().join("graded-run");
@@ -1333,23 +1336,7 @@ fn compare_reads_a_known_fe_run_and_names_its_lines() {
         (stiffness.clone(), graded.clone()),
         (graded.join("stiffness.csv"), stiffness_run.clone()),
     ] {
-        let output = geardyn()
-            .args([
-                "compare",
-                "--speed-rpm",
-                "3000",
-                "--positions",
-                "2",
-                "--fe-run",
-            ])
-            .arg(&run)
-            .arg("--fe-stiffness")
-            .arg(&stiffness_file)
-            .arg("--chart")
-            .arg("--chart-fe-run")
-            .arg(&chart_run)
-            .arg("--out")
-            .arg(dir.path().join("refused"))
+        let output = compare(&stiffness_file, &chart_run, &dir.path().join("refused"))
             .output()
             .unwrap();
         assert!(!output.status.success());

@@ -813,26 +813,13 @@ impl ReducedBlock {
 mod tests {
     use super::*;
     use crate::explicit::body::ExplicitBody;
-    use crate::mesh::{mesh_gear, GearMesh, MeshSpec};
+    use crate::mesh::GearMesh;
     use crate::samples;
 
     /// The 3000 rpm scene's window mesh of the paper's driver: six fine teeth, the explicit
     /// sizes; the block is every element of the other thirty sectors.
     fn window_mesh() -> (GearMesh, ExplicitBody, Vec<bool>) {
-        let case = samples::paper36_case();
-        let gear = &case.pair.gears[0];
-        let mods = case.relief_variant("none").unwrap().modifications;
-        let settings = case.fe;
-        let mesh = mesh_gear(
-            gear,
-            &mods[0],
-            &MeshSpec {
-                fine_size: settings.fine_size,
-                coarse_size: settings.coarse_size,
-                fine_teeth: vec![0, 1, 2, 3, 4, 5],
-                layout: settings.tooth_layout,
-            },
-        );
+        let mesh = samples::paper36_explicit_driver_mesh((0..6).collect());
         let body = ExplicitBody::new(
             &mesh.nodes,
             &mesh.elements,

@@ -1453,7 +1453,9 @@ fn compare_reads_a_known_fe_run_and_names_its_lines() {
     ] {
         assert!(out.join(name).exists(), "{name}");
     }
+    // Run where an output folder would land by default: a refused compare leaves none.
     let refused = geardyn()
+        .current_dir(dir.path())
         .args(["compare", "--speed-rpm", "3000", "--fe-run"])
         .arg(dir.path())
         .arg("--fe-stiffness")
@@ -1462,6 +1464,10 @@ fn compare_reads_a_known_fe_run_and_names_its_lines() {
         .unwrap();
     assert!(!refused.status.success());
     assert!(String::from_utf8_lossy(&refused.stderr).contains("not a geardyn fe output folder"));
+    assert!(
+        !dir.path().join("out").exists(),
+        "a refused compare left its output folder"
+    );
 }
 
 /// `geardyn optimize` at a coarse setting (16 positions, three torques, 20 speeds): every key

@@ -395,7 +395,6 @@ fn given_fe_runs(fe_runs: &[PathBuf]) -> Result<Vec<study::compare::FeDte>> {
 fn compare(args: &CommonArgs, ask: &CompareAsk) -> Result<()> {
     use study::compare::{self as cmp, CompareInput};
     let case = load(args, Vec::new())?;
-    let dir = output_dir(args, "compare", &case)?;
     let mut runs = given_fe_runs(ask.fe_runs)?;
     let given_rpm = cmp::given_rpm_on_case_mesh(&case, &runs);
     let fe_sweep = ask.sweep_speeds(&given_rpm);
@@ -416,6 +415,8 @@ fn compare(args: &CommonArgs, ask: &CompareAsk) -> Result<()> {
         given.push((folder.display().to_string(), layout));
     }
     cmp::layouts_of_the_case(&case, given.iter().map(|(s, l)| (s.as_str(), *l)))?;
+    // The output folder once the inputs have passed: a refused compare leaves none behind.
+    let dir = output_dir(args, "compare", &case)?;
     if !fe_sweep.is_empty() {
         cmp::fe_sweep_runs(&runs, &fe_sweep)?;
     }

@@ -38,7 +38,7 @@ fn explicit(c: &mut Criterion) {
         ),
         (
             "high_scene_body",
-            samples::paper36_explicit_driver_mesh((0..gear.teeth() as usize).collect()),
+            samples::explicit_gear_mesh(&case, 0, (0..gear.teeth() as usize).collect()),
         ),
     ];
     let material = samples::paper36_explicit_material();
@@ -137,29 +137,17 @@ fn reduced_block(c: &mut Criterion) {
     use geardyn::explicit::reduced::{FrameMotion, ReducedBlock};
     let case = samples::paper36_case();
     let gear = &case.pair.gears[0];
-    let mesh = samples::paper36_explicit_driver_mesh((0..6).collect());
+    let mesh = samples::explicit_gear_mesh(&case, 0, (0..6).collect());
     let material = samples::paper36_explicit_material();
     let whole = ExplicitBody::new(&mesh.nodes, &mesh.elements, material).unwrap();
     let in_block: Vec<bool> = mesh.element_fine.iter().map(|f| !f).collect();
-    let block_elements: Vec<[usize; 8]> = mesh
-        .elements
-        .iter()
-        .zip(&in_block)
-        .filter(|(_, &b)| b)
-        .map(|(e, _)| *e)
-        .collect();
+    let (block_elements, fine_elements) =
+        geardyn::explicit::reduced::split_elements(&mesh.elements, &in_block);
     let body_of = |elements: &[[usize; 8]]| {
         ExplicitBody::with_symmetry(&mesh.nodes, elements, material, Some(gear.teeth() as usize))
             .unwrap()
     };
     let elements = body_of(&block_elements);
-    let fine_elements: Vec<[usize; 8]> = mesh
-        .elements
-        .iter()
-        .zip(&in_block)
-        .filter(|(_, &b)| !b)
-        .map(|(e, _)| *e)
-        .collect();
     let fine = body_of(&fine_elements);
     let whole_symmetric = body_of(&mesh.elements);
     let block = ReducedBlock::new(

@@ -32,13 +32,12 @@ pub fn shifted_24_40(inverse: bool) -> Case {
     .expect("the shifted 24/40 pair is a valid case")
 }
 
-/// The paper's driver meshed as the explicit runs mesh it (the case's explicit sizes and tooth
+/// Gear `g` of `case` meshed as the explicit runs mesh it (the case's explicit sizes and tooth
 /// layout, unmodified), fine on `fine_teeth`: e.g. teeth 0–5, a window of the 3000 rpm scene.
-pub fn paper36_explicit_driver_mesh(fine_teeth: Vec<usize>) -> crate::mesh::GearMesh {
-    let case = paper36_case();
+pub fn explicit_gear_mesh(case: &Case, g: usize, fine_teeth: Vec<usize>) -> crate::mesh::GearMesh {
     let settings = case.fe;
     crate::mesh::mesh_gear(
-        &case.pair.gears[0],
+        &case.pair.gears[g],
         &crate::geometry::FlankModification::none(),
         &crate::mesh::MeshSpec {
             fine_size: settings.fine_size,

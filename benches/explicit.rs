@@ -134,7 +134,7 @@ fn pair_step(c: &mut Criterion) {
 /// the hub turned at a prescribed rate (the driver) and with a free hub (the driven gear); the
 /// whole gear's and the six fine sectors' elements for scale.
 fn reduced_block(c: &mut Criterion) {
-    use geardyn::explicit::reduced::{FrameMotion, ReducedBlock};
+    use geardyn::explicit::reduced::{Cutoff, FrameMotion, ReducedBlock};
     let case = samples::paper36_case();
     let gear = &case.pair.gears[0];
     let mesh = samples::explicit_gear_mesh(&case, 0, (0..6).collect());
@@ -157,7 +157,7 @@ fn reduced_block(c: &mut Criterion) {
         &mesh.bore_nodes,
         &whole.mass,
         &material,
-        80e3,
+        Cutoff::Hz(80e3),
     )
     .unwrap();
     eprintln!(

@@ -12,6 +12,7 @@ use std::path::Path;
 use thiserror::Error;
 
 use crate::explicit::body::ExplicitMaterial;
+use crate::explicit::far::FarBody;
 use crate::explicit::pair::{Ramp, Start};
 use crate::explicit::scene::{FeSettings, FineTeeth, MassScalingMode, Scene, TimeStep};
 use crate::fe::{MassLumping, PlaneState};
@@ -260,6 +261,16 @@ pub struct FeSection {
     /// [`crate::mesh::ToothLayout`].
     #[serde(default = "default_tooth_layout")]
     pub tooth_layout: ToothLayout,
+    /// How a run on windows of fine teeth models each gear's body away from the contact:
+    /// "full" (default: every element in the explicit step) or "reduced" (the coarse sectors
+    /// as one Craig–Bampton block per gear turning with its hub, its fixed-interface modes to
+    /// twelve times its lowest). See [`crate::explicit::far`].
+    #[serde(default)]
+    pub far_body: FarBody,
+    /// A reduced far block's fixed-interface modes kept up to this many times its lowest
+    /// (`fe.far_body = "reduced"`): higher is nearer the full body and costs more a step.
+    #[serde(default = "default_far_block_cutoff")]
+    pub far_block_cutoff: f64,
     /// Contact penalty k_n = penalty_factor · max diag K_e of the master element.
     #[serde(default = "default_penalty_factor")]
     pub penalty_factor: f64,
@@ -311,6 +322,8 @@ impl Default for FeSection {
             time_step: TimeStep::default(),
             fine_teeth: FineTeeth::default(),
             tooth_layout: default_tooth_layout(),
+            far_body: FarBody::default(),
+            far_block_cutoff: default_far_block_cutoff(),
             penalty_factor: default_penalty_factor(),
             mass_lumping: MassLumping::default(),
             high_frequency_damping_ratio: default_high_frequency_damping(),
@@ -332,6 +345,10 @@ fn default_step_factor() -> f64 {
 /// accurate against the converged references on balance (validation/performance, lever 2c).
 fn default_tooth_layout() -> ToothLayout {
     ToothLayout::StableStep
+}
+
+fn default_far_block_cutoff() -> f64 {
+    crate::explicit::far::FAR_BLOCK_CUTOFF
 }
 
 fn default_penalty_factor() -> f64 {
@@ -1053,6 +1070,13 @@ impl Case {
                 "must be in (0, 3]; values above 1 are unstable and only useful to see the failure (default 0.9)",
             ));
         }
+        if !(2.0..=100.0).contains(&fe.far_block_cutoff) {
+            return Err(invalid(
+                "fe.far_block_cutoff",
+                fe.far_block_cutoff.to_string(),
+                "must be in [2, 100] (default 12: a reduced far block's fixed-interface modes to 12 times its lowest; below about 6 the block's own ringing is cut short)",
+            ));
+        }
         if !(fe.penalty_factor > 0.0 && fe.penalty_factor.is_finite()) {
             return Err(invalid(
                 "fe.penalty_factor",
@@ -1220,6 +1244,8 @@ impl Case {
             time_step: fe.time_step,
             fine_teeth: fe.fine_teeth,
             tooth_layout: fe.tooth_layout,
+            far_body: fe.far_body,
+            far_block_cutoff: fe.far_block_cutoff,
             penalty_factor: fe.penalty_factor,
             mass_lumping: fe.mass_lumping,
             high_frequency_damping_ratio: fe.high_frequency_damping_ratio,
@@ -1883,6 +1909,16 @@ mod tests {
         );
         let wrong_type = message("fe.step_factor=fast");
         assert!(wrong_type.contains("step_factor"), "{wrong_type}");
+        let cutoff = message("fe.far_block_cutoff=1.5");
+        assert!(
+            cutoff.contains("fe.far_block_cutoff = 1.5 is invalid") && cutoff.contains("[2, 100]"),
+            "{cutoff}"
+        );
+        let far = message("fe.far_body=reducd");
+        assert!(far.contains("reducd"), "{far}");
+        let reduced = Case::load_with(None, &[set("fe.far_body=reduced")]).unwrap();
+        assert_eq!(reduced.fe.far_body, crate::explicit::far::FarBody::Reduced);
+        assert_eq!(reduced.fe.far_block_cutoff, 12.0);
         let no_scene = message("scene[nowhere].duration_s=1");
         assert!(
             no_scene.contains("nowhere") && no_scene.contains("low-unmodified"),

@@ -7,6 +7,7 @@
 //! ([`scene`]).
 
 pub mod body;
+pub mod far;
 pub mod kicks;
 pub mod lockstep;
 pub mod pair;

@@ -39,14 +39,25 @@
 //! E_kin + E_strain + E_damping + E_contact − W_ext = 0, with E_contact the work done by the
 //! contact forces (penalty springs and friction), W_ext the work of the driver's hub (reactions
 //! on the prescribed bore nodes) and of the load torque; work terms by the trapezoid rule.
+//!
+//! # A reduced far body ([`crate::explicit::far`])
+//! With [`ExplicitPair::reduce_far_bodies`] each gear's coarse sectors are one reduced block
+//! turning with the hub: the step's elements are the fine sectors' only, the block's interface
+//! nodes are placed from its state after each drift and its internal nodes are not stepped.
+//! The block's accelerations follow from the fine elements' forces on its interface: the
+//! driver's hub turns it as prescribed (the hub's torque on it is in the driver's work), the
+//! driven hub and the block are solved together (I_h above is then the bore nodes' inertia,
+//! the block's own comes with it). Its kinetic, strain and damping terms join the account.
 
 use nalgebra::{Point2, Rotation2, Vector2};
 use std::time::Instant;
 
 use crate::contact::{project_on_quadratic_edge, ContactLaw, FrictionState};
 use crate::explicit::body::{ExplicitBody, ExplicitMaterial, ForceOutput};
+use crate::explicit::far::{BlockCache, FarBlock, Lookup};
 use crate::explicit::kicks;
 use crate::explicit::lockstep::Lockstep;
+use crate::explicit::reduced::{BlockScratch, BlockState, BlockSums, FrameMotion};
 use crate::explicit::remesh::NodeTransfer;
 use crate::fe::FeError;
 use crate::geometry::engagement::ToothPair;
@@ -184,6 +195,21 @@ pub struct ExplicitPair {
     /// Per gear, the runs of the other DOFs, which each gear's thread kicks in the force
     /// phase right after its element forces ([`PairIntegrator::step`]).
     body_only_runs: [Vec<std::ops::Range<usize>>; 2],
+    /// Per gear, its far body as a reduced block ([`ExplicitPair::reduce_far_bodies`]).
+    pub far: [Option<FarGear>; 2],
+}
+
+/// A gear whose far body is a reduced block ([`crate::explicit::far`]).
+pub struct FarGear {
+    pub block: FarBlock,
+    /// The fine sectors' elements, the step's (the whole body stays the pair's: its masses,
+    /// its stable step).
+    pub fine: ExplicitBody,
+    /// The runs of DOFs the drift moves: all but the block's internal nodes'.
+    moving_runs: Vec<std::ops::Range<usize>>,
+    /// Per node: not a node of the block's (interface or internal), so its kinetic energy is
+    /// the nodes' and not the block's.
+    counted: Vec<bool>,
 }
 
 /// The DOFs of the nodes `held` (any order, repeats allowed) among `dofs`, ascending, and the
@@ -295,6 +321,10 @@ pub struct PairState {
     /// Driven hub rotation φ from its placement [rad] (negative: the driven gear turns
     /// clockwise), rate and acceleration.
     pub hub: [f64; 3],
+    /// Each gear's far block's state, where it is reduced ([`ExplicitPair::reduce_far_bodies`];
+    /// the block's internal nodes in x and v are then not kept up).
+    #[serde(default)]
+    pub blocks: [Option<BlockState>; 2],
 }
 
 /// Energy account [J].
@@ -462,6 +492,7 @@ impl ExplicitPair {
             penalty_factor,
             held_dofs: [held0, held1],
             body_only_runs: [runs0, runs1],
+            far: [None, None],
         })
     }
 
@@ -469,9 +500,156 @@ impl ExplicitPair {
         self.bodies.iter().map(|b| b.elements.len()).sum()
     }
 
+    /// The elements a step computes: the fine sectors' only where the far body is reduced.
+    pub fn stepped_elements(&self) -> usize {
+        (0..2).map(|g| self.force_body(g).elements.len()).sum()
+    }
+
+    /// The body whose element forces a step computes for gear `g`.
+    fn force_body(&self, g: usize) -> &ExplicitBody {
+        self.far[g]
+            .as_ref()
+            .map_or(&self.bodies[g], |far| &far.fine)
+    }
+
+    /// Each gear's coarse sectors as one reduced block ([`crate::explicit::far`]), from
+    /// `cache` where a block of the same pattern of fine teeth fits; on the masses as they are
+    /// (scale them first). A gear whose teeth are all fine keeps its full body. Fails where a
+    /// flank's node would be the block's.
+    pub fn reduce_far_bodies(&mut self, cache: &mut BlockCache) -> Result<(), FeError> {
+        let lookups: [Lookup; 2] = std::array::from_fn(|g| {
+            let teeth = self.pair.gears[g].teeth() as usize;
+            cache.lookup(g, teeth, &self.meshes[g], &self.bodies[g].mass)
+        });
+
+        // The blocks to build, the two gears' side by side (each a few seconds: its modes).
+        let build = |g: usize| match &lookups[g] {
+            Lookup::Build(request) => {
+                let body = &self.bodies[g];
+                Some(request.build(&self.meshes[g], &body.mass, &body.material, cache.cutoff))
+            }
+            _ => None,
+        };
+        let (built0, built1) = rayon::join(|| build(0), || build(1));
+        let mut built = [built0, built1];
+        let mut blocks: [Option<FarBlock>; 2] = [None, None];
+        for (g, lookup) in lookups.into_iter().enumerate() {
+            blocks[g] = match (lookup, built[g].take()) {
+                (Lookup::Found(block), _) => Some(block),
+                (Lookup::Build(request), Some(block)) => {
+                    Some(cache.insert(request, block?, &self.bodies[g].mass))
+                }
+                _ => None,
+            };
+        }
+        for (g, block) in blocks.into_iter().enumerate() {
+            let Some(block) = block else {
+                continue;
+            };
+            let (mesh, body) = (&self.meshes[g], &self.bodies[g]);
+            let teeth = self.pair.gears[g].teeth() as usize;
+            let nodes = mesh.nodes.len();
+            let mut counted = vec![true; nodes];
+            block
+                .interface
+                .iter()
+                .chain(&block.internal)
+                .for_each(|&n| counted[n] = false);
+            let flank_nodes: Vec<usize> = self
+                .flanks
+                .iter()
+                .filter(|f| f.gear == g)
+                .flat_map(|f| f.nodes.iter().copied())
+                .collect();
+            if let Some(&n) = flank_nodes.iter().find(|&&n| !counted[n]) {
+                return Err(FeError::Remeshing(format!(
+                    "gear {}'s node {n} is on a contact flank and in its far block: the far \
+                     body cannot be reduced on this mesh (fe.far_body = \"full\")",
+                    g + 1
+                )));
+            }
+            let fine_elements: Vec<[usize; 8]> = mesh
+                .elements
+                .iter()
+                .zip(&mesh.element_fine)
+                .filter(|(_, &fine)| fine)
+                .map(|(e, _)| *e)
+                .collect();
+            let fine = ExplicitBody::with_symmetry(
+                &mesh.nodes,
+                &fine_elements,
+                body.material,
+                Some(teeth),
+            )?;
+            let dofs = 2 * nodes;
+            let (_, moving_runs) = split_dofs(dofs, block.internal.iter().copied());
+            let bore = mesh.bore_nodes.iter().copied();
+            let (held, _) = split_dofs(dofs, flank_nodes.iter().copied().chain(bore.clone()));
+            let stepped_apart = flank_nodes
+                .iter()
+                .copied()
+                .chain(bore)
+                .chain(block.interface.iter().copied())
+                .chain(block.internal.iter().copied());
+            let (_, runs) = split_dofs(dofs, stepped_apart);
+            self.held_dofs[g] = held;
+            self.body_only_runs[g] = runs;
+            self.far[g] = Some(FarGear {
+                block,
+                fine,
+                moving_runs,
+                counted,
+            });
+        }
+        Ok(())
+    }
+
+    /// Builds into `cache` gear `g`'s far block of this model's mesh (the model of a window
+    /// whose blocks a checkpoint names: [`crate::explicit::far::BlockSeed`]), leaving the
+    /// model as it is.
+    pub fn seed_far_block(&self, g: usize, cache: &mut BlockCache) -> Result<(), FeError> {
+        let teeth = self.pair.gears[g].teeth() as usize;
+        let (mesh, body) = (&self.meshes[g], &self.bodies[g]);
+        if let Lookup::Build(request) = cache.lookup(g, teeth, mesh, &body.mass) {
+            let block = request.build(mesh, &body.mass, &body.material, cache.cutoff)?;
+            cache.insert(request, block, &body.mass);
+        }
+        Ok(())
+    }
+
+    /// The frame (centre, angle, rate) of gear `g`'s far block with its hub at `motion`
+    /// ([angle, rate, …]).
+    fn block_frame(&self, g: usize, far: &FarGear, motion: [f64; 3]) -> (Point2<f64>, f64, f64) {
+        let placement = &self.placement[g];
+        (
+            placement.centre,
+            far.block.frame_angle(placement.rotation, motion[0]),
+            motion[1],
+        )
+    }
+
+    /// `state` with every far block's nodes written from its block (the step leaves the
+    /// internal nodes where they were): for what reads the whole mesh.
+    pub fn expanded(&self, state: &PairState, driver_motion: [f64; 3]) -> PairState {
+        let mut full = state.clone();
+        for g in 0..2 {
+            if let (Some(far), Some(block)) = (&self.far[g], &state.blocks[g]) {
+                let motion = if g == 0 { driver_motion } else { state.hub };
+                let frame = self.block_frame(g, far, motion);
+                far.block
+                    .expand(block, frame, &mut full.x[g], &mut full.v[g]);
+            }
+        }
+        full
+    }
+
     /// Multiplies every nodal mass and the driven hub's inertia by `factor` (mass scaling): all
     /// natural frequencies, and the stable step's inverse, fall by √factor.
     pub fn scale_mass(&mut self, factor: f64) {
+        assert!(
+            self.far.iter().all(Option::is_none),
+            "masses are scaled before the far bodies are reduced"
+        );
         for g in 0..2 {
             self.bodies[g].mass.iter_mut().for_each(|m| *m *= factor);
             self.inverse_mass[g].iter_mut().for_each(|w| *w /= factor);
@@ -488,6 +666,10 @@ impl ExplicitPair {
     /// the step is made (the steps for an inertia budget: [`ExplicitPair::mass_scaling_steps`]).
     /// Returns each gear's least and largest factor.
     pub fn scale_mass_to_steps(&mut self, steps: [f64; 2]) -> [[f64; 2]; 2] {
+        assert!(
+            self.far.iter().all(Option::is_none),
+            "masses are scaled before the far bodies are reduced"
+        );
         std::array::from_fn(|g| {
             let factors = self.element_mass_factors(g, steps[g]);
             self.bodies[g].set_element_mass_factors(&factors);
@@ -624,6 +806,8 @@ impl ExplicitPair {
             v,
             a: [zeros(0), zeros(1)],
             hub: [hub, rates[1], 0.0],
+            // At rest in the hub frame: the rigid rotation is the frame's.
+            blocks: std::array::from_fn(|g| self.far[g].as_ref().map(|f| f.block.block.rest())),
         }
     }
 
@@ -878,10 +1062,44 @@ impl ExplicitPair {
         a: &mut [f64],
         f: &mut [f64],
     ) -> (ForceOutput, f64) {
-        let out = self.bodies[g].internal_forces(x, v, beta, f);
+        let out = self.force_body(g).internal_forces(x, v, beta, f);
         let w = &self.inverse_mass[g];
         let power = kicks::kick(alpha, half, &self.body_only_runs[g], w, a, v, f);
         (out, power)
+    }
+
+    /// Gear `g`'s far block's step after its element forces `f` (nothing without one): the
+    /// forces on its interface taken into the block frame (and cleared in `f`), the block's
+    /// products at its hub's `motion` ([angle, rate, acceleration]) and damping power; the
+    /// driver's block's accelerations, returning the hub's torque on it [N m] (the driven
+    /// hub's are solved with the hub, [`PairIntegrator::contact_and_hubs`]; 0 returned).
+    fn far_block_forces(
+        &self,
+        g: usize,
+        motion: [f64; 3],
+        beta: f64,
+        f: &mut [f64],
+        block: Option<&mut BlockState>,
+        step: Option<&mut BlockStep>,
+    ) -> f64 {
+        let (Some(far), Some(block), Some(step)) = (&self.far[g], block, step) else {
+            return 0.0;
+        };
+        let (_, angle, rate) = self.block_frame(g, far, motion);
+        far.block
+            .take_interface_force(angle, f, &mut step.interface_force);
+        let reduced = &far.block.block;
+        step.sums = reduced.prepare(block, rate, beta, &step.interface_force, &mut step.scratch);
+        step.damping_power = reduced.damping_power(block, beta);
+        if g == 0 {
+            let frame = FrameMotion {
+                rate,
+                accel: motion[2],
+            };
+            reduced.finish_prescribed(block, &step.sums, frame, &step.scratch)
+        } else {
+            0.0
+        }
     }
 
     /// Empty friction history for [`ExplicitPair::contact_forces`].
@@ -1122,6 +1340,21 @@ pub struct PairIntegrator<'a> {
     balance: [f64; 3],
     /// The contact to the other thread at every step instead ([`Self::alternate_contact_thread`]).
     alternate_contact: bool,
+    /// Per gear with a far block: its step's work space.
+    block_steps: [Option<BlockStep>; 2],
+    /// The driver's hub torque on its far block at the last step and the step before [N m]
+    /// (its work is the driver's).
+    block_torque: f64,
+    old_block_torque: f64,
+}
+
+/// A far block's step work space: the products' scratch, the interface forces in the block
+/// frame, what its prepared step leaves for the hub and its damping power [W].
+struct BlockStep {
+    scratch: BlockScratch,
+    interface_force: Vec<f64>,
+    sums: BlockSums,
+    damping_power: f64,
 }
 
 /// A `Vector2` as `[x, y]` in a checkpoint.
@@ -1220,6 +1453,9 @@ pub struct IntegratorCheckpoint {
     old_reaction: Vec<f64>,
     searched: [Vec<bool>; 2],
     old_bore_x: Vec<f64>,
+    /// The driver's hub torque on its far block (absent from older checkpoints: zero).
+    #[serde(default)]
+    block_torque: f64,
 }
 
 impl PairState {
@@ -1240,6 +1476,10 @@ impl PairState {
             v: std::array::from_fn(|g| transfers[g].apply(&self.v[g], 2)),
             a: std::array::from_fn(|g| vec![0.0; transfers[g].sources.len() * 2]),
             hub: self.hub,
+            // Projected from x and v on the new mesh's blocks by
+            // [`PairIntegrator::settle_remeshed`] (expand the old ones first:
+            // [`ExplicitPair::expanded`]).
+            blocks: [None, None],
         }
     }
 }
@@ -1339,6 +1579,8 @@ impl IntegratorCheckpoint {
             old_reaction: vec![0.0; bore],
             searched: [flags(&self.searched[0]), flags(&self.searched[1])],
             old_bore_x: vec![0.0; bore],
+            // With the reactions, by [`PairIntegrator::settle_remeshed`].
+            block_torque: 0.0,
         })
     }
 
@@ -1373,6 +1615,7 @@ impl<'a> PairIntegrator<'a> {
             old_reaction: self.old_reaction.clone(),
             searched: self.searched.clone(),
             old_bore_x: self.old_bore_x.clone(),
+            block_torque: self.block_torque,
         }
     }
 
@@ -1401,6 +1644,7 @@ impl<'a> PairIntegrator<'a> {
             old_reaction,
             searched,
             old_bore_x,
+            block_torque,
         } = checkpoint;
         self.energy = energy;
         self.phase_wall = phase_wall;
@@ -1413,6 +1657,7 @@ impl<'a> PairIntegrator<'a> {
         self.old_reaction = old_reaction;
         self.searched = searched;
         self.old_bore_x = old_bore_x;
+        self.block_torque = block_torque;
         Ok(())
     }
 
@@ -1453,6 +1698,19 @@ impl<'a> PairIntegrator<'a> {
             ),
             balance: [0.0; 3],
             alternate_contact: false,
+            block_steps: std::array::from_fn(|g| {
+                model.far[g].as_ref().map(|far| {
+                    let block = &far.block.block;
+                    BlockStep {
+                        scratch: block.scratch(),
+                        interface_force: vec![0.0; block.interface_dofs()],
+                        sums: BlockSums::default(),
+                        damping_power: 0.0,
+                    }
+                })
+            }),
+            block_torque: 0.0,
+            old_block_torque: 0.0,
         }
     }
 
@@ -1469,25 +1727,57 @@ impl<'a> PairIntegrator<'a> {
     }
 
     /// The first phase of a step, per gear and in parallel: the drift x += Δt v after the half
-    /// kick v += ½Δt a (skipped with `dt` = None), the hub motion of the bore nodes, and the
+    /// kick v += ½Δt a (skipped with `dt` = None; a far block's nodes by the block's drift,
+    /// its interface nodes then placed from it), the hub motion of the bore nodes, and the
     /// held DOFs' velocities copied for the contact.
     fn drift(&mut self, state: &mut PairState, dt: Option<f64>, bore: [[f64; 3]; 2]) {
         let model = self.model;
         let [x0, x1] = &mut state.x;
         let [v0, v1] = &mut state.v;
         let [a0, a1] = &mut state.a;
+        let [b0, b1] = &mut state.blocks;
+        let [s0, s1] = &mut self.block_steps;
         let [c0, c1] = &mut self.contact_velocity;
-        let gear = |g: usize, x: &mut [f64], v: &mut [f64], a: &mut [f64], held_v: &mut [f64]| {
-            if let Some(dt) = dt {
-                kicks::drift(dt, x, v, a);
+        let gear = |g: usize,
+                    (x, v, a): (&mut [f64], &mut [f64], &mut [f64]),
+                    held_v: &mut [f64],
+                    block: Option<&mut BlockState>,
+                    step: Option<&mut BlockStep>| {
+            match (&model.far[g], block, step) {
+                (Some(far), Some(block), Some(step)) => {
+                    if let Some(dt) = dt {
+                        for r in &far.moving_runs {
+                            let r = r.clone();
+                            kicks::drift(dt, &mut x[r.clone()], &mut v[r.clone()], &a[r]);
+                        }
+                        block.drift(dt);
+                    }
+                    let reduced = &far.block.block;
+                    reduced.interface_motion(block, &mut step.scratch);
+                    let scratch = &step.scratch;
+                    far.block.place_interface(
+                        model.block_frame(g, far, bore[g]),
+                        (scratch.interface_displacement(), scratch.interface_rate()),
+                        x,
+                        v,
+                    );
+                }
+                (Some(_), _, _) => panic!("a far block without its state"),
+                (None, _, _) => {
+                    if let Some(dt) = dt {
+                        kicks::drift(dt, x, v, a);
+                    }
+                }
             }
             model.place_bore(g, x, v, a, bore[g]);
             for &d in &model.held_dofs[g] {
                 held_v[d] = v[d];
             }
         };
-        self.lockstep
-            .join(|| gear(0, x0, v0, a0, c0), || gear(1, x1, v1, a1, c1));
+        self.lockstep.join(
+            || gear(0, (x0, v0, a0), c0, b0.as_mut(), s0.as_mut()),
+            || gear(1, (x1, v1, a1), c1, b1.as_mut(), s1.as_mut()),
+        );
     }
 
     /// The middle phase, on both threads at once: the contact forces (into `contact_force`,
@@ -1503,12 +1793,17 @@ impl<'a> PairIntegrator<'a> {
     /// between the threads to balance them gained nothing (validation/performance): its nodes'
     /// cache lines then move between the cores at every step.
     ///
+    /// A far block's step follows its gear's element forces on the same thread (the fine
+    /// elements' forces on its interface are its load; [`ExplicitPair::far_block_forces`]),
+    /// with the hubs' `frames` ([angle, rate, acceleration] of the driver and the driven hub).
+    ///
     /// Returns the bodies' forces and energies, the mass damping's power in the kicked DOFs,
     /// and the phase's times [s]: the contact's, each gear's element forces and kick.
     fn contact_and_body_forces(
         &mut self,
         state: &mut PairState,
         half: f64,
+        frames: [[f64; 3]; 2],
     ) -> ([ForceOutput; 2], f64, [f64; 3]) {
         let PairIntegrator {
             model,
@@ -1526,18 +1821,28 @@ impl<'a> PairIntegrator<'a> {
             lockstep,
             contact_beside,
             contact_velocity,
+            block_steps,
+            block_torque,
             ..
         } = self;
         let (model, dt, beta, alpha) = (*model, *dt, *beta_k, *mass_damping);
         let [f0, f1] = force;
-        let PairState { x, v, a, .. } = state;
+        let PairState {
+            x, v, a, blocks, ..
+        } = state;
         let [v0, v1] = v;
         let [a0, a1] = a;
+        let [b0, b1] = blocks;
+        let [s0, s1] = block_steps;
         let x: [&[f64]; 2] = [&x[0], &x[1]];
-        let forces = |g: usize, f: &mut [f64], v: &mut [f64], a: &mut [f64]| {
+        let forces = |g: usize,
+                      (f, v, a): (&mut [f64], &mut [f64], &mut [f64]),
+                      block: Option<&mut BlockState>,
+                      step: Option<&mut BlockStep>| {
             let started = Instant::now();
             let (out, power) = model.body_forces_and_kick(g, (beta, alpha, half), x[g], v, a, f);
-            (out, power, started.elapsed().as_secs_f64())
+            let torque = model.far_block_forces(g, frames[g], beta, f, block, step);
+            (out, power, torque, started.elapsed().as_secs_f64())
         };
         let held_v: [&[f64]; 2] = [&contact_velocity[0], &contact_velocity[1]];
         let mut contact = || {
@@ -1557,19 +1862,16 @@ impl<'a> PairIntegrator<'a> {
             searched[1].copy_from_slice(&last_contact.searched);
             started.elapsed().as_secs_f64()
         };
-        let ((o0, p0, t0), (o1, p1, t1), t_contact) = if *contact_beside == 0 {
-            let ((c, b0), b1) = lockstep.join(
-                || (contact(), forces(0, f0, v0, a0)),
-                || forces(1, f1, v1, a1),
-            );
-            (b0, b1, c)
+        let mut gear0 = || forces(0, (f0, v0, a0), b0.as_mut(), s0.as_mut());
+        let mut gear1 = || forces(1, (f1, v1, a1), b1.as_mut(), s1.as_mut());
+        let ((o0, p0, torque, t0), (o1, p1, _, t1), t_contact) = if *contact_beside == 0 {
+            let ((c, g0), g1) = lockstep.join(|| (contact(), gear0()), gear1);
+            (g0, g1, c)
         } else {
-            let (b0, (c, b1)) = lockstep.join(
-                || forces(0, f0, v0, a0),
-                || (contact(), forces(1, f1, v1, a1)),
-            );
-            (b0, b1, c)
+            let (g0, (c, g1)) = lockstep.join(gear0, || (contact(), gear1()));
+            (g0, g1, c)
         };
+        *block_torque = torque;
         ([o0, o1], p0 + p1, [t_contact, t0, t1])
     }
 
@@ -1636,7 +1938,28 @@ impl<'a> PairIntegrator<'a> {
         };
         moment += mesh_torque;
         let alpha = self.mass_damping;
-        state.hub[2] = moment / model.hub_inertia - alpha * state.hub[1];
+        assert!(
+            alpha == 0.0 || model.far.iter().all(Option::is_none),
+            "mass damping (dynamic relaxation) on a reduced far body"
+        );
+        state.hub[2] = match (
+            &model.far[1],
+            state.blocks[1].as_mut(),
+            &self.block_steps[1],
+        ) {
+            (Some(far), Some(block), Some(step)) => {
+                // The hub and its block solved together.
+                far.block.block.finish_free(
+                    block,
+                    &step.sums,
+                    model.hub_inertia,
+                    state.hub[1],
+                    moment,
+                    &step.scratch,
+                )
+            }
+            _ => moment / model.hub_inertia - alpha * state.hub[1],
+        };
         // Driver reactions: what the hub must apply so the bore nodes follow their path (their
         // prescribed accelerations are in state.a from place_bore).
         for (i, &n) in model.meshes[0].bore_nodes.iter().enumerate() {
@@ -1662,18 +1985,26 @@ impl<'a> PairIntegrator<'a> {
         let [v0, v1] = &mut state.v;
         let [a0, a1] = &mut state.a;
         let [f0, f1] = &mut self.force;
-        let gear = |g: usize, x: &mut [f64], v: &mut [f64], a: &mut [f64], f: &mut [f64]| {
+        let [b0, b1] = &mut state.blocks;
+        let gear = |g: usize,
+                    (x, v, a): (&mut [f64], &mut [f64], &mut [f64]),
+                    f: &mut [f64],
+                    block: Option<&mut BlockState>| {
             let w = &model.inverse_mass[g];
             let mut power = 0.0;
             for &d in &model.held_dofs[g] {
                 power += kicks::kick_one(alpha, half, w[d], &mut a[d], &mut v[d], &mut f[d]);
             }
+            if let Some(block) = block {
+                block.kick(half);
+            }
             model.place_bore(g, x, v, a, bore[g]);
             power
         };
-        let (p0, p1) = self
-            .lockstep
-            .join(|| gear(0, x0, v0, a0, f0), || gear(1, x1, v1, a1, f1));
+        let (p0, p1) = self.lockstep.join(
+            || gear(0, (x0, v0, a0), f0, b0.as_mut()),
+            || gear(1, (x1, v1, a1), f1, b1.as_mut()),
+        );
         p0 + p1
     }
 
@@ -1681,11 +2012,13 @@ impl<'a> PairIntegrator<'a> {
     pub fn initialize(&mut self, state: &mut PairState) {
         let (theta, rate, accel) = self.drive.driver_motion(state.time);
         let [phi, phi_rate, _] = state.hub;
-        self.drift(state, None, [[theta, rate, accel], [phi, phi_rate, 0.0]]);
-        let (body, _, _) = self.contact_and_body_forces(state, 0.0);
+        let frames = [[theta, rate, accel], [phi, phi_rate, 0.0]];
+        self.drift(state, None, frames);
+        let (body, _, _) = self.contact_and_body_forces(state, 0.0, frames);
         self.contact_and_hubs(state);
         self.kick_held(state, None, [[theta, rate, accel], state.hub]);
-        self.energy.strain = body[0].strain_energy + body[1].strain_energy;
+        self.energy.strain =
+            body[0].strain_energy + body[1].strain_energy + self.block_strain(state);
         self.energy.kinetic = self.kinetic(state);
         // A start at speed: the initial kinetic energy is work done on the pair before t = 0.
         self.energy.external_work = self.energy.kinetic + self.energy.strain;
@@ -1701,37 +2034,82 @@ impl<'a> PairIntegrator<'a> {
     pub fn settle_remeshed(&mut self, state: &mut PairState) -> f64 {
         let before = self.energy.kinetic + self.energy.strain;
         let (theta, rate, accel) = self.drive.driver_motion(state.time);
-        self.drift(state, None, [[theta, rate, accel], state.hub]);
         let (model, beta, alpha) = (self.model, self.beta_k, self.mass_damping);
+        let frames = [[theta, rate, accel], state.hub];
+        // The carried nodes onto this mesh's far blocks.
+        for (g, frame) in frames.iter().enumerate() {
+            if let (Some(far), None) = (&model.far[g], &state.blocks[g]) {
+                let frame = model.block_frame(g, far, *frame);
+                state.blocks[g] = Some(far.block.project(frame, &state.x[g], &state.v[g]));
+            }
+        }
+        self.drift(state, None, frames);
         let [f0, f1] = &mut self.force;
-        let PairState { x, v, a, .. } = &mut *state;
+        let [s0, s1] = &mut self.block_steps;
+        let PairState {
+            x, v, a, blocks, ..
+        } = &mut *state;
         let [v0, v1] = v;
         let [a0, a1] = a;
-        let gear = |g: usize, f: &mut [f64], v: &mut [f64], a: &mut [f64]| {
-            model
+        let [b0, b1] = blocks;
+        let gear = |g: usize,
+                    (f, v, a): (&mut [f64], &mut [f64], &mut [f64]),
+                    block: Option<&mut BlockState>,
+                    step: Option<&mut BlockStep>| {
+            let out = model
                 .body_forces_and_kick(g, (beta, alpha, 0.0), &x[g], v, a, f)
-                .0
+                .0;
+            let torque = model.far_block_forces(g, frames[g], beta, f, block, step);
+            (out, torque)
         };
-        let (o0, o1) = self
-            .lockstep
-            .join(|| gear(0, f0, v0, a0), || gear(1, f1, v1, a1));
+        let ((o0, torque), (o1, _)) = self.lockstep.join(
+            || gear(0, (f0, v0, a0), b0.as_mut(), s0.as_mut()),
+            || gear(1, (f1, v1, a1), b1.as_mut(), s1.as_mut()),
+        );
+        self.block_torque = torque;
         self.contact_and_hubs(state);
         self.kick_held(state, None, [[theta, rate, accel], state.hub]);
-        self.energy.strain = o0.strain_energy + o1.strain_energy;
+        self.energy.strain = o0.strain_energy + o1.strain_energy + self.block_strain(state);
         self.energy.kinetic = self.kinetic(state);
         let added = self.energy.kinetic + self.energy.strain - before;
         self.energy.remeshing += added;
         added
     }
 
+    /// The nodes' kinetic energy, a far block's nodes' from the block ([`ReducedBlock`]'s
+    /// T, turning with its hub).
+    ///
+    /// [`ReducedBlock`]: crate::explicit::reduced::ReducedBlock
     fn kinetic(&self, state: &PairState) -> f64 {
+        let model = self.model;
+        let (_, driver_rate, _) = self.drive.driver_motion(state.time);
         (0..2)
             .map(|g| {
-                state.v[g]
-                    .iter()
-                    .enumerate()
-                    .map(|(d, v)| 0.5 * self.model.bodies[g].mass[d / 2] * v * v)
-                    .sum::<f64>()
+                let mass = &model.bodies[g].mass;
+                let node = |(d, v): (usize, &f64)| 0.5 * mass[d / 2] * v * v;
+                match (&model.far[g], &state.blocks[g]) {
+                    (Some(far), Some(block)) => {
+                        let rate = if g == 0 { driver_rate } else { state.hub[1] };
+                        let nodes: f64 = state.v[g]
+                            .iter()
+                            .enumerate()
+                            .filter(|(d, _)| far.counted[d / 2])
+                            .map(node)
+                            .sum();
+                        nodes + far.block.block.kinetic_energy(block, rate)
+                    }
+                    _ => state.v[g].iter().enumerate().map(node).sum::<f64>(),
+                }
+            })
+            .sum()
+    }
+
+    /// The far blocks' strain energy [J].
+    fn block_strain(&self, state: &PairState) -> f64 {
+        (0..2)
+            .filter_map(|g| {
+                let (far, block) = (self.model.far[g].as_ref()?, state.blocks[g].as_ref()?);
+                Some(far.block.block.strain_energy(block))
             })
             .sum()
     }
@@ -1763,6 +2141,7 @@ impl<'a> PairIntegrator<'a> {
             self.old_bore_x[2 * i + 1] = state.x[0][2 * n + 1];
         }
         self.old_reaction.copy_from_slice(&self.driver_reaction);
+        self.old_block_torque = self.block_torque;
         let (old_phi, old_torque) = (state.hub[0], self.drive.load_torque_at(state.time));
         let (old_theta, _, _) = self.drive.driver_motion(state.time);
         state.time += dt;
@@ -1771,10 +2150,11 @@ impl<'a> PairIntegrator<'a> {
         state.hub[0] += dt * state.hub[1];
         // Half kick and drift on every DOF, then the hubs set the bore DOFs.
         let phase = Instant::now();
-        self.drift(state, Some(dt), [[theta, rate, accel], state.hub]);
+        let frames = [[theta, rate, accel], state.hub];
+        self.drift(state, Some(dt), frames);
         self.phase_wall.drift_s += phase.elapsed().as_secs_f64();
         let phase = Instant::now();
-        let (body, body_node_power, times) = self.contact_and_body_forces(state, 0.5 * dt);
+        let (body, body_node_power, times) = self.contact_and_body_forces(state, 0.5 * dt, frames);
         self.book_force_phase(phase.elapsed().as_secs_f64(), times);
         let hub_power = self.contact_and_hubs(state);
         state.hub[1] += 0.5 * dt * state.hub[2];
@@ -1782,8 +2162,15 @@ impl<'a> PairIntegrator<'a> {
         let node_power =
             body_node_power + self.kick_held(state, Some(dt), [[theta, rate, accel], state.hub]);
         self.phase_wall.accelerate_s += phase.elapsed().as_secs_f64();
-        let strain = body[0].strain_energy + body[1].strain_energy;
-        let damping_power = body[0].damping_power + body[1].damping_power + hub_power + node_power;
+        let strain = body[0].strain_energy + body[1].strain_energy + self.block_strain(state);
+        let block_damping: f64 = self
+            .block_steps
+            .iter()
+            .flatten()
+            .map(|s| s.damping_power)
+            .sum();
+        let damping_power =
+            body[0].damping_power + body[1].damping_power + block_damping + hub_power + node_power;
         // Work: driver reactions, load torque, contact forces (trapezoid).
         let mut work = 0.0;
         for (i, &n) in model.meshes[0].bore_nodes.iter().enumerate() {
@@ -1792,6 +2179,8 @@ impl<'a> PairIntegrator<'a> {
                 work += 0.5 * (self.old_reaction[2 * i + c] + self.driver_reaction[2 * i + c]) * dx;
             }
         }
+        // The driver's hub turning its far block.
+        work += 0.5 * (self.old_block_torque + self.block_torque) * (theta - old_theta);
         let mean_torque = 0.5 * (old_torque + self.drive.load_torque_at(state.time));
         work += mean_torque * (state.hub[0] - old_phi);
         let transmitted = (mean_torque * model.kinematic_hub_rotation(theta - old_theta)).abs();
@@ -1837,6 +2226,16 @@ impl<'a> PairIntegrator<'a> {
     /// this contact state; [`ExplicitPair::contact_critical_step`] bounds every state.
     pub fn coupled_critical_step(&self, state: &PairState, iterations: usize) -> f64 {
         let model = self.model;
+        // The whole bodies at the far blocks' state (the reduced blocks, Rayleigh–Ritz models
+        // of theirs, hold no higher frequency).
+        let expanded;
+        let state = if model.far.iter().any(Option::is_some) {
+            let (theta, rate, accel) = self.drive.driver_motion(state.time);
+            expanded = model.expanded(state, [theta, rate, accel]);
+            &expanded
+        } else {
+            state
+        };
         let inv_sqrt_m: [Vec<f64>; 2] =
             std::array::from_fn(|g| model.inverse_mass[g].iter().map(|w| w.sqrt()).collect());
         let mut probe = state.clone();

@@ -60,13 +60,13 @@
 //! (six fine teeth) the block is 1 440 of the 2 046 elements and 4 716 nodes, its interface
 //! the two radial edges beside the fine sectors (48 nodes), and an 80 kHz cutoff keeps 45
 //! modes: 143 reduced DOFs, built in about 2 s. Checked against the full block and the full
-//! explicit body in the tests below; not yet wired into the explicit pair (issue 31's next
-//! lever, validation/performance).
+//! explicit body in the tests below; in the explicit pair's step through
+//! [`crate::explicit::far`] (`fe.far_body = "reduced"`).
 
 use nalgebra::{Cholesky, DMatrix, DVector, Point2};
 
 use crate::fe::assembly::{stiffness_triplets, symmetric_product, FactorizedStiffness, FeError};
-use crate::fe::modal::lowest_modes;
+use crate::fe::modal::{lane_dot as dot, lowest_modes};
 use crate::fe::q8::elasticity_matrix;
 
 use super::body::ExplicitMaterial;
@@ -209,23 +209,6 @@ fn modal_products(
     product_twice(gyroscopic, rates, (g_rate, g_eta));
 }
 
-/// Σ a_k b_k in eight lanes (a fixed order of the sums, the same bits on every vector unit).
-#[inline(always)]
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let mut lanes = [0.0; 8];
-    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
-    let (ra, rb) = (ca.remainder(), cb.remainder());
-    for (x, y) in ca.zip(cb) {
-        for l in 0..8 {
-            lanes[l] += x[l] * y[l];
-        }
-    }
-    for (l, (x, y)) in ra.iter().zip(rb).enumerate() {
-        lanes[l] += x * y;
-    }
-    lanes.iter().sum()
-}
-
 /// The elements `in_block` and the others, each in the mesh's order.
 pub fn split_elements(
     elements: &[[usize; 8]],
@@ -235,6 +218,42 @@ pub fn split_elements(
     let (block, rest): (Vec<_>, Vec<_>) = elements.iter().zip(in_block).partition(|(_, &b)| b);
     let strip = |v: Vec<(&[usize; 8], &bool)>| v.into_iter().map(|(e, _)| *e).collect();
     (strip(block), strip(rest))
+}
+
+/// A block's nodes in a mesh, each list ascending.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct BlockNodes {
+    /// Nodes of the block's elements among the mesh's held nodes (the bore).
+    pub held: Vec<usize>,
+    /// The other nodes the block shares with the rest of the mesh.
+    pub interface: Vec<usize>,
+    /// The nodes of the block's elements only.
+    pub internal: Vec<usize>,
+}
+
+impl BlockNodes {
+    /// The nodes of the elements `in_block` of a mesh of `nodes` nodes whose nodes `held` ride
+    /// on the hub.
+    pub fn of(nodes: usize, elements: &[[usize; 8]], in_block: &[bool], held: &[usize]) -> Self {
+        let mut block_node = vec![false; nodes];
+        let mut outside_node = vec![false; nodes];
+        for (e, &b) in elements.iter().zip(in_block) {
+            let mark = if b {
+                &mut block_node
+            } else {
+                &mut outside_node
+            };
+            e.iter().for_each(|&i| mark[i] = true);
+        }
+        let mut is_held = vec![false; nodes];
+        held.iter().for_each(|&i| is_held[i] = true);
+        let pick = |keep: &dyn Fn(usize) -> bool| (0..nodes).filter(|&i| keep(i)).collect();
+        BlockNodes {
+            held: pick(&|i| block_node[i] && is_held[i]),
+            interface: pick(&|i| block_node[i] && outside_node[i] && !is_held[i]),
+            internal: pick(&|i| block_node[i] && !outside_node[i] && !is_held[i]),
+        }
+    }
 }
 
 /// A block of a gear body reduced to its interface DOFs, fixed-interface modes and residual
@@ -279,11 +298,33 @@ pub struct ReducedBlock {
 }
 
 /// The block's state in the reduced block's own modal coordinates η (z = V η): η, η̇, η̈.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct BlockState {
     pub eta: Vec<f64>,
     pub rate: Vec<f64>,
     pub accel: Vec<f64>,
+}
+
+impl BlockState {
+    /// The drift of a central-difference step: η̇ += ½Δt η̈, η += Δt η̇.
+    pub fn drift(&mut self, dt: f64) {
+        for ((e, r), a) in self
+            .eta
+            .iter_mut()
+            .zip(self.rate.iter_mut())
+            .zip(&self.accel)
+        {
+            *r += 0.5 * dt * a;
+            *e += dt * *r;
+        }
+    }
+
+    /// The closing kick η̇ += `half` η̈ (`half` = ½Δt).
+    pub fn kick(&mut self, half: f64) {
+        for (r, a) in self.rate.iter_mut().zip(&self.accel) {
+            *r += half * a;
+        }
+    }
 }
 
 /// Work space of [`ReducedBlock`]'s step ([`ReducedBlock::scratch`]).
@@ -310,6 +351,21 @@ impl BlockScratch {
     }
 }
 
+/// What [`ReducedBlock::prepare`] leaves for the hub's equation: I(η), s·y, s·s,
+/// (m̂ + η)·η̇ and the interface forces' moment τ_b.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct BlockSums([f64; 5]);
+
+/// Where the fixed-interface modes kept stop.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Cutoff {
+    /// At a frequency [Hz].
+    Hz(f64),
+    /// At this many times the block's lowest fixed-interface mode: a stiffer block keeps its
+    /// modes to a higher frequency (module doc).
+    LowestModeTimes(f64),
+}
+
 /// The hub frame's motion: rate ω [rad/s] and angular acceleration ω̇ [rad/s²].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FrameMotion {
@@ -320,7 +376,7 @@ pub struct FrameMotion {
 impl ReducedBlock {
     /// Reduces the elements `in_block` of the mesh (`nodes` in the hub frame, centre at the
     /// origin; `elements`), whose nodes in `held` ride on the hub, with the nodal masses `mass`
-    /// (one per node, of the whole mesh), keeping the fixed-interface modes up to `cutoff_hz`.
+    /// (one per node, of the whole mesh), keeping the fixed-interface modes up to `cutoff`.
     pub fn new(
         nodes: &[Point2<f64>],
         elements: &[[usize; 8]],
@@ -328,7 +384,7 @@ impl ReducedBlock {
         held: &[usize],
         mass: &[f64],
         material: &ExplicitMaterial,
-        cutoff_hz: f64,
+        cutoff: Cutoff,
     ) -> Result<Self, FeError> {
         assert_eq!(in_block.len(), elements.len(), "one flag per element");
         assert_eq!(mass.len(), nodes.len(), "one mass per node");
@@ -337,25 +393,11 @@ impl ReducedBlock {
             "a block and a rest of the mesh"
         );
         let n = nodes.len();
-        let mut block_node = vec![false; n];
-        let mut outside_node = vec![false; n];
-        for (e, &b) in elements.iter().zip(in_block) {
-            let mark = if b {
-                &mut block_node
-            } else {
-                &mut outside_node
-            };
-            e.iter().for_each(|&i| mark[i] = true);
-        }
-        let mut is_held = vec![false; n];
-        held.iter().for_each(|&i| is_held[i] = true);
-        let held: Vec<usize> = (0..n).filter(|&i| block_node[i] && is_held[i]).collect();
-        let interface: Vec<usize> = (0..n)
-            .filter(|&i| block_node[i] && outside_node[i] && !is_held[i])
-            .collect();
-        let internal: Vec<usize> = (0..n)
-            .filter(|&i| block_node[i] && !outside_node[i] && !is_held[i])
-            .collect();
+        let BlockNodes {
+            held,
+            interface,
+            internal,
+        } = BlockNodes::of(n, elements, in_block, held);
         let (block_elements, _) = split_elements(elements, in_block);
         let d = elasticity_matrix(
             material.youngs_modulus,
@@ -385,14 +427,26 @@ impl ReducedBlock {
         let internal_mass: Vec<f64> = internal.iter().map(|&i| mass[i]).collect();
         let mass_triplets: Vec<(usize, usize, f64)> =
             (0..ni).map(|k| (k, k, internal_mass[k / 2])).collect();
-        let target = (std::f64::consts::TAU * cutoff_hz).powi(2);
         let mut count = 16.min(ni);
+        let mut target = f64::INFINITY;
         let modes = loop {
             let modes = lowest_modes(ni, &internal_stiffness, &mass_triplets, count, 0.0)?;
-            if count == ni || modes.last().is_some_and(|m| m.eigenvalue > target) {
+            target = match cutoff {
+                Cutoff::Hz(hz) => (std::f64::consts::TAU * hz).powi(2),
+                Cutoff::LowestModeTimes(k) => modes
+                    .first()
+                    .map_or(target, |lowest| k * k * lowest.eigenvalue),
+            };
+            let last = modes.last().map_or(0.0, |m| m.eigenvalue);
+            if count == ni || last > target {
                 break modes;
             }
-            count = (2 * count).min(ni);
+            // Weyl: a plane body's count of modes below λ grows as λ, so one more solve with
+            // a quarter to spare instead of doubling from here.
+            let expected = 1.25 * count as f64 * target / last.max(f64::MIN_POSITIVE);
+            count = (expected.min(ni as f64).ceil() as usize)
+                .max(2 * count)
+                .min(ni);
         };
         let modes: Vec<_> = modes
             .into_iter()
@@ -453,95 +507,79 @@ impl ReducedBlock {
         let dofs = columns.len();
         let basis_internal = DMatrix::from_columns(&columns);
 
-        // T's columns on the mesh's DOFs, for Tᵀ K T.
-        let full = |j: usize| {
-            let mut t = vec![0.0; 2 * n];
-            if j < nb {
-                t[2 * interface[j / 2] + j % 2] = 1.0;
-            }
-            for (k, &node) in internal.iter().enumerate() {
-                t[2 * node] = basis_internal[(2 * k, j)];
-                t[2 * node + 1] = basis_internal[(2 * k + 1, j)];
-            }
-            t
-        };
-        let t_full: Vec<Vec<f64>> = (0..dofs).map(full).collect();
-        let k_t: Vec<Vec<f64>> = t_full
-            .iter()
-            .map(|t| symmetric_product(&stiffness, t))
-            .collect();
-        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
-        let mut reduced_stiffness = DMatrix::from_fn(dofs, dofs, |a, b| dot(&t_full[a], &k_t[b]));
-        // Exactly symmetric (the two triangles differ by round-off).
-        reduced_stiffness = (&reduced_stiffness + reduced_stiffness.transpose()) * 0.5;
-
-        // Mass-weighted sums over the interface and internal nodes of T's node vectors.
+        // T on the block's interface and internal DOFs (x and y of each node, the interface
+        // nodes first): the identity on the interface, the internal rows below.
         let interface_mass: Vec<f64> = interface.iter().map(|&i| mass[i]).collect();
         let interface_reference: Vec<Point2<f64>> = interface.iter().map(|&i| nodes[i]).collect();
         let internal_reference: Vec<Point2<f64>> = internal.iter().map(|&i| nodes[i]).collect();
-        let node_vector = |j: usize, node: usize| -> [f64; 2] {
-            // node indexes interface nodes first, then internal ones.
-            if node < interface.len() {
-                let on = |c: usize| f64::from(u8::from(j == 2 * node + c));
-                [on(0), on(1)]
-            } else {
-                let k = node - interface.len();
-                [basis_internal[(2 * k, j)], basis_internal[(2 * k + 1, j)]]
+        let block_dofs: Vec<usize> = interface
+            .iter()
+            .chain(&internal)
+            .flat_map(|&i| [2 * i, 2 * i + 1])
+            .collect();
+        let rows = block_dofs.len();
+        let mut t = DMatrix::zeros(rows, dofs);
+        for j in 0..nb {
+            t[(j, j)] = 1.0;
+        }
+        t.rows_mut(nb, ni).copy_from(&basis_internal);
+        // K T column by column on the mesh's DOFs, gathered onto the block's: Tᵀ K T.
+        let mut k_t = DMatrix::zeros(rows, dofs);
+        let mut column = vec![0.0; 2 * n];
+        for j in 0..dofs {
+            for (r, &d) in block_dofs.iter().enumerate() {
+                column[d] = t[(r, j)];
             }
-        };
-        let nodes_all = interface.len() + internal.len();
-        let node_mass = |node: usize| {
+            let product = symmetric_product(&stiffness, &column);
+            for (r, &d) in block_dofs.iter().enumerate() {
+                k_t[(r, j)] = product[d];
+            }
+        }
+        let mut reduced_stiffness = t.transpose() * &k_t;
+        // Exactly symmetric (the two triangles differ by round-off).
+        reduced_stiffness = (&reduced_stiffness + reduced_stiffness.transpose()) * 0.5;
+
+        // Mass-weighted sums over the block's nodes: M T, M J T (J turns each node's vector by
+        // +90°), M X and M J X.
+        let weight = |r: usize| {
+            let node = r / 2;
             if node < interface.len() {
                 interface_mass[node]
             } else {
                 internal_mass[node - interface.len()]
             }
         };
-        let node_reference = |node: usize| {
+        let reference = |r: usize| {
+            let node = r / 2;
             if node < interface.len() {
                 interface_reference[node]
             } else {
                 internal_reference[node - interface.len()]
             }
         };
-        let vectors: Vec<Vec<[f64; 2]>> = (0..dofs)
-            .map(|j| (0..nodes_all).map(|node| node_vector(j, node)).collect())
-            .collect();
-        let mut reduced_mass = DMatrix::zeros(dofs, dofs);
-        let mut gyroscopic = DMatrix::zeros(dofs, dofs);
-        for a in 0..dofs {
-            for b in 0..dofs {
-                let (mut m, mut g) = (0.0, 0.0);
-                for (node, (ta, tb)) in vectors[a].iter().zip(&vectors[b]).enumerate() {
-                    let w = node_mass(node);
-                    m += w * (ta[0] * tb[0] + ta[1] * tb[1]);
-                    // t_a · J t_b
-                    g += w * (-ta[0] * tb[1] + ta[1] * tb[0]);
+        let m_t = DMatrix::from_fn(rows, dofs, |r, j| weight(r) * t[(r, j)]);
+        let m_j_t = DMatrix::from_fn(rows, dofs, |r, j| {
+            weight(r)
+                * if r % 2 == 0 {
+                    -t[(r + 1, j)]
+                } else {
+                    t[(r - 1, j)]
                 }
-                reduced_mass[(a, b)] = m;
-                gyroscopic[(a, b)] = g;
-            }
-        }
+        });
+        let m_x = DVector::from_fn(rows, |r, _| weight(r) * reference(r)[r % 2]);
+        let m_j_x = DVector::from_fn(rows, |r, _| {
+            let p = reference(r);
+            weight(r) * if r % 2 == 0 { -p.y } else { p.x }
+        });
+        let mut reduced_mass = t.transpose() * &m_t;
+        let mut gyroscopic = t.transpose() * &m_j_t;
         reduced_mass = (&reduced_mass + reduced_mass.transpose()) * 0.5;
         gyroscopic = (&gyroscopic - gyroscopic.transpose()) * 0.5;
-        let turning_reference = DVector::from_fn(dofs, |a, _| {
-            (0..nodes_all)
-                .map(|node| {
-                    let (t, p) = (vectors[a][node], node_reference(node));
-                    node_mass(node) * (-t[0] * p.y + t[1] * p.x)
-                })
-                .sum()
-        });
-        let radial_reference = DVector::from_fn(dofs, |a, _| {
-            (0..nodes_all)
-                .map(|node| {
-                    let (t, p) = (vectors[a][node], node_reference(node));
-                    node_mass(node) * (t[0] * p.x + t[1] * p.y)
-                })
-                .sum()
-        });
-        let reference_inertia = (0..nodes_all)
-            .map(|node| node_mass(node) * node_reference(node).coords.norm_squared())
+        let turning_reference = t.transpose() * &m_j_x;
+        let radial_reference = t.transpose() * &m_x;
+        let reference_inertia = (0..rows)
+            .step_by(2)
+            .map(|r| weight(r) * reference(r).coords.norm_squared())
             .sum();
         let mass_factor =
             Cholesky::new(reduced_mass.clone()).ok_or_else(|| FeError::NotPositiveDefinite {
@@ -640,17 +678,20 @@ impl ReducedBlock {
         );
     }
 
-    /// The parts of a step both hubs share: y = V_bᵀ F_b − Ω² (η + β η̇) − 2ω Ĝ η̇ + ω² (m̂ + η)
-    /// (η̈ without the ω̇ term) into `scratch.force`, s = ĝ + Ĝ η into `scratch.g_eta`, and
-    /// (I(η), s·y, s·s, (m̂ + η)·η̇, τ_b); u_b from the state's [`Self::interface_motion`].
-    fn common(
+    /// The costly part of a step, whatever turns the hub, at the hub's `rate`, after
+    /// [`Self::interface_motion`] of the same state: η̈ without the ω̇ term,
+    /// y = V_bᵀ F_b − Ω² (η + β η̇) − 2ω Ĝ η̇ + ω² (m̂ + η), into `scratch.force`, s = ĝ + Ĝ η
+    /// into `scratch.g_eta`, and the sums (I(η), s·y, s·s, (m̂ + η)·η̇, τ_b).
+    /// [`Self::finish_prescribed`] or [`Self::finish_free`] then give η̈ in O(n), so a free
+    /// hub's torque can be known later than the interface forces.
+    pub fn prepare(
         &self,
         state: &BlockState,
         rate: f64,
         beta: f64,
         interface_force: &[f64],
         scratch: &mut BlockScratch,
-    ) -> [f64; 5] {
+    ) -> BlockSums {
         let (n, nb) = (self.dofs(), self.interface_dofs());
         assert_eq!(
             interface_force.len(),
@@ -693,12 +734,13 @@ impl ReducedBlock {
             let (fx, fy) = (interface_force[2 * k], interface_force[2 * k + 1]);
             moment += (p.x + z_b[2 * k]) * fy - (p.y + z_b[2 * k + 1]) * fx;
         }
-        [inertia, s_y, s_s, radial_rate, moment]
+        BlockSums([inertia, s_y, s_s, radial_rate, moment])
     }
 
     /// η̈ with the hub turned as `frame` says, and the torque the hub applies to the block
-    /// [N·m], after [`Self::interface_motion`] of the same state; `beta` is the stiffness-proportional damping coefficient [s], `interface_force`
-    /// the forces on the interface nodes in the hub frame.
+    /// [N·m], after [`Self::interface_motion`] of the same state; `beta` is the
+    /// stiffness-proportional damping coefficient [s], `interface_force` the forces on the
+    /// interface nodes in the hub frame.
     pub fn accelerate_prescribed(
         &self,
         state: &mut BlockState,
@@ -707,18 +749,8 @@ impl ReducedBlock {
         interface_force: &[f64],
         scratch: &mut BlockScratch,
     ) -> f64 {
-        let [inertia, s_y, s_s, radial_rate, moment] =
-            self.common(state, frame.rate, beta, interface_force, scratch);
-        for ((a, y), s) in state
-            .accel
-            .iter_mut()
-            .zip(&scratch.force)
-            .zip(&scratch.g_eta)
-        {
-            *a = y - frame.accel * s;
-        }
-        // s·η̈ = s·y − ω̇ s·s
-        inertia * frame.accel + s_y - frame.accel * s_s + 2.0 * frame.rate * radial_rate - moment
+        let sums = self.prepare(state, frame.rate, beta, interface_force, scratch);
+        self.finish_prescribed(state, &sums, frame, scratch)
     }
 
     /// η̈ and ω̇ of a hub of inertia `hub_inertia` [kg·m²] turning at `rate` under the torque
@@ -735,8 +767,45 @@ impl ReducedBlock {
         interface_force: &[f64],
         scratch: &mut BlockScratch,
     ) -> f64 {
-        let [inertia, s_y, s_s, radial_rate, moment] =
-            self.common(state, rate, beta, interface_force, scratch);
+        let sums = self.prepare(state, rate, beta, interface_force, scratch);
+        self.finish_free(state, &sums, hub_inertia, rate, torque, scratch)
+    }
+
+    /// η̈ of a [`Self::prepare`]d state with the hub turned as `frame` says (its rate the
+    /// prepared one); returns the torque the hub applies to the block [N·m].
+    pub fn finish_prescribed(
+        &self,
+        state: &mut BlockState,
+        sums: &BlockSums,
+        frame: FrameMotion,
+        scratch: &BlockScratch,
+    ) -> f64 {
+        let [inertia, s_y, s_s, radial_rate, moment] = sums.0;
+        for ((a, y), s) in state
+            .accel
+            .iter_mut()
+            .zip(&scratch.force)
+            .zip(&scratch.g_eta)
+        {
+            *a = y - frame.accel * s;
+        }
+        // s·η̈ = s·y − ω̇ s·s
+        inertia * frame.accel + s_y - frame.accel * s_s + 2.0 * frame.rate * radial_rate - moment
+    }
+
+    /// η̈ and ω̇ of a [`Self::prepare`]d state on a free hub of inertia `hub_inertia`
+    /// [kg·m²] at the prepared `rate` under `torque` [N·m] (everything but the block's);
+    /// returns ω̇.
+    pub fn finish_free(
+        &self,
+        state: &mut BlockState,
+        sums: &BlockSums,
+        hub_inertia: f64,
+        rate: f64,
+        torque: f64,
+        scratch: &BlockScratch,
+    ) -> f64 {
+        let [inertia, s_y, s_s, radial_rate, moment] = sums.0;
         // η̈ = y − ω̇ s in the hub equation (I_h + I) ω̇ + s·η̈ + 2ω (m̂ + η)·η̇ = τ + τ_b.
         let accel =
             (torque + moment - 2.0 * rate * radial_rate - s_y) / (hub_inertia + inertia - s_s);
@@ -889,26 +958,6 @@ mod tests {
         (mesh, body, in_block)
     }
 
-    /// η̇ += ½Δt η̈; η += Δt η̇.
-    fn drift(dt: f64, state: &mut BlockState) {
-        for ((e, r), a) in state
-            .eta
-            .iter_mut()
-            .zip(state.rate.iter_mut())
-            .zip(&state.accel)
-        {
-            *r += 0.5 * dt * a;
-            *e += dt * *r;
-        }
-    }
-
-    /// η̇ += ½Δt η̈.
-    fn kick(dt: f64, state: &mut BlockState) {
-        for (r, a) in state.rate.iter_mut().zip(&state.accel) {
-            *r += 0.5 * dt * a;
-        }
-    }
-
     fn block_of(
         mesh: &GearMesh,
         body: &ExplicitBody,
@@ -922,7 +971,7 @@ mod tests {
             &mesh.bore_nodes,
             &body.mass,
             &body.material,
-            cutoff,
+            Cutoff::Hz(cutoff),
         )
         .unwrap()
     }
@@ -1185,7 +1234,7 @@ mod tests {
             let (mut worst_h, mut worst_e): (f64, f64) = (0.0, 0.0);
             for _ in 0..(duration / dt).round() as usize {
                 rate += 0.5 * dt * accel;
-                drift(dt, &mut state);
+                state.drift(dt);
                 block.interface_motion(&state, &mut scratch);
                 accel = block.accelerate_free(
                     &mut state,
@@ -1197,7 +1246,7 @@ mod tests {
                     &mut scratch,
                 );
                 rate += 0.5 * dt * accel;
-                kick(dt, &mut state);
+                state.kick(0.5 * dt);
                 worst_h = worst_h.max((momentum(&state, rate) / h0 - 1.0).abs());
                 worst_e = worst_e.max((energy(&state, rate) / e0 - 1.0).abs());
             }
@@ -1390,7 +1439,7 @@ mod tests {
                 v[d] += 0.5 * dt * a[d];
                 x[d] += dt * v[d];
             }
-            drift(dt, &mut state);
+            state.drift(dt);
             place_bore(t, &mut x, &mut v, &mut a);
             block.interface_motion(&state, &mut scratch);
             let (u_b, rate_b) = (scratch.interface_displacement(), scratch.interface_rate());
@@ -1426,7 +1475,7 @@ mod tests {
                 &interface_force,
                 &mut scratch,
             );
-            kick(dt, &mut state);
+            state.kick(0.5 * dt);
             let torque = bore_torque(&x, &a, &f) + block_torque;
             block.interface_motion(&state, &mut scratch);
             let u_b = scratch.interface_displacement();
@@ -1548,7 +1597,7 @@ mod tests {
                 &mesh.bore_nodes,
                 &body.mass,
                 &body.material,
-                cutoff,
+                Cutoff::Hz(cutoff),
             )
             .unwrap();
             eprintln!(

@@ -207,7 +207,7 @@ pub fn natural_coordinates(xe: &[Point2<f64>; 8], p: &Point2<f64>) -> Option<(f6
 
 /// Reference points hashed on a grid of cells [`SAME_NODE`] × 1000 wide, for finding a point's
 /// twin among them.
-struct PointIndex<'a> {
+pub(crate) struct PointIndex<'a> {
     points: &'a [Point2<f64>],
     cells: std::collections::HashMap<(i64, i64), Vec<usize>>,
 }
@@ -222,7 +222,7 @@ impl<'a> PointIndex<'a> {
         )
     }
 
-    fn new(points: &'a [Point2<f64>]) -> Self {
+    pub(crate) fn new(points: &'a [Point2<f64>]) -> Self {
         let mut cells: std::collections::HashMap<(i64, i64), Vec<usize>> =
             std::collections::HashMap::new();
         for (i, p) in points.iter().enumerate() {
@@ -232,7 +232,7 @@ impl<'a> PointIndex<'a> {
     }
 
     /// The point within [`SAME_NODE`] of `p`, if any (the cell and its neighbours).
-    fn find(&self, p: &Point2<f64>) -> Option<usize> {
+    pub(crate) fn find(&self, p: &Point2<f64>) -> Option<usize> {
         let (cx, cy) = Self::cell(p);
         (-1..=1)
             .flat_map(|dx| (-1..=1).map(move |dy| (cx + dx, cy + dy)))

@@ -165,6 +165,7 @@
 use std::time::Instant;
 
 use crate::explicit::body::{ExplicitBody, ExplicitMaterial};
+use crate::explicit::far::{BlockCache, BlockSeed, FarBody};
 use crate::explicit::pair::{
     Drive, ExplicitPair, IntegratorCheckpoint, PairEnergy, PairIntegrator, PairState, PhaseWall,
     Ramp, Start,
@@ -226,6 +227,11 @@ pub struct FeSettings {
     pub fine_teeth: FineTeeth,
     /// How the teeth are laid out (the case's `fe.tooth_layout`).
     pub tooth_layout: ToothLayout,
+    /// How a run on windows models the gears' bodies away from the contact (the case's
+    /// `fe.far_body`), and a reduced block's cutoff over its lowest fixed-interface mode
+    /// (`fe.far_block_cutoff`).
+    pub far_body: FarBody,
+    pub far_block_cutoff: f64,
 }
 
 /// Which teeth a run meshes fine (the case's `fe.fine_teeth`; module doc, "Model no more than
@@ -358,6 +364,10 @@ pub struct PreparedScene {
     pub coarse_size: f64,
     pub fine_teeth: FineTeeth,
     pub tooth_layout: ToothLayout,
+    /// The far body of a run on windows: full, or one reduced block per gear cut off at
+    /// `far_block_cutoff` times its lowest fixed-interface mode.
+    pub far_body: FarBody,
+    pub far_block_cutoff: f64,
 }
 
 /// Ringing of the mesh mode, over the static response, at which a run counts as settled.
@@ -696,6 +706,8 @@ fn prepare_scene(
         coarse_size: settings.coarse_size,
         fine_teeth: settings.fine_teeth,
         tooth_layout: settings.tooth_layout,
+        far_body: settings.far_body,
+        far_block_cutoff: settings.far_block_cutoff,
     })
 }
 
@@ -866,6 +878,10 @@ pub struct RunOutcome {
     pub element_steps: f64,
     /// The windows the run went through (0: the scene's own mesh throughout).
     pub windows: usize,
+    /// Far blocks built, and found built for a window of their pattern (`fe.far_body =
+    /// "reduced"`; a resumed run's count from its resumption).
+    pub far_blocks_built: usize,
+    pub far_blocks_reused: usize,
 }
 
 /// A change of a run's step.
@@ -1079,6 +1095,10 @@ pub struct RunCheckpoint {
     /// Σ elements × steps so far.
     #[serde(default)]
     element_steps: f64,
+    /// Where the run's far blocks were built (`fe.far_body = "reduced"`): a resumed run builds
+    /// the same ones, which its blocks' states belong to.
+    #[serde(default)]
+    far_blocks: Vec<BlockSeed>,
 }
 
 impl RunCheckpoint {
@@ -1087,14 +1107,16 @@ impl RunCheckpoint {
     /// are dropped: a run sent back goes no further back than the switch.
     fn remeshed(
         self,
-        old: &ExplicitPair,
+        (old, driver_motion): (&ExplicitPair, [f64; 3]),
         new: &ExplicitPair,
         transfers: &[NodeTransfer; 2],
         window: Window,
     ) -> Result<Self, String> {
         let integrator = self.integrator.remeshed(old, new, transfers)?;
+        // The old far blocks' nodes as the blocks have them, for the transfer.
+        let state = old.expanded(&self.state, driver_motion);
         Ok(RunCheckpoint {
-            state: self.state.remeshed(transfers),
+            state: state.remeshed(transfers),
             integrator,
             snapshot: None,
             trusted: None,
@@ -1122,6 +1144,8 @@ impl RunCheckpoint {
             checkpoint: None,
             element_steps: self.element_steps,
             windows: self.window.map_or(0, |w| w.index + 1),
+            far_blocks_built: 0,
+            far_blocks_reused: 0,
         }
     }
 }
@@ -1245,8 +1269,22 @@ impl WindowPlan {
     }
 }
 
-/// The pair model of `window`: the scene's, meshed fine on the window's teeth only.
-fn window_model(prepared: &PreparedScene, window: &Window) -> Result<ExplicitPair, FeError> {
+/// The pair model of `window`: the scene's, meshed fine on the window's teeth only; its far
+/// bodies reduced if the scene says so, the blocks from `cache` where they fit.
+fn window_model(
+    prepared: &PreparedScene,
+    window: &Window,
+    cache: &mut BlockCache,
+) -> Result<ExplicitPair, FeError> {
+    let mut model = full_window_model(prepared, window)?;
+    if prepared.far_body == FarBody::Reduced {
+        model.reduce_far_bodies(cache)?;
+    }
+    Ok(model)
+}
+
+/// [`window_model`] with its bodies in full.
+fn full_window_model(prepared: &PreparedScene, window: &Window) -> Result<ExplicitPair, FeError> {
     window_model_of(
         &prepared.model,
         &prepared.modifications,
@@ -1385,6 +1423,11 @@ pub fn scene_fingerprint(prepared: &PreparedScene, duration: f64, output_interva
     eat(&(total_steps as u64).to_le_bytes());
     eat(&(every as u64).to_le_bytes());
     eat(format!("{:?}", prepared.time_step).as_bytes());
+    // Blocks change the run's answers; a full far body hashes as before.
+    if prepared.far_body != FarBody::Full {
+        eat(format!("{:?}", prepared.far_body).as_bytes());
+        eat(&prepared.far_block_cutoff.to_bits().to_le_bytes());
+    }
     // Debug prints every f64 in its shortest exact form.
     eat(format!("{:?}", prepared.drive).as_bytes());
     for body in &model.bodies {
@@ -1473,7 +1516,8 @@ pub fn recorded_samples(prepared: &PreparedScene, duration: f64, output_interval
 /// count and the penetration), and per node of both bodies the integrator's arrays (position,
 /// velocity, acceleration, internal, contact and previous contact force, and the velocities'
 /// copy for the contact, on two DOFs; a search stamp and flag) and those of the coupled stable-step check (eight more per DOF:
-/// [`PairIntegrator::coupled_critical_step`]).
+/// [`PairIntegrator::coupled_critical_step`]; three more with reduced far bodies, its state
+/// expanded). The far blocks' own matrices are not counted (a few MB).
 pub fn run_memory(prepared: &PreparedScene, duration: f64, output_interval: f64) -> MemoryEstimate {
     let samples = recorded_samples(prepared, duration, output_interval) as f64;
     let pairs = prepared.model.flank_pairs.len();
@@ -1493,7 +1537,14 @@ pub fn run_memory(prepared: &PreparedScene, duration: f64, output_interval: f64)
         ))
         .and(MemoryEstimate::part(
             "stable-step check",
-            nodes * 8.0 * 2.0 * 8.0,
+            // With reduced far bodies, a copy of the state with their nodes expanded besides.
+            nodes
+                * match prepared.far_body {
+                    FarBody::Full => 8.0,
+                    FarBody::Reduced => 11.0,
+                }
+                * 2.0
+                * 8.0,
         ))
         .and(MemoryEstimate::part(
             "step snapshots",
@@ -1546,7 +1597,7 @@ pub fn run(
         let from = resume.map(|(c, h)| (c, h, false));
         return match run_window(
             prepared,
-            &prepared.model,
+            (&prepared.model, &BlockCache::new(prepared.far_block_cutoff)),
             None,
             duration,
             output_interval,
@@ -1569,12 +1620,27 @@ pub fn run(
         })?,
         None => plan.window(pair, 0, 0.0, &[]),
     };
-    let mut model = window_model(prepared, &window)?;
+    // One far block per gear and pattern of fine teeth, for the whole run; a resumed run's the
+    // interrupted run's, built again where they were.
+    let mut cache = BlockCache::new(prepared.far_block_cutoff);
+    if let Some((checkpoint, _)) = &resume {
+        for seed in &checkpoint.far_blocks {
+            let mut fine_teeth = window.fine_teeth.clone();
+            fine_teeth[seed.gear].clone_from(&seed.fine_teeth);
+            let seeded = Window {
+                fine_teeth,
+                tooth_pairs: Vec::new(),
+                ..window.clone()
+            };
+            full_window_model(prepared, &seeded)?.seed_far_block(seed.gear, &mut cache)?;
+        }
+    }
+    let mut model = window_model(prepared, &window, &mut cache)?;
     let mut from = resume.map(|(c, h)| (c, h, false));
     loop {
         match run_window(
             prepared,
-            &model,
+            (&model, &cache),
             Some(&window),
             duration,
             output_interval,
@@ -1592,13 +1658,18 @@ pub fn run(
                     theta - prepared.drive.start_rotation,
                     &near,
                 );
-                let next_model = window_model(prepared, &next)?;
+                let next_model = window_model(prepared, &next, &mut cache)?;
                 let carried = NodeTransfer::between(&model.meshes[0], &next_model.meshes[0])
                     .and_then(|t0| {
                         let t1 = NodeTransfer::between(&model.meshes[1], &next_model.meshes[1])?;
-                        checkpoint
-                            .clone()
-                            .remeshed(&model, &next_model, &[t0, t1], next.clone())
+                        let (theta, rate, accel) =
+                            prepared.drive.driver_motion(checkpoint.state.time);
+                        checkpoint.clone().remeshed(
+                            (&model, [theta, rate, accel]),
+                            &next_model,
+                            &[t0, t1],
+                            next.clone(),
+                        )
                     });
                 let carried = match carried {
                     Ok(carried) => carried,
@@ -1629,7 +1700,7 @@ pub fn run(
 #[allow(clippy::too_many_arguments)]
 fn run_window(
     prepared: &PreparedScene,
-    model: &ExplicitPair,
+    (model, cache): (&ExplicitPair, &BlockCache),
     window: Option<&Window>,
     duration: f64,
     output_interval: f64,
@@ -1672,7 +1743,13 @@ fn run_window(
                 .iter()
                 .zip(&model.bodies)
                 .all(|(x, body)| x.len() == 2 * body.reference.len())
-                && history.pair_forces.len() == pairs;
+                && history.pair_forces.len() == pairs
+                // A far block's state of this mesh's block (one just carried is projected).
+                && (0..2).all(|g| match (&model.far[g], &checkpoint.state.blocks[g]) {
+                    (Some(far), Some(block)) => block.eta.len() == far.block.block.dofs(),
+                    (Some(_), None) => carried,
+                    (None, block) => block.is_none(),
+                });
             if !fits {
                 return Err(FeError::Resume(
                     "its state does not fit this mesh".to_string(),
@@ -1713,6 +1790,7 @@ fn run_window(
         }
     };
     let ratio = model.pair.gears[0].teeth() as f64 / model.pair.gears[1].teeth() as f64;
+    let teeth = model.pair.gears.each_ref().map(|g| g.teeth() as usize);
     let rb2 = model.pair.gears[1].base_radius;
     let started = Instant::now();
     let mut diverged = None;
@@ -1826,7 +1904,8 @@ fn run_window(
         trusted: trusted.clone(),
         window: window.cloned(),
         element_steps: element_steps_before
-            + (integrator.steps as f64 - steps_before as f64) * model.elements() as f64,
+            + (integrator.steps as f64 - steps_before as f64) * model.stepped_elements() as f64,
+        far_blocks: cache.seeds(teeth),
     };
     let mut step = first_step;
     while step <= control.total_steps {
@@ -2086,10 +2165,12 @@ fn run_window(
     // In floating point: a run sent back to a snapshot taken before it resumed has fewer
     // steps than it started with.
     let element_steps = element_steps_before
-        + (integrator.steps as f64 - steps_before as f64) * model.elements() as f64;
+        + (integrator.steps as f64 - steps_before as f64) * model.stepped_elements() as f64;
     Ok(WindowEnd::Done(Box::new(RunOutcome {
         element_steps,
         windows: window.map_or(0, |w| w.index + 1),
+        far_blocks_built: cache.built,
+        far_blocks_reused: cache.reused,
         history,
         steps: integrator.steps,
         wall_s,

@@ -9,6 +9,7 @@
 use serde::Serialize;
 
 use crate::case::{Case, Override};
+use crate::explicit::far::FarBody;
 use crate::explicit::pair::PairEnergy;
 use crate::explicit::scene::{
     analyse_dte, bin_difference, binned_stiffness, common_bins, covering_duration, paired_bins,
@@ -500,6 +501,9 @@ pub struct FeSummary {
     pub coarse_element_mm: f64,
     /// How the explicit mesh laid out the teeth (`fe.tooth_layout`).
     pub tooth_layout: ToothLayout,
+    /// How the run modelled the bodies away from the contact (`fe.far_body`; "reduced" acts
+    /// on runs on windows only, `model` says whether it did).
+    pub far_body: FarBody,
     /// The run's checks of its own answer against the LTCA on its own mesh ([`self_checks`]).
     pub self_checks: Vec<Check>,
 }
@@ -828,6 +832,7 @@ pub fn run(
         fine_element_mm: fine_mm,
         coarse_element_mm: coarse_mm,
         tooth_layout: settings.tooth_layout,
+        far_body: settings.far_body,
         self_checks: fe_checks,
     };
     Ok(FeStudy {
@@ -917,6 +922,15 @@ fn model_description(case: &Case, prepared: &PreparedScene, mesh: &RunMesh) -> S
         ToothLayout::Graded => "",
         ToothLayout::StableStep => {
             "; teeth laid out for the stable step (columns even at the tip, the upper fillet's rows of equal length; fe.tooth_layout)"
+        }
+    } + &match (settings.far_body, mesh.windows > 0) {
+        (FarBody::Full, _) => String::new(),
+        (FarBody::Reduced, true) => format!(
+            "; each window's coarse sectors one reduced Craig–Bampton block per gear turning with its hub (fixed-interface modes to {} times the block's lowest, static interface and spin loads exact; fe.far_body, fe.far_block_cutoff), the step's elements the fine sectors' only",
+            settings.far_block_cutoff
+        ),
+        (FarBody::Reduced, false) => {
+            "; bodies in full (fe.far_body = \"reduced\" acts on runs on windows of fine teeth only)".to_string()
         }
     } + &mass_scaling
 }

@@ -132,7 +132,9 @@ fn pair_step(c: &mut Criterion) {
 /// element kernel (damped, one core) against the same block reduced by Craig–Bampton at an
 /// 80 kHz cutoff ([`geardyn::explicit::reduced`]): its interface motion and accelerations with
 /// the hub turned at a prescribed rate (the driver) and with a free hub (the driven gear); the
-/// whole gear's and the six fine sectors' elements for scale.
+/// same prescribed step of the block the pair builds (`fe.far_body = "reduced"`: its modes to
+/// [`geardyn::explicit::far::FAR_BLOCK_CUTOFF`] times its lowest); the whole gear's and the six
+/// fine sectors' elements for scale.
 fn reduced_block(c: &mut Criterion) {
     use geardyn::explicit::reduced::{Cutoff, FrameMotion, ReducedBlock};
     let case = samples::paper36_case();
@@ -150,25 +152,32 @@ fn reduced_block(c: &mut Criterion) {
     let elements = body_of(&block_elements);
     let fine = body_of(&fine_elements);
     let whole_symmetric = body_of(&mesh.elements);
-    let block = ReducedBlock::new(
-        &mesh.nodes,
-        &mesh.elements,
-        &in_block,
-        &mesh.bore_nodes,
-        &whole.mass,
-        &material,
-        Cutoff::Hz(80e3),
-    )
-    .unwrap();
-    eprintln!(
-        "reduced block: {} of {} elements, {} interface nodes, {} internal nodes, {} modes, {} reduced DOFs",
-        block_elements.len(),
-        mesh.elements.len(),
-        block.interface.len(),
-        block.internal.len(),
-        block.mode_frequencies_hz.len(),
-        block.dofs()
-    );
+    let block_at = |cutoff: Cutoff| {
+        let block = ReducedBlock::new(
+            &mesh.nodes,
+            &mesh.elements,
+            &in_block,
+            &mesh.bore_nodes,
+            &whole.mass,
+            &material,
+            cutoff,
+        )
+        .unwrap();
+        eprintln!(
+            "reduced block at {cutoff:?}: {} of {} elements, {} interface nodes, {} internal nodes, {} modes, {} reduced DOFs",
+            block_elements.len(),
+            mesh.elements.len(),
+            block.interface.len(),
+            block.internal.len(),
+            block.mode_frequencies_hz.len(),
+            block.dofs()
+        );
+        block
+    };
+    let block = block_at(Cutoff::Hz(80e3));
+    let pair_block = block_at(Cutoff::LowestModeTimes(
+        geardyn::explicit::far::FAR_BLOCK_CUTOFF,
+    ));
     let mut group = c.benchmark_group("reduced_block_paper36_window");
     let (x, v, mut force) = turned_state(&mesh);
     for (name, body) in [
@@ -183,29 +192,47 @@ fn reduced_block(c: &mut Criterion) {
             })
         });
     }
-    let mut state = block.rest();
-    state
-        .eta
-        .iter_mut()
-        .enumerate()
-        .for_each(|(k, z)| *z = 1e-9 * (k as f64).sin());
-    state
-        .rate
-        .iter_mut()
-        .enumerate()
-        .for_each(|(k, z)| *z = 1e-4 * (k as f64).cos());
+    // A deformed, moving state of a block.
+    let state_of = |block: &ReducedBlock| {
+        let mut state = block.rest();
+        state
+            .eta
+            .iter_mut()
+            .enumerate()
+            .for_each(|(k, z)| *z = 1e-9 * (k as f64).sin());
+        state
+            .rate
+            .iter_mut()
+            .enumerate()
+            .for_each(|(k, z)| *z = 1e-4 * (k as f64).cos());
+        state
+    };
+    let mut state = state_of(&block);
     let interface_force = vec![10.0; block.interface_dofs()];
     let mut scratch = block.scratch();
     let frame = FrameMotion {
         rate: 314.0,
         accel: 10.0,
     };
-    group.bench_function("reduced_prescribed", |b| {
-        b.iter(|| {
-            block.interface_motion(black_box(&state), &mut scratch);
-            block.accelerate_prescribed(&mut state, frame, 1.3e-9, &interface_force, &mut scratch)
-        })
-    });
+    for (name, block) in [
+        ("reduced_prescribed", &block),
+        ("reduced_prescribed_pair_cutoff", &pair_block),
+    ] {
+        let mut state = state_of(block);
+        let mut scratch = block.scratch();
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                block.interface_motion(black_box(&state), &mut scratch);
+                block.accelerate_prescribed(
+                    &mut state,
+                    frame,
+                    1.3e-9,
+                    &interface_force,
+                    &mut scratch,
+                )
+            })
+        });
+    }
     group.bench_function("reduced_interface_motion_only", |b| {
         b.iter(|| block.interface_motion(black_box(&state), &mut scratch))
     });

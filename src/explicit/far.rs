@@ -266,26 +266,13 @@ impl FarBlock {
     /// angle `angle` turning at `omega` about `centre`.
     pub fn place_interface(
         &self,
-        (centre, angle, omega): (Point2<f64>, f64, f64),
+        frame: (Point2<f64>, f64, f64),
         (displacement, rate): (&[f64], &[f64]),
         x: &mut [f64],
         v: &mut [f64],
     ) {
-        let turn = Rotation2::new(angle);
-        for (k, (&n, p)) in self
-            .interface
-            .iter()
-            .zip(self.block.interface_reference())
-            .enumerate()
-        {
-            let y = Vector2::new(p.x + displacement[2 * k], p.y + displacement[2 * k + 1]);
-            let relative = Vector2::new(rate[2 * k] - omega * y.y, rate[2 * k + 1] + omega * y.x);
-            let (q, w) = (centre + turn * y, turn * relative);
-            x[2 * n] = q.x;
-            x[2 * n + 1] = q.y;
-            v[2 * n] = w.x;
-            v[2 * n + 1] = w.y;
-        }
+        let nodes = (&self.interface[..], self.block.interface_reference());
+        place_nodes(frame, nodes, (displacement, rate), x, v);
     }
 
     /// The forces `f` (the gear's array, global frame) on the interface nodes, turned into
@@ -308,55 +295,24 @@ impl FarBlock {
     pub fn expand(
         &self,
         state: &BlockState,
-        (centre, angle, omega): (Point2<f64>, f64, f64),
+        frame: (Point2<f64>, f64, f64),
         x: &mut [f64],
         v: &mut [f64],
     ) {
         let block = &self.block;
-        let z = block.coordinates(&state.eta);
-        let z_rate = block.coordinates(&state.rate);
+        let (z, z_rate) = (
+            block.coordinates(&state.eta),
+            block.coordinates(&state.rate),
+        );
+        // z's first entries are u_b.
         let nb = block.interface_dofs();
+        self.place_interface(frame, (&z.as_slice()[..nb], &z_rate.as_slice()[..nb]), x, v);
         let (u_i, w_i) = (
             block.internal_displacements(&z),
             block.internal_displacements(&z_rate),
         );
-        let turn = Rotation2::new(angle);
-        let mut put = |n: usize, p: &Point2<f64>, u: [f64; 2], w: [f64; 2]| {
-            let y = Vector2::new(p.x + u[0], p.y + u[1]);
-            let relative = Vector2::new(w[0] - omega * y.y, w[1] + omega * y.x);
-            let (q, r) = (centre + turn * y, turn * relative);
-            x[2 * n] = q.x;
-            x[2 * n + 1] = q.y;
-            v[2 * n] = r.x;
-            v[2 * n + 1] = r.y;
-        };
-        for (k, (&n, p)) in self
-            .interface
-            .iter()
-            .zip(block.interface_reference())
-            .enumerate()
-        {
-            put(
-                n,
-                p,
-                [z[2 * k], z[2 * k + 1]],
-                [z_rate[2 * k], z_rate[2 * k + 1]],
-            );
-        }
-        debug_assert_eq!(nb, 2 * self.interface.len());
-        for (k, (&n, p)) in self
-            .internal
-            .iter()
-            .zip(block.internal_reference())
-            .enumerate()
-        {
-            put(
-                n,
-                p,
-                [u_i[2 * k], u_i[2 * k + 1]],
-                [w_i[2 * k], w_i[2 * k + 1]],
-            );
-        }
+        let nodes = (&self.internal[..], block.internal_reference());
+        place_nodes(frame, nodes, (u_i.as_slice(), w_i.as_slice()), x, v);
     }
 
     /// The block's state of the mesh's positions `x` and velocities `v` (the frame at
@@ -387,6 +343,28 @@ impl FarBlock {
         let z = block.project(&u_b, &u_i);
         let z_rate = block.project(&w_b, &w_i);
         block.state_of(&z, &z_rate)
+    }
+}
+
+/// Writes the mesh nodes `nodes` (with their references in the block frame) at the block
+/// displacements `displacement` and rates `rate` (x and y per node) into `x`, `v`, the frame
+/// at angle φ turning at ω about c: x = c + R(φ)(X + u), ẋ = R(φ)(u̇ + ω J (X + u)).
+fn place_nodes(
+    (centre, angle, omega): (Point2<f64>, f64, f64),
+    (nodes, reference): (&[usize], &[Point2<f64>]),
+    (displacement, rate): (&[f64], &[f64]),
+    x: &mut [f64],
+    v: &mut [f64],
+) {
+    let turn = Rotation2::new(angle);
+    for (k, (&n, p)) in nodes.iter().zip(reference).enumerate() {
+        let y = Vector2::new(p.x + displacement[2 * k], p.y + displacement[2 * k + 1]);
+        let relative = Vector2::new(rate[2 * k] - omega * y.y, rate[2 * k + 1] + omega * y.x);
+        let (q, w) = (centre + turn * y, turn * relative);
+        x[2 * n] = q.x;
+        x[2 * n + 1] = q.y;
+        v[2 * n] = w.x;
+        v[2 * n + 1] = w.y;
     }
 }
 

@@ -864,19 +864,32 @@ fn high_speed_scene_of(case: &Case, fine_teeth: FineTeeth, far_body: FarBody) ->
     study::fe::prepare(&case, &scene).unwrap()
 }
 
-/// Reduced far bodies on a pair of unequal gears (the test matrix's 24/40, coarse: pitches of
-/// 15° and 9°, so the two gears' windows advance by different turns and their blocks'
-/// patterns differ): against the same windows in full, held to the windows' own tolerances,
-/// each window's blocks built or found turned into place. Measured (2026-12-06): 9 windows,
-/// 922 against 3 128 elements a step, DTE mean −0.04 %, peak-to-peak +0.1 %, rms of the
-/// difference 0.3 % of the peak-to-peak, pair loads within 0.3 % of the largest, balance
-/// 3.8e-6 of the transmitted work, 4 blocks built and 14 reused. Ignored in the suite: about
-/// 4.4 minutes (the stiffer 24-tooth pinion's block keeps its modes to a higher frequency, so
-/// more of them); `cargo test --release --test explicit_pair -- --ignored unequal`.
+/// Reduced far bodies on pairs of unequal gears (the test matrix's 24/40 and its inverse
+/// 40/24, coarse: pitches of 15° and 9°, so the two gears' windows advance by different turns
+/// and their blocks' patterns differ): against the same windows in full, held to the windows'
+/// own tolerances, each window's blocks built or found turned into place. Measured
+/// (2026-12-06): 24/40, 9 windows, 922 against 3 128 elements a step, DTE mean −0.04 %,
+/// peak-to-peak +0.1 %, rms of the difference 0.3 % of the peak-to-peak, pair loads within
+/// 0.3 % of the largest, balance 3.8e-6 of the transmitted work, 4 blocks built and 14 reused:
+/// passes. 40/24, 15 windows, 902 against 3 135 elements a step, DTE mean +0.20 %,
+/// peak-to-peak −1.8 %, **rms of the difference 3.2 % of the peak-to-peak** (its DTE swings
+/// a quarter as much as 24/40's), pair loads within 1.2 %, balance 6.5e-6, 4 built and 26
+/// reused: FAILS the rms (2 %), an open finding (validation/performance, lever 2d: the
+/// 24-tooth gear's block, stiffer, keeps fewer modes below its cutoff; the block's own test
+/// needed 160 kHz for the 24-tooth pinion). Ignored in the suite (about 10 minutes) and
+/// failing on 40/24: `cargo test --release --test explicit_pair -- --ignored unequal`.
 #[test]
-#[ignore = "4.4 minutes: run with --ignored"]
+#[ignore = "10 minutes, and fails on 40/24 (rms 3.2 % against 2 %): an open finding"]
 fn reduced_far_bodies_on_unequal_gears_follow_their_full_bodies() {
-    let case = coarse_matrix_pair("24-40");
+    for name in ["24-40", "40-24"] {
+        unequal_gears_against_their_full_bodies(name);
+    }
+}
+
+/// [`reduced_far_bodies_on_unequal_gears_follow_their_full_bodies`] on the test matrix's pair
+/// `name`.
+fn unequal_gears_against_their_full_bodies(name: &str) {
+    let case = coarse_matrix_pair(name);
     let duration = TWELVE_PITCH_DURATION;
     let outcome = |far_body: FarBody| {
         let prepared = high_speed_scene_of(&case, FineTeeth::Window, far_body);
@@ -888,7 +901,7 @@ fn reduced_far_bodies_on_unequal_gears_follow_their_full_bodies() {
     assert!(full.windows >= 6, "{} windows", full.windows);
     assert_eq!(reduced.windows, full.windows);
     eprintln!(
-        "24/40: {} windows, {:.0} against {:.0} elements a step; blocks built {}, reused {}",
+        "{name}: {} windows, {:.0} against {:.0} elements a step; blocks built {}, reused {}",
         reduced.windows,
         reduced.element_steps / reduced.steps as f64,
         full.element_steps / full.steps as f64,

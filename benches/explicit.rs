@@ -152,7 +152,7 @@ fn reduced_block(c: &mut Criterion) {
     let elements = body_of(&block_elements);
     let fine = body_of(&fine_elements);
     let whole_symmetric = body_of(&mesh.elements);
-    let block_at = |cutoff: Cutoff| {
+    let block_at = |cutoff: Cutoff, rate_bound: f64| {
         let block = ReducedBlock::new(
             &mesh.nodes,
             &mesh.elements,
@@ -161,10 +161,12 @@ fn reduced_block(c: &mut Criterion) {
             &whole.mass,
             &material,
             cutoff,
+            rate_bound,
         )
         .unwrap();
         eprintln!(
-            "reduced block at {cutoff:?}: {} of {} elements, {} interface nodes, {} internal nodes, {} modes, {} reduced DOFs",
+            "reduced block at {cutoff:?}, Coriolis couplings among {} modes: {} of {} elements, {} interface nodes, {} internal nodes, {} modes, {} reduced DOFs",
+            block.coriolis_modes(),
             block_elements.len(),
             mesh.elements.len(),
             block.interface.len(),
@@ -174,10 +176,11 @@ fn reduced_block(c: &mut Criterion) {
         );
         block
     };
-    let block = block_at(Cutoff::Hz(80e3));
-    let pair_block = block_at(Cutoff::LowestModeTimes(
-        geardyn::explicit::far::FAR_BLOCK_CUTOFF,
-    ));
+    let block = block_at(Cutoff::Hz(80e3), f64::INFINITY);
+    let pair_cutoff = Cutoff::LowestModeTimes(geardyn::explicit::far::FAR_BLOCK_CUTOFF);
+    let pair_block = block_at(pair_cutoff, f64::INFINITY);
+    // The pair's bound at 3000 rpm (twice the speed, explicit::far::RATE_BOUND_FACTOR).
+    let bounded_block = block_at(pair_cutoff, 2.0 * 314.16);
     let mut group = c.benchmark_group("reduced_block_paper36_window");
     let (x, v, mut force) = turned_state(&mesh);
     for (name, body) in [
@@ -217,6 +220,10 @@ fn reduced_block(c: &mut Criterion) {
     for (name, block) in [
         ("reduced_prescribed", &block),
         ("reduced_prescribed_pair_cutoff", &pair_block),
+        (
+            "reduced_prescribed_pair_cutoff_coriolis_bound",
+            &bounded_block,
+        ),
     ] {
         let mut state = state_of(block);
         let mut scratch = block.scratch();

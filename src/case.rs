@@ -1074,7 +1074,7 @@ impl Case {
             return Err(invalid(
                 "fe.far_block_cutoff",
                 fe.far_block_cutoff.to_string(),
-                "must be in [2, 100] (default 12: a reduced far block's fixed-interface modes to 12 times its lowest; below about 6 the block's own ringing is cut short)",
+                "must be in [2, 100] (default 16: a reduced far block's fixed-interface modes to 16 times its lowest; below about 6 the block's own ringing is cut short)",
             ));
         }
         if !(fe.penalty_factor > 0.0 && fe.penalty_factor.is_finite()) {
@@ -1918,7 +1918,10 @@ mod tests {
         assert!(far.contains("reducd"), "{far}");
         let reduced = Case::load_with(None, &[set("fe.far_body=reduced")]).unwrap();
         assert_eq!(reduced.fe.far_body, crate::explicit::far::FarBody::Reduced);
-        assert_eq!(reduced.fe.far_block_cutoff, 12.0);
+        assert_eq!(
+            reduced.fe.far_block_cutoff,
+            crate::explicit::far::FAR_BLOCK_CUTOFF
+        );
         let no_scene = message("scene[nowhere].duration_s=1");
         assert!(
             no_scene.contains("nowhere") && no_scene.contains("low-unmodified"),

@@ -526,7 +526,8 @@ impl ExplicitPair {
         let build = |g: usize| match &lookups[g] {
             Lookup::Build(request) => {
                 let body = &self.bodies[g];
-                Some(request.build(&self.meshes[g], &body.mass, &body.material, cache.cutoff))
+                let (cutoff, bound) = (cache.cutoff, cache.rate_bounds[g]);
+                Some(request.build(&self.meshes[g], &body.mass, &body.material, cutoff, bound))
             }
             _ => None,
         };
@@ -611,8 +612,30 @@ impl ExplicitPair {
         let teeth = self.pair.gears[g].teeth() as usize;
         let (mesh, body) = (&self.meshes[g], &self.bodies[g]);
         if let Lookup::Build(request) = cache.lookup(g, teeth, mesh, &body.mass) {
-            let block = request.build(mesh, &body.mass, &body.material, cache.cutoff)?;
+            let (cutoff, bound) = (cache.cutoff, cache.rate_bounds[g]);
+            let block = request.build(mesh, &body.mass, &body.material, cutoff, bound)?;
             cache.insert(request, block, &body.mass);
+        }
+        Ok(())
+    }
+
+    /// Whether each far block's Coriolis couplings hold at the hubs' `rates` [rad/s]
+    /// ([`crate::explicit::far::RATE_BOUND_FACTOR`]); a message that says what to change if
+    /// not.
+    fn far_rates_hold(&self, rates: [f64; 2]) -> Result<(), String> {
+        for (g, far) in self.far.iter().enumerate() {
+            let Some(far) = far else { continue };
+            let bound = far.block.block.rate_bound();
+            if rates[g].abs() > bound {
+                return Err(format!(
+                    "gear {} turns at {:.1} rad/s, above the {bound:.1} rad/s its reduced far \
+                     block keeps its Coriolis couplings for ({} times its nominal speed): run \
+                     it with fe.far_body = \"full\"",
+                    g + 1,
+                    rates[g].abs(),
+                    crate::explicit::far::RATE_BOUND_FACTOR
+                ));
+            }
         }
         Ok(())
     }
@@ -2213,7 +2236,7 @@ impl<'a> PairIntegrator<'a> {
         if !(state.hub[0].is_finite() && strain.is_finite()) {
             return Err("the state is not finite (NaN or infinity)".into());
         }
-        Ok(())
+        model.far_rates_hold([rate, state.hub[1]])
     }
 
     /// Stable step of the pair linearized at `state`: Δt_cr = 2/ω_max, ω_max² the largest

@@ -1269,6 +1269,14 @@ impl WindowPlan {
     }
 }
 
+/// An empty cache of the scene's far blocks: its cutoff, its hubs' rate bounds.
+fn block_cache(prepared: &PreparedScene) -> BlockCache {
+    let gears = &prepared.model.pair.gears;
+    let teeth = [gears[0].teeth() as usize, gears[1].teeth() as usize];
+    let bounds = crate::explicit::far::rate_bounds(prepared.drive.driver_speed, teeth);
+    BlockCache::new(prepared.far_block_cutoff, bounds)
+}
+
 /// The pair model of `window`: the scene's, meshed fine on the window's teeth only; its far
 /// bodies reduced if the scene says so, the blocks from `cache` where they fit.
 fn window_model(
@@ -1597,7 +1605,7 @@ pub fn run(
         let from = resume.map(|(c, h)| (c, h, false));
         return match run_window(
             prepared,
-            (&prepared.model, &BlockCache::new(prepared.far_block_cutoff)),
+            (&prepared.model, &block_cache(prepared)),
             None,
             duration,
             output_interval,
@@ -1622,7 +1630,7 @@ pub fn run(
     };
     // One far block per gear and pattern of fine teeth, for the whole run; a resumed run's the
     // interrupted run's, built again where they were.
-    let mut cache = BlockCache::new(prepared.far_block_cutoff);
+    let mut cache = block_cache(prepared);
     if let Some((checkpoint, _)) = &resume {
         for seed in &checkpoint.far_blocks {
             let mut fine_teeth = window.fine_teeth.clone();

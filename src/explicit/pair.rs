@@ -622,15 +622,15 @@ impl ExplicitPair {
     /// Whether each far block's Coriolis couplings hold at the hubs' `rates` [rad/s]
     /// ([`crate::explicit::far::RATE_BOUND_FACTOR`]); a message that says what to change if
     /// not.
-    fn far_rates_hold(&self, rates: [f64; 2]) -> Result<(), String> {
+    pub fn far_rates_hold(&self, rates: [f64; 2]) -> Result<(), String> {
         for (g, far) in self.far.iter().enumerate() {
             let Some(far) = far else { continue };
             let bound = far.block.block.rate_bound();
             if rates[g].abs() > bound {
                 return Err(format!(
                     "gear {} turns at {:.1} rad/s, above the {bound:.1} rad/s its reduced far \
-                     block keeps its Coriolis couplings for ({} times its nominal speed): run \
-                     it with fe.far_body = \"full\"",
+                     block keeps its Coriolis couplings for (sized for {} times its nominal \
+                     speed): run it with fe.far_body = \"full\"",
                     g + 1,
                     rates[g].abs(),
                     crate::explicit::far::RATE_BOUND_FACTOR
@@ -2236,7 +2236,14 @@ impl<'a> PairIntegrator<'a> {
         if !(state.hub[0].is_finite() && strain.is_finite()) {
             return Err("the state is not finite (NaN or infinity)".into());
         }
-        model.far_rates_hold([rate, state.hub[1]])
+        Ok(())
+    }
+
+    /// Whether the far blocks' Coriolis couplings hold at `state`'s hub rates
+    /// ([`ExplicitPair::far_rates_hold`]): the run stops if not.
+    pub fn far_rates_hold(&self, state: &PairState) -> Result<(), String> {
+        let (_, rate, _) = self.drive.driver_motion(state.time);
+        self.model.far_rates_hold([rate, state.hub[1]])
     }
 
     /// Stable step of the pair linearized at `state`: Δt_cr = 2/ω_max, ω_max² the largest

@@ -64,7 +64,9 @@
 //! coupling between modes j and k with Ω_j ≥ 2ω/ε moves mode j, driven at mode k's frequency
 //! Ω_k ≤ Ω_j, by |η_j| ≤ 2ω Ω_k |η_k| / Ω_j² ≤ ε |η_k|, and puts on mode k at most ε times
 //! mode j's elastic force (and the Euler term ω̇ Ĝ η moves mode j by ω̇/Ω_j² of |η_k|,
-//! 1e-7 at the 3000 rpm scene's driven-hub accelerations). So the block keeps Ĝ among its
+//! 1e-7 at the 3000 rpm scene's driven-hub accelerations). Two modes left out with near-equal
+//! frequencies (the teeth's clusters) are not moved quasi-statically but split: their
+//! frequencies by at most ω |Ĝ_jk| ≤ ε Ω_j / 2. So the block keeps Ĝ among its
 //! own modes below 2 ω_max / ε only ([`CORIOLIS_TOLERANCE`] ε = 1e-3, ω_max the largest |ω|
 //! the hub may reach, which the explicit pair sets and checks), the same Ĝ in the energy
 //! and the momentum, so that the model keeps its own energy exactly: at 3000 rpm (ω_max
@@ -314,7 +316,8 @@ pub struct ReducedBlock {
     /// Ĝ = Vᵀ G V among the own modes whose Coriolis couplings are kept (the lowest ones,
     /// module doc), m̂ = Vᵀ m_X, ĝ = Vᵀ g_X.
     modal_gyroscopic: DMatrix<f64>,
-    /// The largest |ω| [rad/s] the couplings kept are sized for.
+    /// The largest |ω| [rad/s] the couplings kept hold for: ε/2 times the first own mode left
+    /// out (infinite if none is), at or above the bound [`Self::new`] was asked for.
     rate_bound: f64,
     modal_radial: DVector<f64>,
     modal_turning: DVector<f64>,
@@ -654,6 +657,11 @@ impl ReducedBlock {
             .iter()
             .take_while(|l| CORIOLIS_TOLERANCE * l.sqrt() < 2.0 * rate_bound)
             .count();
+        // What the couplings kept hold for: up to ε/2 times the first mode left out (at or
+        // above the bound asked for).
+        let rate_bound = modal_squared
+            .get(coriolis_modes)
+            .map_or(f64::INFINITY, |l| 0.5 * CORIOLIS_TOLERANCE * l.sqrt());
         let interface_modes = own_modes.rows(0, nb).into_owned();
         let kept_modes = own_modes.columns(0, coriolis_modes);
         let mut modal_gyroscopic = kept_modes.transpose() * &gyroscopic * kept_modes;
@@ -700,7 +708,8 @@ impl ReducedBlock {
         self.modal_gyroscopic.nrows()
     }
 
-    /// The largest |ω| of the hub [rad/s] the kept Coriolis couplings hold for (module doc).
+    /// The largest |ω| of the hub [rad/s] the kept Coriolis couplings hold for (module doc): ε/2
+    /// times the first own mode left out, at or above the bound the block was built for.
     pub fn rate_bound(&self) -> f64 {
         self.rate_bound
     }
@@ -1282,7 +1291,16 @@ mod tests {
     #[test]
     fn a_free_spinning_block_keeps_its_angular_momentum_and_energy() {
         let (mesh, body, in_block) = window_mesh();
-        let block = block_of(&mesh, &body, &in_block, 20e3, f64::INFINITY);
+        // Every Coriolis coupling, and those of a bound of twice the spin (truncated).
+        for rate_bound in [f64::INFINITY, 600.0] {
+            let block = block_of(&mesh, &body, &in_block, 20e3, rate_bound);
+            assert!(rate_bound.is_infinite() || block.coriolis_modes() < block.dofs());
+            a_free_spinning_block_keeps_them(&block);
+        }
+    }
+
+    /// [`a_free_spinning_block_keeps_its_angular_momentum_and_energy`] on `block`.
+    fn a_free_spinning_block_keeps_them(block: &ReducedBlock) {
         let hub_inertia = 1e-3;
         // An initial deformation: the last residual vector (the angular acceleration's) and an
         // interface shear.
@@ -1678,11 +1696,11 @@ mod tests {
     /// The Coriolis couplings a block leaves out (module doc), on the spin-up of
     /// [`the_reduced_block_spins_up_as_the_full_body`]: with the bound the explicit pair sets
     /// (twice the speed) the block keeps Ĝ among fewer than half of its own modes (61 of 143),
-    /// and its run differs from the run with every coupling kept by less than ε =
-    /// [`CORIOLIS_TOLERANCE`] of the largest values (measured: 2.8e-7, 8.4e-7 and 1.5e-7 of
-    /// the loaded node's, the interface node's motion and the hub torque) and by less than
-    /// 1 % of what leaving out every coupling moves them (1.7e-4, 3.1e-4, 6.2e-4): the
-    /// couplings left out carry under 1 % of the Coriolis term's effect.
+    /// and its run differs from the run with every coupling kept by less than 1 % of what
+    /// leaving out every coupling moves it (measured: 2.8e-7, 8.4e-7 and 1.5e-7 of the largest
+    /// values of the loaded node's, the interface node's motion and the hub torque, against
+    /// 1.7e-4, 3.1e-4, 6.2e-4 with none kept): the couplings left out carry under 1 % of the
+    /// Coriolis term's effect at this speed.
     #[test]
     fn the_coriolis_couplings_left_out_move_the_block_within_their_bound() {
         let turning = Turning {
@@ -1714,7 +1732,6 @@ mod tests {
             kept.map(|e| format!("{e:.2e}")),
             none.map(|e| format!("{e:.2e}"))
         );
-        assert!(kept.iter().all(|e| *e < CORIOLIS_TOLERANCE), "{kept:?}");
         assert!(
             kept.iter().zip(&none).all(|(k, n)| *k < 0.01 * n),
             "{kept:?} against {none:?}"

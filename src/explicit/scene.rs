@@ -1431,10 +1431,16 @@ pub fn scene_fingerprint(prepared: &PreparedScene, duration: f64, output_interva
     eat(&(total_steps as u64).to_le_bytes());
     eat(&(every as u64).to_le_bytes());
     eat(format!("{:?}", prepared.time_step).as_bytes());
-    // Blocks change the run's answers; a full far body hashes as before.
+    // Blocks change the run's answers; a full far body hashes as before. The blocks' modal
+    // state means what their build makes of it: its order and Coriolis tolerance (since
+    // 2026-12-06's second basis: modes ascending, couplings to ε) go in too.
     if prepared.far_body != FarBody::Full {
         eat(format!("{:?}", prepared.far_body).as_bytes());
         eat(&prepared.far_block_cutoff.to_bits().to_le_bytes());
+        eat(b"far block basis 2");
+        eat(&crate::explicit::reduced::CORIOLIS_TOLERANCE
+            .to_bits()
+            .to_le_bytes());
     }
     // Debug prints every f64 in its shortest exact form.
     eat(format!("{:?}", prepared.drive).as_bytes());
@@ -1980,6 +1986,16 @@ fn run_window(
             diverged = Some(format!(
                 "the explicit run diverged at t = {:.6e} s (step {step}): {cause}. {remedy}. The \
                  results up to t = {:.6e} s are kept",
+                state.time,
+                history.time.last().copied().unwrap_or(0.0)
+            ));
+            break;
+        }
+        // Not a divergence: the reduced far blocks' model no longer holds (no lower step helps).
+        if let Err(reason) = integrator.far_rates_hold(&state) {
+            diverged = Some(format!(
+                "the explicit run stopped at t = {:.6e} s (step {step}): {reason}. The results up \
+                 to t = {:.6e} s are kept",
                 state.time,
                 history.time.last().copied().unwrap_or(0.0)
             ));

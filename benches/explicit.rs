@@ -133,8 +133,8 @@ fn pair_step(c: &mut Criterion) {
 /// 80 kHz cutoff ([`geardyn::explicit::reduced`]): its interface motion and accelerations with
 /// the hub turned at a prescribed rate (the driver) and with a free hub (the driven gear); the
 /// same prescribed step of the block the pair builds (`fe.far_body = "reduced"`: its modes to
-/// [`geardyn::explicit::far::FAR_BLOCK_CUTOFF`] times its lowest); the whole gear's and the six
-/// fine sectors' elements for scale.
+/// [`geardyn::explicit::far::FAR_BLOCK_CUTOFF`] times the fine sectors' lowest); the whole
+/// gear's and the six fine sectors' elements for scale.
 fn reduced_block(c: &mut Criterion) {
     use geardyn::explicit::reduced::{Cutoff, FrameMotion, ReducedBlock};
     let case = samples::paper36_case();
@@ -177,7 +177,7 @@ fn reduced_block(c: &mut Criterion) {
         block
     };
     let block = block_at(Cutoff::Hz(80e3), f64::INFINITY);
-    let pair_cutoff = Cutoff::LowestModeTimes(geardyn::explicit::far::FAR_BLOCK_CUTOFF);
+    let pair_cutoff = Cutoff::BesideBlockTimes(geardyn::explicit::far::FAR_BLOCK_CUTOFF);
     let pair_block = block_at(pair_cutoff, f64::INFINITY);
     // The pair's bound at 3000 rpm (twice the speed, explicit::far::RATE_BOUND_FACTOR).
     let bounded_block = block_at(pair_cutoff, 2.0 * 314.16);

@@ -42,24 +42,31 @@ use super::remesh::PointIndex;
 #[serde(rename_all = "lowercase")]
 pub enum FarBody {
     /// Every element in the explicit step.
-    #[default]
     Full,
     /// The coarse sectors of a run on windows of fine teeth as one reduced block per gear
-    /// (module doc), its fixed-interface modes kept to a multiple of its lowest (the case's
-    /// `fe.far_block_cutoff`, default [`FAR_BLOCK_CUTOFF`]).
+    /// (module doc), its fixed-interface modes kept to a multiple of the fine sectors' lowest
+    /// (the case's `fe.far_block_cutoff`, default [`FAR_BLOCK_CUTOFF`]). The default since
+    /// 2026-12-06: within the windows' tolerances of the full bodies on the paper's pair at
+    /// 3000 rpm and on 24/40 and 40/24 at 12 000 rpm, and about a fifth faster on the paper's
+    /// 3000 rpm scene. Runs on one mesh (no windows) keep their bodies full either way.
+    #[default]
     Reduced,
 }
 
-/// The cutoff of a far block's fixed-interface modes over its lowest one. Against the full
-/// bodies on the coarse pair's windows at 12 000 rpm (tests/explicit_pair.rs) the DTE's
-/// peak-to-peak is 2.9 % off at 6 times (the reduced block's own checks: on the paper's
-/// driver, lowest 13.4 kHz, 80 kHz kept its interface within 0.18 % at 3000 rpm; the stiffer
-/// 24-tooth pinion of the shifted 24/40 pair needed 160 kHz for 0.45 %), 0.5 % at 12 times:
-/// a multiple of the block's own lowest mode follows the gear, where a fixed frequency would
-/// not. On the 3000 rpm scene (validation/performance, lever 2d) 12 times left two small DTE
-/// lines 2.2 and 2.3 % off the full bodies' and the impact 3.7 %; 16 times (to 214 kHz on the
-/// paper's driver, 196 modes, 294 reduced DOFs) every line within 1.5 %, the impact 0.9 %.
-pub const FAR_BLOCK_CUTOFF: f64 = 16.0;
+/// The cutoff of a far block's fixed-interface modes over the lowest mode of the fine sectors
+/// beside it (held at the block and the bore: the teeth that carry the contact, as the block
+/// sees them; [`super::reduced::lowest_mode_beside_block`]). The block feeds those teeth and is
+/// fed by them, so it keeps its own modes to several times the frequency they vibrate at.
+/// Against the full bodies on the coarse windows at 12 000 rpm (tests/explicit_pair.rs), the
+/// DTE's rms difference over its peak-to-peak at 5, 6, 7, 8 times: 1.90, 1.21, 0.80, 0.54 % on
+/// 40/24 and 0.24, 0.13, 0.08, 0.05 % on 24/40 (the windows' tolerance 2 %;
+/// validation/performance, lever 2f). The rule it replaces, a multiple of the block's own lowest
+/// mode, did not follow the gears: a large gear's rim has a low lowest mode (11 kHz on the
+/// 40-tooth gear), so 16 times left 40/24's DTE peak-to-peak 2.9 % off, while the stiff
+/// 24-tooth gear kept its modes to 500 kHz for nothing. On the paper's driver at its real mesh
+/// (fine sectors' lowest 31–45 kHz with the window's pattern) 6 times keeps its modes to
+/// 190–270 kHz, where 16 times its lowest kept them to 214–225 kHz.
+pub const FAR_BLOCK_CUTOFF: f64 = 6.0;
 
 /// How many times its nominal speed a gear's hub may turn before its far block's Coriolis
 /// couplings no longer hold ([`ReducedBlock::new`]: they are kept among the own modes below
@@ -92,7 +99,7 @@ pub struct FarBlock {
 /// The blocks built so far, by gear and pattern of fine teeth, at one cutoff.
 #[derive(Debug)]
 pub struct BlockCache {
-    /// The blocks' cutoff over their lowest fixed-interface mode.
+    /// The blocks' cutoff over the lowest mode of the fine sectors beside them.
     pub cutoff: f64,
     /// The largest |ω| each gear's hub may reach [rad/s]: its blocks keep their Coriolis
     /// couplings for it ([`ReducedBlock::new`]), and the explicit pair stops a run that
@@ -129,8 +136,8 @@ impl BlockCache {
             .collect()
     }
 
-    /// An empty cache of blocks cut off at `cutoff` times their lowest fixed-interface mode,
-    /// for hubs turning at most at `rate_bounds` [rad/s].
+    /// An empty cache of blocks cut off at `cutoff` times the lowest mode of the fine sectors
+    /// beside them, for hubs turning at most at `rate_bounds` [rad/s].
     pub fn new(cutoff: f64, rate_bounds: [f64; 2]) -> Self {
         BlockCache {
             cutoff,
@@ -195,8 +202,9 @@ pub struct BlockRequest {
 
 impl BlockRequest {
     /// The block of `mesh` with nodal masses `mass` (the whole mesh's): every element outside
-    /// the fine sectors, the bore held, its modes to `cutoff` times its lowest, its Coriolis
-    /// couplings for a hub turning at most at `rate_bound` [rad/s].
+    /// the fine sectors, the bore held, its modes to `cutoff` times the fine sectors' lowest
+    /// ([`Cutoff::BesideBlockTimes`]), its Coriolis couplings for a hub turning at most at
+    /// `rate_bound` [rad/s].
     pub fn build(
         &self,
         mesh: &GearMesh,
@@ -212,7 +220,7 @@ impl BlockRequest {
             &mesh.bore_nodes,
             mass,
             material,
-            Cutoff::LowestModeTimes(cutoff),
+            Cutoff::BesideBlockTimes(cutoff),
             rate_bound,
         )
     }

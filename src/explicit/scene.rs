@@ -228,8 +228,8 @@ pub struct FeSettings {
     /// How the teeth are laid out (the case's `fe.tooth_layout`).
     pub tooth_layout: ToothLayout,
     /// How a run on windows models the gears' bodies away from the contact (the case's
-    /// `fe.far_body`), and a reduced block's cutoff over its lowest fixed-interface mode
-    /// (`fe.far_block_cutoff`).
+    /// `fe.far_body`), and a reduced block's cutoff over the lowest mode of the fine sectors
+    /// beside it (`fe.far_block_cutoff`).
     pub far_body: FarBody,
     pub far_block_cutoff: f64,
 }
@@ -365,7 +365,7 @@ pub struct PreparedScene {
     pub fine_teeth: FineTeeth,
     pub tooth_layout: ToothLayout,
     /// The far body of a run on windows: full, or one reduced block per gear cut off at
-    /// `far_block_cutoff` times its lowest fixed-interface mode.
+    /// `far_block_cutoff` times the lowest mode of the fine sectors beside it.
     pub far_body: FarBody,
     pub far_block_cutoff: f64,
 }
@@ -1407,6 +1407,15 @@ impl<'a> Keeping<'a> {
 /// Steps between two looks at the clock for [`Keeping`].
 pub const KEEP_CHECK_STEPS: usize = 64;
 
+/// The far body a run of `prepared` over `duration` really has: its reduced blocks act on
+/// runs on windows of fine teeth only, a run on the scene's one mesh keeps its bodies full.
+pub fn run_far_body(prepared: &PreparedScene, duration: f64, output_interval: f64) -> FarBody {
+    match WindowPlan::of(prepared, duration, output_interval) {
+        Some(_) => prepared.far_body,
+        None => FarBody::Full,
+    }
+}
+
 /// A fingerprint of everything a run's steps depend on: the step, the step count and output
 /// stride, the drive, the damping, the friction, and every body's reference nodes, masses and
 /// flank penalties (FNV-1a over their bits). Two scenes that differ in any of them — another
@@ -1433,11 +1442,14 @@ pub fn scene_fingerprint(prepared: &PreparedScene, duration: f64, output_interva
     eat(format!("{:?}", prepared.time_step).as_bytes());
     // Blocks change the run's answers; a full far body hashes as before. The blocks' modal
     // state means what their build makes of it: its order and Coriolis tolerance (since
-    // 2026-12-06's second basis: modes ascending, couplings to ε) go in too.
-    if prepared.far_body != FarBody::Full {
-        eat(format!("{:?}", prepared.far_body).as_bytes());
+    // 2026-12-06's second basis: modes ascending, couplings to ε) and what the cutoff
+    // multiplies (the third: the fine sectors' lowest mode, not the block's) go in too.
+    // Of the far body the run has: a run on one mesh hashes as before whatever the setting.
+    let far_body = run_far_body(prepared, duration, output_interval);
+    if far_body != FarBody::Full {
+        eat(format!("{far_body:?}").as_bytes());
         eat(&prepared.far_block_cutoff.to_bits().to_le_bytes());
-        eat(b"far block basis 2");
+        eat(b"far block basis 3");
         eat(&crate::explicit::reduced::CORIOLIS_TOLERANCE
             .to_bits()
             .to_le_bytes());
@@ -1553,7 +1565,7 @@ pub fn run_memory(prepared: &PreparedScene, duration: f64, output_interval: f64)
             "stable-step check",
             // With reduced far bodies, a copy of the state with their nodes expanded besides.
             nodes
-                * match prepared.far_body {
+                * match run_far_body(prepared, duration, output_interval) {
                     FarBody::Full => 8.0,
                     FarBody::Reduced => 11.0,
                 }
@@ -1591,7 +1603,9 @@ pub fn run(
                 "it was made on another scene (its step, duration, drive, damping, friction \
                  or mesh differ): resume with the scene, case file, --set and flags of the \
                  interrupted run (a checkpoint from before 2026-12-06 was meshed with the \
-                 graded tooth layout, then the default: add --set fe.tooth_layout=graded)"
+                 graded tooth layout, then the default: add --set fe.tooth_layout=graded; \
+                 one of a run on windows from before 2026-12-06's reduced far body default \
+                 had full bodies: add --set fe.far_body=full)"
                     .to_string(),
             ));
         }

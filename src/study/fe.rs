@@ -501,8 +501,8 @@ pub struct FeSummary {
     pub coarse_element_mm: f64,
     /// How the explicit mesh laid out the teeth (`fe.tooth_layout`).
     pub tooth_layout: ToothLayout,
-    /// How the run modelled the bodies away from the contact (`fe.far_body`; "reduced" acts
-    /// on runs on windows only, `model` says whether it did).
+    /// How the run modelled the bodies away from the contact: `fe.far_body` on a run on
+    /// windows, "full" on one mesh (the reduced blocks act on runs on windows only).
     pub far_body: FarBody,
     /// The run's checks of its own answer against the LTCA on its own mesh ([`self_checks`]).
     pub self_checks: Vec<Check>,
@@ -832,7 +832,11 @@ pub fn run(
         fine_element_mm: fine_mm,
         coarse_element_mm: coarse_mm,
         tooth_layout: settings.tooth_layout,
-        far_body: settings.far_body,
+        far_body: if outcome.windows > 0 {
+            settings.far_body
+        } else {
+            FarBody::Full
+        },
         self_checks: fe_checks,
     };
     Ok(FeStudy {
@@ -926,7 +930,7 @@ fn model_description(case: &Case, prepared: &PreparedScene, mesh: &RunMesh) -> S
     } + &match (settings.far_body, mesh.windows > 0) {
         (FarBody::Full, _) => String::new(),
         (FarBody::Reduced, true) => format!(
-            "; each window's coarse sectors one reduced Craig–Bampton block per gear turning with its hub (fixed-interface modes to {} times the block's lowest, static interface and spin loads exact; fe.far_body, fe.far_block_cutoff), the step's elements the fine sectors' only",
+            "; each window's coarse sectors one reduced Craig–Bampton block per gear turning with its hub (fixed-interface modes to {} times the lowest of the fine sectors beside it, static interface and spin loads exact; fe.far_body, fe.far_block_cutoff), the step's elements the fine sectors' only",
             settings.far_block_cutoff
         ),
         (FarBody::Reduced, false) => {

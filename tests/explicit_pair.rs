@@ -1214,10 +1214,10 @@ fn a_stiffness_scene_covers_a_base_pitch_of_any_pair() {
 /// difference of the DTE falls at every step of 5, 6, 7, 8 times the fine sectors' lowest mode.
 /// Measured 2026-12-06: 1.90, 1.21, 0.80, 0.54 % of the peak-to-peak on 40/24 and 0.24, 0.13,
 /// 0.08, 0.05 % on 24/40 (the peak-to-peak −1.40, −0.62, −0.63, −0.25 % and −0.05, +0.17,
-/// +0.04, −0.08 %). Ignored in the suite (about 9 minutes):
+/// +0.04, −0.08 %). Ignored in the suite (about 6 minutes):
 /// `cargo test --release --test explicit_pair -- --ignored converge --nocapture`.
 #[test]
-#[ignore = "about 9 minutes"]
+#[ignore = "about 6 minutes"]
 fn reduced_far_bodies_converge_as_their_cutoff_rises() {
     for name in ["40-24", "24-40"] {
         let case = coarse_matrix_pair(name);
@@ -1253,4 +1253,69 @@ fn reduced_far_bodies_converge_as_their_cutoff_rises() {
             .collect();
         assert!(rms.windows(2).all(|w| w[1] < w[0]), "{name}: {rms:?}");
     }
+}
+
+/// [`reduced_far_bodies_on_unequal_gears_follow_their_full_bodies`] on the rest of the test
+/// matrix (shifts, a hunting tooth, extreme modules, a thin rim, 25°, high contact ratios),
+/// the coarse elements scaled with the module; each pair's outcome printed, then every failure
+/// named. Measured 2026-12-06 (DTE peak-to-peak, rms of the difference over it, pair loads):
+/// 17-53-shift +0.20 / 0.17 / 0.09 %, 31-32 +0.20 / 0.34 / 0.05 %, 19-57-shift +0.15 / 0.08 /
+/// 0.04 %, 19-57-backlash +0.01 / 0.04 / 0.01 %, module-1 +0.01 / 0.02 / 0.01 %, module-8
+/// +0.81 / 0.57 / 0.51 %, thin-rim −0.04 / 0.17 / 0.10 %, alpha-25 +0.04 / 0.18 / 0.22 %,
+/// hcr-2.1 +0.10 / 0.23 / 0.25 %, hcr-2.4 −0.13 / 0.50 / 1.28 %, hcr-2.65 +1.01 / 0.74 /
+/// 1.28 %: all within the windows' 2 %. Ignored in the suite (about 16 minutes):
+/// `cargo test --release --test explicit_pair -- --ignored across_the_test_matrix --nocapture`.
+#[test]
+#[ignore = "about 16 minutes"]
+fn reduced_far_bodies_across_the_test_matrix() {
+    let mut failures = Vec::new();
+    for pair in geardyn::samples::PAIR_MATRIX {
+        if ["paper36", "24-40", "40-24"].contains(&pair.name) {
+            continue;
+        }
+        let module_mm = pair.case().unwrap().pair.gears[0].module() * 1e3;
+        let scale = module_mm / 3.18;
+        let mut overrides = pair.parsed_overrides();
+        overrides.extend([
+            Override::set("mesh.fine_element_mm", 1.5 * scale),
+            Override::set("mesh.coarse_element_mm", 3.0 * scale),
+            Override::set("fe.explicit_fine_element_mm", 1.5 * scale),
+        ]);
+        let case = Case::load_with(None, &overrides).unwrap();
+        let outcome = std::panic::catch_unwind(|| {
+            let run_with = |far_body: FarBody| {
+                let prepared = high_speed_scene_of(&case, FineTeeth::Window, far_body);
+                let outcome = run(
+                    &prepared,
+                    TWELVE_PITCH_DURATION,
+                    2e-6,
+                    None,
+                    None,
+                    &mut |_| {},
+                );
+                let outcome = outcome.unwrap();
+                assert!(outcome.diverged.is_none(), "{:?}", outcome.diverged);
+                outcome
+            };
+            let (full, reduced) = (run_with(FarBody::Full), run_with(FarBody::Reduced));
+            let agreement = TwelvePitchAgreement::of(&reduced, &full);
+            eprintln!(
+                "{}: {} windows, blocks built {}, DTE peak-to-peak {:+.3} %, rms of the difference {:.3} %, pair loads {:.3} %",
+                pair.name,
+                reduced.windows,
+                reduced.far_blocks_built,
+                100.0 * (agreement.peak_to_peak[0] / agreement.peak_to_peak[1] - 1.0),
+                100.0 * agreement.rms_difference / agreement.peak_to_peak[1],
+                100.0 * agreement.worst_pair / agreement.largest_pair.max(f64::MIN_POSITIVE)
+            );
+            agreement.assert_within_the_windows_tolerances();
+        });
+        if outcome.is_err() {
+            failures.push(pair.name);
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "outside the windows' tolerances: {failures:?}"
+    );
 }

@@ -54,8 +54,8 @@ pub enum FarBody {
 }
 
 /// The cutoff of a far block's fixed-interface modes over the lowest mode of the fine sectors
-/// beside it (held at the block and the bore: the teeth that carry the contact, as the block
-/// sees them; [`super::reduced::lowest_mode_beside_block`]). The block feeds those teeth and is
+/// beside it (held at the block and the bore: the sectors that carry the contact, as the
+/// block sees them; [`super::reduced::lowest_mode_beside_block`]). The block feeds those teeth and is
 /// fed by them, so it keeps its own modes to several times the frequency they vibrate at.
 /// Against the full bodies on the coarse windows at 12 000 rpm (tests/explicit_pair.rs), the
 /// DTE's rms difference over its peak-to-peak at 5, 6, 7, 8 times: 1.90, 1.21, 0.80, 0.54 % on

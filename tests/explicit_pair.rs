@@ -864,6 +864,23 @@ fn high_speed_scene_of(case: &Case, fine_teeth: FineTeeth, far_body: FarBody) ->
     study::fe::prepare(&case, &scene).unwrap()
 }
 
+/// `case`'s run of [`high_speed_scene_of`] on windows of fine teeth with its far bodies as
+/// `far_body`, over [`TWELVE_PITCH_DURATION`], which must not diverge.
+fn twelve_pitch_outcome(case: &Case, far_body: FarBody) -> RunOutcome {
+    let prepared = high_speed_scene_of(case, FineTeeth::Window, far_body);
+    let outcome = run(
+        &prepared,
+        TWELVE_PITCH_DURATION,
+        2e-6,
+        None,
+        None,
+        &mut |_| {},
+    )
+    .unwrap();
+    assert!(outcome.diverged.is_none(), "{:?}", outcome.diverged);
+    outcome
+}
+
 /// Reduced far bodies on pairs of unequal gears (the test matrix's 24/40 and its inverse
 /// 40/24, coarse: pitches of 15° and 9°, so the two gears' windows advance by different turns
 /// and their blocks' patterns differ): against the same windows in full, held to the windows'
@@ -886,14 +903,10 @@ fn reduced_far_bodies_on_unequal_gears_follow_their_full_bodies() {
 /// `name`.
 fn unequal_gears_against_their_full_bodies(name: &str) {
     let case = coarse_matrix_pair(name);
-    let duration = TWELVE_PITCH_DURATION;
-    let outcome = |far_body: FarBody| {
-        let prepared = high_speed_scene_of(&case, FineTeeth::Window, far_body);
-        let outcome = run(&prepared, duration, 2e-6, None, None, &mut |_| {}).unwrap();
-        assert!(outcome.diverged.is_none(), "{:?}", outcome.diverged);
-        outcome
-    };
-    let (full, reduced) = (outcome(FarBody::Full), outcome(FarBody::Reduced));
+    let (full, reduced) = (
+        twelve_pitch_outcome(&case, FarBody::Full),
+        twelve_pitch_outcome(&case, FarBody::Reduced),
+    );
     assert!(full.windows >= 6, "{} windows", full.windows);
     assert_eq!(reduced.windows, full.windows);
     eprintln!(
@@ -1224,18 +1237,7 @@ fn reduced_far_bodies_converge_as_their_cutoff_rises() {
         let outcome = |far_body: FarBody, cutoff: f64| {
             let mut case = case.clone();
             case.fe.far_block_cutoff = cutoff;
-            let prepared = high_speed_scene_of(&case, FineTeeth::Window, far_body);
-            let outcome = run(
-                &prepared,
-                TWELVE_PITCH_DURATION,
-                2e-6,
-                None,
-                None,
-                &mut |_| {},
-            );
-            let outcome = outcome.unwrap();
-            assert!(outcome.diverged.is_none(), "{:?}", outcome.diverged);
-            outcome
+            twelve_pitch_outcome(&case, far_body)
         };
         let full = outcome(FarBody::Full, FAR_BLOCK_CUTOFF);
         let rms: Vec<f64> = [5.0, 6.0, 7.0, 8.0]
@@ -1283,21 +1285,10 @@ fn reduced_far_bodies_across_the_test_matrix() {
         ]);
         let case = Case::load_with(None, &overrides).unwrap();
         let outcome = std::panic::catch_unwind(|| {
-            let run_with = |far_body: FarBody| {
-                let prepared = high_speed_scene_of(&case, FineTeeth::Window, far_body);
-                let outcome = run(
-                    &prepared,
-                    TWELVE_PITCH_DURATION,
-                    2e-6,
-                    None,
-                    None,
-                    &mut |_| {},
-                );
-                let outcome = outcome.unwrap();
-                assert!(outcome.diverged.is_none(), "{:?}", outcome.diverged);
-                outcome
-            };
-            let (full, reduced) = (run_with(FarBody::Full), run_with(FarBody::Reduced));
+            let (full, reduced) = (
+                twelve_pitch_outcome(&case, FarBody::Full),
+                twelve_pitch_outcome(&case, FarBody::Reduced),
+            );
             let agreement = TwelvePitchAgreement::of(&reduced, &full);
             eprintln!(
                 "{}: {} windows, blocks built {}, DTE peak-to-peak {:+.3} %, rms of the difference {:.3} %, pair loads {:.3} %",

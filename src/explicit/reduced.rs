@@ -260,6 +260,36 @@ pub fn split_elements(
     (strip(block), strip(rest))
 }
 
+type Triplets = Vec<(usize, usize, f64)>;
+
+/// The problem on the DOFs of the nodes `free` (ascending) of a mesh of `nodes` nodes: their
+/// numbering (x and y of each in turn; `usize::MAX` for every other DOF), `stiffness`'s entries
+/// among them renumbered (ascending on both sides, so the lower triangle stays the lower
+/// triangle) and their lumped masses `mass` (one per mesh node) as triplets.
+fn on_free_nodes(
+    nodes: usize,
+    free: &[usize],
+    stiffness: &[(usize, usize, f64)],
+    mass: &[f64],
+) -> (Vec<usize>, Triplets, Triplets) {
+    let mut index = vec![usize::MAX; 2 * nodes];
+    for (k, &node) in free.iter().enumerate() {
+        index[2 * node] = 2 * k;
+        index[2 * node + 1] = 2 * k + 1;
+    }
+    let free_stiffness = stiffness
+        .iter()
+        .filter_map(|&(r, c, v)| {
+            let (fr, fc) = (index[r], index[c]);
+            (fr != usize::MAX && fc != usize::MAX).then_some((fr, fc, v))
+        })
+        .collect();
+    let free_mass = (0..2 * free.len())
+        .map(|k| (k, k, mass[free[k / 2]]))
+        .collect();
+    (index, free_stiffness, free_mass)
+}
+
 /// The lowest mode [Hz] of the mesh's elements outside the block (`in_block` false: a window's
 /// fine sectors) held where they meet the block and at the nodes `held` (the bore): the
 /// fundamental of the sectors that carry the contact, as the block sees them (a sector's, not
@@ -280,20 +310,8 @@ pub fn lowest_mode_beside_block(
         material.poisson_ratio,
         material.plane,
     );
-    let mut free_index = vec![usize::MAX; 2 * nodes.len()];
-    for (k, &node) in internal.iter().enumerate() {
-        free_index[2 * node] = 2 * k;
-        free_index[2 * node + 1] = 2 * k + 1;
-    }
-    // Ascending on both sides, so the lower triangle stays the lower triangle.
-    let stiffness: Vec<(usize, usize, f64)> =
-        stiffness_triplets(nodes, &rest, &d, material.thickness)
-            .into_iter()
-            .filter_map(|(r, c, v)| {
-                let (fr, fc) = (free_index[r], free_index[c]);
-                (fr != usize::MAX && fc != usize::MAX).then_some((fr, fc, v))
-            })
-            .collect();
+    let stiffness = stiffness_triplets(nodes, &rest, &d, material.thickness);
+    let (_, stiffness, mass) = on_free_nodes(nodes.len(), &internal, &stiffness, mass);
     let free = 2 * internal.len();
     if free == 0 {
         return Err(FeError::Remeshing(
@@ -302,7 +320,6 @@ pub fn lowest_mode_beside_block(
                 .into(),
         ));
     }
-    let mass: Vec<(usize, usize, f64)> = (0..free).map(|k| (k, k, mass[internal[k / 2]])).collect();
     let modes = crate::fe::modal::lowest_modes(free, &stiffness, &mass, 1, 0.0)?;
     Ok(modes[0].frequency_hz)
 }
@@ -513,25 +530,13 @@ impl ReducedBlock {
 
         // The fixed-interface problem on the internal DOFs, numbered 0..ni.
         let (nb, ni) = (2 * interface.len(), 2 * internal.len());
-        let mut internal_index = vec![usize::MAX; 2 * n];
-        for (k, &node) in internal.iter().enumerate() {
-            internal_index[2 * node] = 2 * k;
-            internal_index[2 * node + 1] = 2 * k + 1;
-        }
+        let (internal_index, internal_stiffness, mass_triplets) =
+            on_free_nodes(n, &internal, &stiffness, mass);
         let fixed: Vec<usize> = (0..2 * n)
             .filter(|&dof| internal_index[dof] == usize::MAX)
             .collect();
         let factor = FactorizedStiffness::new(2 * n, stiffness.clone(), &fixed)?;
-        let internal_stiffness: Vec<(usize, usize, f64)> = stiffness
-            .iter()
-            .filter_map(|&(r, c, v)| {
-                let (ri, ci) = (internal_index[r], internal_index[c]);
-                (ri != usize::MAX && ci != usize::MAX).then_some((ri, ci, v))
-            })
-            .collect();
         let internal_mass: Vec<f64> = internal.iter().map(|&i| mass[i]).collect();
-        let mass_triplets: Vec<(usize, usize, f64)> =
-            (0..ni).map(|k| (k, k, internal_mass[k / 2])).collect();
         // Every mode up to the target and the first above it, converged.
         let modes = lowest_modes_within(
             ni,

@@ -396,6 +396,11 @@ pub struct SceneSection {
     /// extraction on any pair: the scene's duration in seconds fits one pair's pitch only).
     #[serde(default)]
     pub cover_pitch: bool,
+    /// End the run before `duration_s` once its DTE has settled: the rms over the last three
+    /// stretches of whole mesh periods after the ramp's ringing no longer moves
+    /// ([`crate::explicit::scene::SettledStop`]); `duration_s` is then the longest it runs.
+    #[serde(default)]
+    pub stop_when_settled: bool,
     /// Ramp of the load torque, and of the driver speed when starting from rest [s].
     pub ramp_s: f64,
     /// Ramp shape: "linear" (the seed paper's) or "cosine" (no jump in acceleration).
@@ -1231,6 +1236,7 @@ impl Case {
                 friction: sc.friction,
                 duration: sc.duration_s,
                 cover_pitch: sc.cover_pitch,
+                stop_when_settled: sc.stop_when_settled,
                 ramp_time: sc.ramp_s,
                 ramp: sc.ramp,
                 start: sc.start,

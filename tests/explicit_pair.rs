@@ -7,8 +7,8 @@ use geardyn::case::{Case, Override};
 use geardyn::explicit::far::{FarBody, FAR_BLOCK_CUTOFF};
 use geardyn::explicit::pair::{Drive, ExplicitPair, PairIntegrator, PairState, Ramp, Start};
 use geardyn::explicit::scene::{
-    run, FineTeeth, History, Keeping, PreparedScene, RunCheckpoint, RunOutcome, TimeStep,
-    KEEP_CHECK_STEPS,
+    run, FineTeeth, History, Keeping, PreparedScene, RunCheckpoint, RunOutcome, SettledStop,
+    TimeStep, KEEP_CHECK_STEPS,
 };
 use geardyn::study;
 
@@ -852,9 +852,19 @@ fn twelve_pitch_scene_with(fine_teeth: FineTeeth, far_body: FarBody) -> Prepared
 /// `case`'s high-speed scene at 12 000 rpm over [`TWELVE_PITCH_DURATION`], turning from the
 /// start, the load ramped over 0.2 ms, its teeth and far bodies as given.
 fn high_speed_scene_of(case: &Case, fine_teeth: FineTeeth, far_body: FarBody) -> PreparedScene {
+    high_speed_scene_over(case, fine_teeth, far_body, TWELVE_PITCH_DURATION)
+}
+
+/// [`high_speed_scene_of`] over `duration`.
+fn high_speed_scene_over(
+    case: &Case,
+    fine_teeth: FineTeeth,
+    far_body: FarBody,
+    duration: f64,
+) -> PreparedScene {
     let mut scene = case.scene("high-unmodified").unwrap().clone();
     scene.driver_speed = 12_000.0 * std::f64::consts::TAU / 60.0;
-    scene.duration = TWELVE_PITCH_DURATION;
+    scene.duration = duration;
     scene.ramp_time = 0.2e-3;
     // Turning already: a spin-up to 12 000 rpm in 0.2 ms would swing the DTE by 30 mrad.
     scene.start = Start::AtSpeed;
@@ -879,6 +889,86 @@ fn twelve_pitch_outcome(case: &Case, far_body: FarBody) -> RunOutcome {
     .unwrap();
     assert!(outcome.diverged.is_none(), "{:?}", outcome.diverged);
     outcome
+}
+
+/// A run whose scene may stop once settled ([`SettledStop`]) ends at the first check where its
+/// own record meets the rule, not later and not sooner, with the record of the run that went
+/// on to its duration up to there, bit for bit, and says where it stopped; across windows of
+/// fine teeth (the FE speed sweep's runs; full far bodies, whose blocks would take most of
+/// the test's time on this coarse mesh). The rule is set to stop at
+/// any drift here, with thirds of 0.1 ms, so that a short run reaches it (at 3 ms, its third check): whether the rule's
+/// own drift and thirds are right is the unit test's (explicit::scene).
+#[test]
+fn a_run_stops_where_its_record_settled() {
+    let duration = 3.1e-3;
+    let mut prepared =
+        high_speed_scene_over(&coarse_case(), FineTeeth::Window, FarBody::Full, duration);
+    let interval = 5e-6;
+    let full = run(&prepared, duration, interval, None, None, &mut |_| {}).unwrap();
+    assert!(full.diverged.is_none() && full.settled_at_s.is_none());
+    assert!(
+        prepared.settled_stop.is_none(),
+        "the case's scene does not ask for it"
+    );
+    let stop = SettledStop {
+        from_s: 0.3e-3,
+        mesh_hz: 12_000.0 / 60.0 * 36.0,
+        min_third_s: 0.1e-3,
+        drift: f64::INFINITY,
+        growth: f64::INFINITY,
+    };
+    // The rule on the whole run's record, sample by sample, as the run applies it.
+    let h = &full.history;
+    let expected = (2..h.time.len()).find(|&n| {
+        let dt = h.time[n - 1] / (n - 1) as f64;
+        stop.due(&h.time[..n]) && stop.settled(&h.dte[..n], dt)
+    });
+    let expected = expected.expect("the rule stops the whole run's record somewhere");
+    assert!(expected + 1 < h.time.len(), "not before the end");
+    prepared.settled_stop = Some(stop);
+    let stopped = run(&prepared, duration, interval, None, None, &mut |_| {}).unwrap();
+    eprintln!(
+        "stopped at {:?} s after {} windows (the whole run {} windows to {} s)",
+        stopped.settled_at_s,
+        stopped.windows,
+        full.windows,
+        h.time.last().unwrap()
+    );
+    assert_eq!(stopped.settled_at_s, Some(h.time[expected - 1]));
+    assert_eq!(stopped.history.time, h.time[..expected]);
+    assert_eq!(stopped.history.dte, h.dte[..expected]);
+    assert!(stopped.windows > 1 && stopped.windows <= full.windows);
+    assert!(stopped.diverged.is_none() && stopped.interrupted.is_none());
+    assert!(stopped.checkpoint.is_none());
+}
+
+/// A scene that asks to stop once settled gets its rule from `prepare`: judged from the
+/// statistics start, on the driver's mesh frequency, at the rule's own tolerances; also where
+/// the scene is lengthened to cover a base pitch (the stiffness scene).
+#[test]
+fn a_scene_that_stops_when_settled_is_prepared_with_its_rule() {
+    use geardyn::explicit::scene::statistics_start;
+    for name in ["high-unmodified", "stiffness"] {
+        let case = coarse(vec![Override::set(
+            format!("scene[{name}].stop_when_settled"),
+            true,
+        )]);
+        let scene = case.scene(name).unwrap();
+        assert!(scene.stop_when_settled);
+        let prepared = study::fe::prepare(&case, scene).unwrap();
+        let stop = prepared.settled_stop.expect("the scene asks for it");
+        let mesh_hz = scene.driver_speed / case.pair.gears[0].angular_pitch();
+        assert_eq!(stop.from_s, statistics_start(&prepared, scene), "{name}");
+        assert!((stop.mesh_hz / mesh_hz - 1.0).abs() < 1e-12, "{name}");
+        assert_eq!(
+            (stop.min_third_s, stop.drift, stop.growth),
+            (
+                SettledStop::MIN_THIRD_S,
+                SettledStop::DRIFT,
+                SettledStop::GROWTH
+            )
+        );
+    }
 }
 
 /// Reduced far bodies on pairs of unequal gears (the test matrix's 24/40 and its inverse

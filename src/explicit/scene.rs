@@ -195,6 +195,8 @@ pub struct Scene {
     pub duration: f64,
     /// Lengthen the run to [`covering_duration`] where `duration` is shorter ([`prepare`]).
     pub cover_pitch: bool,
+    /// End the run once its DTE has settled ([`SettledStop`]), `duration` at the latest.
+    pub stop_when_settled: bool,
     /// Ramp of the load torque, and of the driver speed when starting from rest [s].
     pub ramp_time: f64,
     pub ramp: Ramp,
@@ -368,6 +370,8 @@ pub struct PreparedScene {
     /// `far_block_cutoff` times the lowest mode of the fine sectors beside it.
     pub far_body: FarBody,
     pub far_block_cutoff: f64,
+    /// Where the run may end before `duration` ([`Scene::stop_when_settled`]).
+    pub settled_stop: Option<SettledStop>,
 }
 
 /// Ringing of the mesh mode, over the static response, at which a run counts as settled.
@@ -489,6 +493,7 @@ pub fn prepare(
     };
     let mut prepared = prepare_for(scene.duration)?;
     if !scene.cover_pitch {
+        prepared.settled_stop = SettledStop::of(&prepared, scene);
         return Ok(prepared);
     }
     // Settling and the low-pass span depend on the masses and the damping, hardly on how far
@@ -502,7 +507,119 @@ pub fn prepare(
         prepared = prepare_for(needed)?;
     }
     prepared.scene_duration = scene.duration;
+    prepared.settled_stop = SettledStop::of(&prepared, scene);
     Ok(prepared)
+}
+
+/// Where a run whose scene asks for it ([`Scene::stop_when_settled`]) ends before its
+/// duration: at the first check ([`SettledStop::CHECK_EVERY_S`]) where the DTE's rms about the
+/// mean over the last three stretches of whole mesh periods since `from_s`, r₁, r₂, r₃, has
+/// stopped moving, over the record to now and over the records to the
+/// [`SettledStop::CHECKS`] − 1 checks before: each third at least `min_third_s` long
+/// ([`SettledStop::MIN_THIRD_S`]), the settling drift ([`crate::signal::settling_drift`],
+/// Aitken's limit where the change slows) within `drift` ([`SettledStop::DRIFT`]) and the last
+/// third's rms within `growth` of the first's ([`SettledStop::GROWTH`]).
+///
+/// The FE speed sweep's runs use it: near the mesh resonance the double-sided contact builds
+/// its response up long after the mesh mode's linear decay, away from it the response has
+/// settled within a few milliseconds, and the run's statistics only need the settled part
+/// (validation/lumped-twin). A response still growing or decaying by more than `growth`
+/// across the record, or whose drift reads above `drift` at any of the checks, runs on; its
+/// duration is the longest it runs, and the sweep's own test
+/// ([`crate::study::fe_sweep::SETTLED_DRIFT`]) judges what it reached. What no rule on the
+/// record so far can see: a change that sets in after the stop (a late bifurcation), or a beat
+/// slower than the record whose thirds agree at three checks in a row; a fixed duration has the
+/// same blind spot further on.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SettledStop {
+    /// Where the DTE is judged from [s]: the statistics start (after the ramp's ringing).
+    pub from_s: f64,
+    /// The mesh frequency [Hz]: the thirds hold whole mesh periods.
+    pub mesh_hz: f64,
+    /// The shortest third [s], the settling drift and the change of the rms from the first
+    /// third to the last within which the run stops.
+    pub min_third_s: f64,
+    pub drift: f64,
+    pub growth: f64,
+}
+
+impl SettledStop {
+    /// The settling drift below which a run may stop: a third of the sweep's
+    /// [`crate::study::fe_sweep::SETTLED_DRIFT`], so that the stopped run passes the sweep's
+    /// test with room, and its rms carries at most about 1 % of movement still to come.
+    pub const DRIFT: f64 = 0.01;
+    /// The change of the rms between the first and the last third a stop allows: an approach
+    /// that Aitken's limit calls nearly done (its changes shrinking fast) has little left to
+    /// rise, but two thirds apart by more than this are still a build-up or a beat's swing (the
+    /// sweep's "growing" is 10 %, [`crate::study::fe_sweep::GROWTH_LIMIT`]). The paper pair at
+    /// 5 320 rpm stopped with 3.1 % between its first and last third (validation/performance).
+    pub const GROWTH: f64 = 0.05;
+    /// The shortest third [s]: with thirds of length T, an approach slower than
+    /// [`crate::signal::FLAT_THIRDS`] per third is hidden up to about FLAT_THIRDS·τ/T of the rms
+    /// (τ its time constant), so thirds of 6 ms hide below 1 % of approaches up to τ = 20 ms
+    /// (the slowest the sweep's runs showed: the paper pair at 5 275 rpm on 0.7 mm flanks,
+    /// validation/lumped-twin). With the checks before, a stop thus comes about 21 ms after
+    /// the statistics start at the earliest (thirds cut to whole mesh periods).
+    pub const MIN_THIRD_S: f64 = 6e-3;
+    /// Simulated time between two checks [s], and the checks in a row that must pass: one
+    /// reading that happens to agree (a beat's thirds passing through equal values) does not
+    /// stop a run.
+    pub const CHECK_EVERY_S: f64 = 1e-3;
+    pub const CHECKS: usize = 3;
+
+    /// The scene's stop, if it asks for one and turns (a run at rest has no mesh period).
+    pub fn of(prepared: &PreparedScene, scene: &Scene) -> Option<Self> {
+        let mesh_hz = scene.driver_speed.abs() / prepared.model.pair.gears[0].angular_pitch();
+        (scene.stop_when_settled && mesh_hz > 0.0).then(|| SettledStop {
+            from_s: statistics_start(prepared, scene),
+            mesh_hz,
+            min_third_s: Self::MIN_THIRD_S,
+            drift: Self::DRIFT,
+            growth: Self::GROWTH,
+        })
+    }
+
+    /// The rms of `dte`'s thirds (samples every `dt`, the first at t = 0) over the record from
+    /// `from_s` to its end, where the thirds are long enough; else None.
+    pub fn thirds_over(&self, dte: &[f64], dt: f64) -> Option<[f64; 3]> {
+        // The first sample as the sweep takes it (`FeDte::window_starts`).
+        let start = ((self.from_s / dt).round().max(0.0) as usize).min(dte.len());
+        let window = &dte[start..];
+        if (window.len() as f64) * dt < 3.0 * self.min_third_s {
+            return None;
+        }
+        let (rms, thirds) = crate::signal::thirds_rms(window, dt, self.mesh_hz)?;
+        (thirds[2].len() as f64 * dt >= self.min_third_s - dt).then_some(rms)
+    }
+
+    /// Whether the record `dte` reads settled by itself: thirds long enough, the drift within
+    /// `drift`, the last third's rms within `growth` of the first's.
+    fn reads_settled(&self, dte: &[f64], dt: f64) -> bool {
+        self.thirds_over(dte, dt).is_some_and(|r| {
+            crate::signal::settling_drift(r) <= self.drift
+                && r[0] > 0.0
+                && (r[2] / r[0] - 1.0).abs() <= self.growth
+        })
+    }
+
+    /// Whether a check is due at the sample just recorded (`time`, the record's times): the
+    /// first sample at or past each multiple of [`Self::CHECK_EVERY_S`].
+    pub fn due(&self, time: &[f64]) -> bool {
+        match time {
+            [.., before, now] => {
+                (now / Self::CHECK_EVERY_S).floor() > (before / Self::CHECK_EVERY_S).floor()
+            }
+            _ => false,
+        }
+    }
+
+    /// Whether a run whose record is `dte` may stop now: the record to now and the records to
+    /// the [`Self::CHECKS`] − 1 checks before each read settled.
+    pub fn settled(&self, dte: &[f64], dt: f64) -> bool {
+        let apart = (Self::CHECK_EVERY_S / dt).round() as usize;
+        (0..Self::CHECKS)
+            .all(|k| k * apart < dte.len() && self.reads_settled(&dte[..dte.len() - k * apart], dt))
+    }
 }
 
 /// The shortest run of `scene` whose statistics window ([`statistics_start`]) holds one base
@@ -708,6 +825,7 @@ fn prepare_scene(
         tooth_layout: settings.tooth_layout,
         far_body: settings.far_body,
         far_block_cutoff: settings.far_block_cutoff,
+        settled_stop: None,
     })
 }
 
@@ -859,6 +977,9 @@ pub struct RunOutcome {
     pub diverged: Option<String>,
     /// Where the run stopped on a stop request ([`crate::interrupt`]), if it did.
     pub interrupted: Option<String>,
+    /// Where the run ended before its duration because its DTE had settled
+    /// ([`SettledStop`]) [s], if it did.
+    pub settled_at_s: Option<f64>,
     pub final_energy: PairEnergy,
     /// Where the steps' wall time went, phase by phase.
     pub phase_wall: PhaseWall,
@@ -1136,6 +1257,7 @@ impl RunCheckpoint {
             wall_s: self.wall_s,
             diverged: Some(reason),
             interrupted: None,
+            settled_at_s: None,
             final_energy: self.integrator.energy(),
             phase_wall: self.integrator.phase_wall(),
             coupled_steps: self.coupled_steps,
@@ -1440,6 +1562,23 @@ pub fn scene_fingerprint(prepared: &PreparedScene, duration: f64, output_interva
     eat(&(total_steps as u64).to_le_bytes());
     eat(&(every as u64).to_le_bytes());
     eat(format!("{:?}", prepared.time_step).as_bytes());
+    // A run that may stop early ends elsewhere than one that may not; runs without the stop
+    // hash as before.
+    if let Some(stop) = &prepared.settled_stop {
+        eat(b"settled stop");
+        let rule = [
+            stop.from_s,
+            stop.mesh_hz,
+            stop.min_third_s,
+            stop.drift,
+            stop.growth,
+            SettledStop::CHECK_EVERY_S,
+            SettledStop::CHECKS as f64,
+        ];
+        for x in rule {
+            eat(&x.to_bits().to_le_bytes());
+        }
+    }
     // Blocks change the run's answers; a full far body hashes as before. The blocks' modal
     // state means what their build makes of it: its order and Coriolis tolerance (since
     // 2026-12-06's second basis: modes ascending, couplings to ε) and what the cutoff
@@ -1823,6 +1962,7 @@ fn run_window(
     let started = Instant::now();
     let mut diverged = None;
     let mut interrupted = None;
+    let mut settled_at_s = None;
     // The signals at the integrator's current state: driver rotation, DTE, driven speed, its
     // kinematic value, radial, circumferential and total contact force, mesh force.
     let signals = |integrator: &PairIntegrator, state: &PairState| {
@@ -2127,6 +2267,17 @@ fn run_window(
                 }
             }
         }
+        // After the step's checks: a sample the coupled step's check sends the run back from
+        // is not one to stop at.
+        if let Some(stop) = &prepared.settled_stop {
+            if recording && step < control.total_steps && stop.due(&history.time) {
+                let dt = state.time / (history.time.len() - 1) as f64;
+                if stop.settled(&history.dte, dt) {
+                    settled_at_s = Some(state.time);
+                    break;
+                }
+            }
+        }
         if step % report_every == 0 {
             progress(step as f64 / control.total_steps as f64);
         }
@@ -2214,6 +2365,7 @@ fn run_window(
         wall_s,
         diverged,
         interrupted,
+        settled_at_s,
         final_energy: integrator.energy,
         phase_wall: integrator.phase_wall,
         coupled_steps,
@@ -2527,6 +2679,111 @@ pub fn analyse_dte(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Where [`SettledStop`] stops a synthetic DTE `amplitude(t)·sin(2π f_m t)` sampled every
+    /// 10 µs (the runs' output interval), checked as the run checks it: the record to each due
+    /// sample; None where it runs to `end_s`.
+    fn settled_stop_time(amplitude: impl Fn(f64) -> f64, end_s: f64) -> Option<f64> {
+        let (dt, mesh_hz) = (1e-5, 3192.0);
+        let stop = SettledStop {
+            from_s: 0.016,
+            mesh_hz,
+            min_third_s: SettledStop::MIN_THIRD_S,
+            drift: SettledStop::DRIFT,
+            growth: SettledStop::GROWTH,
+        };
+        let mut time = Vec::new();
+        let mut dte = Vec::new();
+        for k in 0..=((end_s / dt).round() as usize) {
+            let t = k as f64 * dt;
+            time.push(t);
+            dte.push(1e-4 + amplitude(t) * (std::f64::consts::TAU * mesh_hz * t).sin());
+            if stop.due(&time) && stop.settled(&dte, dt) {
+                return Some(t);
+            }
+        }
+        None
+    }
+
+    /// A steady response stops at the first check whose record and the two before hold thirds
+    /// of 20 whole mesh periods (6.27 ms ≥ 6 ms at 3 192 Hz), 18.8 ms after the statistics
+    /// start at 16 ms: 35, 36, 37 ms, so at 37 ms. An exponential approach stops only where
+    /// what is left of it is within the stop's drift of the settled rms (Aitken's limit of the
+    /// thirds is exact for it); one as slow as τ = 20 ms or 60 ms, whose first third (from the
+    /// statistics start on) stays more than the stop's growth below its last, runs on to its
+    /// end, as a growing response does. A rise of 9 % that sets in at 30 ms (the slow build-up
+    /// near the resonance, validation/lumped-twin) does not stop before it has risen (it runs
+    /// on: its first third stays 9 % below its last); a beat of ±10 % whose
+    /// period (30, 40 ms) is longer than a third stops, if at all, where its reading is within
+    /// a few per cent of its mean rms.
+    #[test]
+    fn a_settled_stop_waits_for_the_dte_to_settle() {
+        let steady = settled_stop_time(|_| 2e-4, 0.05).unwrap();
+        assert!(
+            (steady - 0.037).abs() < 0.5e-5,
+            "steady: stopped at {steady}"
+        );
+        // What is left to come at a stop at t: the remainder of the amplitude at the middle of
+        // the last third, over the final amplitude.
+        let left = |amplitude: &dyn Fn(f64) -> f64, t: f64, last: f64| {
+            1.0 - amplitude(t - 0.5 * SettledStop::MIN_THIRD_S) / last
+        };
+        for tau in [2e-3, 5e-3, 10e-3, 20e-3, 60e-3] {
+            let approach = move |t: f64| 2e-4 * (1.0 - 0.5 * (-t / tau).exp());
+            let stopped = settled_stop_time(approach, 0.1);
+            eprintln!("approach, τ = {tau} s: stopped at {stopped:?} s");
+            match stopped {
+                Some(t) => {
+                    let rest = left(&approach, t, 2e-4);
+                    assert!(
+                        rest <= 1.5 * SettledStop::DRIFT,
+                        "τ {tau}: stopped at {t} s with {rest} still to come"
+                    );
+                    assert!(
+                        t >= steady - 1e-9,
+                        "τ {tau}: stopped at {t} before {steady}"
+                    );
+                }
+                None => assert!(tau >= 20e-3, "τ {tau} did not stop"),
+            }
+        }
+        assert_eq!(settled_stop_time(|t| 2e-4 * (t / 0.05).exp(), 0.1), None);
+        // Too little record: never.
+        assert_eq!(settled_stop_time(|_| 2e-4, 0.036), None);
+        // A late rise of 9 % with τ = 5 ms from 30 ms on.
+        let late = |t: f64| 2e-4 * (1.0 + 0.09 * (1.0 - (-(t - 0.03).max(0.0) / 5e-3).exp()));
+        let stopped = settled_stop_time(late, 0.1);
+        eprintln!("late rise: stopped at {stopped:?} s");
+        if let Some(t) = stopped {
+            let rest = left(&late, t, late(1.0));
+            assert!(
+                rest <= 1.5 * SettledStop::DRIFT,
+                "late rise: {rest} still to come"
+            );
+        }
+        for period in [0.03, 0.04] {
+            let beat =
+                move |t: f64| 2e-4 * (1.0 + 0.1 * (std::f64::consts::TAU * t / period).sin());
+            let stopped = settled_stop_time(beat, 0.1);
+            eprintln!("beat of {period} s: stopped at {stopped:?} s");
+            if let Some(t) = stopped {
+                let reading = crate::signal::rms_about_mean(
+                    &(0..((SettledStop::MIN_THIRD_S / 1e-5) as usize))
+                        .map(|k| {
+                            let s = t - k as f64 * 1e-5;
+                            beat(s) * (std::f64::consts::TAU * 3192.0 * s).sin()
+                        })
+                        .collect::<Vec<_>>(),
+                ) * std::f64::consts::SQRT_2
+                    / 2e-4;
+                eprintln!("  its last 6 ms read {reading:.4} of the mean amplitude");
+                assert!(
+                    (reading - 1.0).abs() < 0.05,
+                    "beat {period}: reads {reading}"
+                );
+            }
+        }
+    }
 
     /// A window holds the teeth that engage over its span (and the pad) as [`window_teeth`]
     /// has them and their neighbours, ends one pitch on, keeps a tooth pair loaded at the switch wherever it stands

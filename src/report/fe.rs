@@ -485,6 +485,17 @@ pub fn console(study: &FeStudy) -> String {
         s.energy_error_rel,
         s.energy_error_rel_transmitted
     );
+    if let Some(t) = s.settled_at_s {
+        use crate::explicit::scene::SettledStop;
+        text.push_str(&format!(
+            "stopped at t = {t:.4} s of {} s: the DTE had settled (stop_when_settled: the rms over the last three stretches of whole mesh periods after {:.4} s to move by under {:.0} % more and within {:.0} % from the first to the last, at {} checks in a row)\n",
+            s.scene.duration,
+            s.statistics_start_s,
+            SettledStop::DRIFT * 100.0,
+            SettledStop::GROWTH * 100.0,
+            SettledStop::CHECKS
+        ));
+    }
     let phases = &s.wall_phases_us_per_step;
     // On one thread the contact's placement is only an order.
     let beside = if s.wall_threads > 1 {

@@ -348,7 +348,8 @@ pub fn speed_overrides(rpm: f64) -> Vec<crate::case::Override> {
     )]
 }
 
-/// The least duration of an FE speed sweep run [s]: near the resonance the FE's response builds
+/// The duration of an FE speed sweep run [s], the longest it runs (it ends earlier once its
+/// DTE has settled, [`sweep_speed_overrides`]): near the resonance the FE's response builds
 /// up long after the mesh mode's linear decay time (the double-sided contact's slow approach):
 /// at 5 275 rpm on 0.7 mm flanks (paper pair) its rms over 16–30 ms is 277.5 µrad, over 30–40
 /// ms 302.3, over 40–50 ms 304.7 (validation/lumped-twin). A 0.05 s run's last third thus reads
@@ -361,9 +362,16 @@ pub fn speed_overrides(rpm: f64) -> Vec<crate::case::Override> {
 pub const FE_SWEEP_DURATION_S: f64 = 0.05;
 
 /// The case overrides that put [`SPEED_SCENE`] at `rpm` for the FE speed sweep: the scene's
-/// duration raised to [`FE_SWEEP_DURATION_S`] where it is shorter.
+/// duration raised to [`FE_SWEEP_DURATION_S`] where it is shorter, and the run ended there
+/// or earlier, once its DTE has settled (`stop_when_settled`,
+/// [`crate::explicit::scene::SettledStop`]): away from the resonance the response settles
+/// within a few milliseconds of the ramp's ringing, and the sweep reads the settled part only.
 pub fn sweep_speed_overrides(case: &Case, rpm: f64) -> Vec<crate::case::Override> {
     let mut overrides = speed_overrides(rpm);
+    overrides.push(crate::case::Override::set(
+        format!("scene[{SPEED_SCENE}].stop_when_settled"),
+        true,
+    ));
     let duration = case.scene(SPEED_SCENE).map_or(0.0, |s| s.duration);
     if duration < FE_SWEEP_DURATION_S {
         overrides.push(crate::case::Override::set(
@@ -1052,6 +1060,46 @@ pub fn fe_sweep_speeds(case: &Case) -> Result<Vec<f64>, StudyError> {
         .collect())
 }
 
+/// The speeds of an FE speed sweep on `grid` (ascending, [`fe_sweep_speeds`]) with compare's
+/// own speeds `asked` and the finished runs `given` on the case's explicit mesh: those inside
+/// the grid's range join the sweep; an asked speed, which compare runs as a sweep speed
+/// ([`sweep_speed_overrides`]), takes the place of an inner grid speed within a quarter of the
+/// grid's spacing (two runs 10 rpm apart tell the resonance fit what one does, at twice the
+/// cost), while a given run (of whatever duration) only joins, and the grid's ends stay, so
+/// that the range is the grid's. Ascending, each speed once.
+pub fn sweep_speeds_with(grid: &[f64], asked: &[f64], given: &[f64]) -> Vec<f64> {
+    let (Some(&from), Some(&to)) = (grid.first(), grid.last()) else {
+        return Vec::new();
+    };
+    let spacing = (to - from) / (grid.len().max(2) - 1) as f64;
+    let inside = |speeds: &[f64]| -> Vec<f64> {
+        speeds
+            .iter()
+            .copied()
+            .filter(|rpm| (from..=to).contains(rpm))
+            .collect()
+    };
+    let (asked, given) = (inside(asked), inside(given));
+    let last = grid.len() - 1;
+    let mut speeds: Vec<f64> = grid
+        .iter()
+        .enumerate()
+        .filter(|&(i, g)| {
+            i == 0
+                || i == last
+                || !asked
+                    .iter()
+                    .any(|r| (r - g).abs() < 0.25 * spacing && !super::fe_sweep::same_speed(*r, *g))
+        })
+        .map(|(_, g)| *g)
+        .chain(asked.iter().copied())
+        .chain(given.iter().copied())
+        .collect();
+    speeds.sort_by(f64::total_cmp);
+    speeds.dedup_by(|a, b| super::fe_sweep::same_speed(*a, *b));
+    speeds
+}
+
 /// The first resonance speed's reference for the accuracy chart: the explicit FE's speed sweep
 /// (each run's first harmonic read over its window's last third), when compare ran one, else
 /// the FE modal analysis on the case's mesh, driver held (the explicit FE's boundary), with its
@@ -1485,8 +1533,32 @@ mod tests {
         assert_eq!(label_line(2300.0, fm, fn_, fb, 100.0), "?");
     }
 
+    /// The sweep's grid takes compare's own speeds and the given runs inside its range; an
+    /// inner grid speed next to an asked speed gives way to it (`run --full`'s 4 800 rpm run
+    /// replaces the grid's 4 790), next to a given run it stays, and the grid's ends stay;
+    /// speeds outside the range stay out; an exact match runs once.
+    #[test]
+    fn a_sweep_takes_the_speeds_run_anyway_inside_its_range() {
+        let grid = [4250.0, 4520.0, 4790.0, 5050.0, 5320.0];
+        assert_eq!(
+            sweep_speeds_with(&grid, &[1200.0, 4800.0], &[]),
+            vec![4250.0, 4520.0, 4800.0, 5050.0, 5320.0]
+        );
+        assert_eq!(
+            sweep_speeds_with(&grid, &[4520.0, 4900.0], &[3000.0]),
+            vec![4250.0, 4520.0, 4790.0, 4900.0, 5050.0, 5320.0]
+        );
+        assert_eq!(
+            sweep_speeds_with(&grid, &[4260.0, 5310.0], &[4800.0]),
+            vec![4250.0, 4260.0, 4520.0, 4790.0, 4800.0, 5050.0, 5310.0, 5320.0]
+        );
+        assert_eq!(sweep_speeds_with(&grid, &[], &[]), grid.to_vec());
+        assert!(sweep_speeds_with(&[], &[4800.0], &[4800.0]).is_empty());
+    }
+
     /// A sweep speed's run lasts [`FE_SWEEP_DURATION_S`] where the scene is shorter (the
-    /// paper's 0.03 s), and keeps a longer scene's duration.
+    /// paper's 0.03 s), keeps a longer scene's duration, and may end once settled (the case's
+    /// own scene may not).
     #[test]
     fn sweep_runs_last_long_enough_to_settle() {
         use crate::case::Override;
@@ -1501,6 +1573,9 @@ mod tests {
         let base = Case::embedded_default().unwrap();
         let (short, rpm) = duration(&sweep_speed_overrides(&base, 5275.0));
         assert_eq!(short, FE_SWEEP_DURATION_S);
+        let swept = Case::load_with(None, &sweep_speed_overrides(&base, 5275.0)).unwrap();
+        assert!(swept.scene(SPEED_SCENE).unwrap().stop_when_settled);
+        assert!(!base.scene(SPEED_SCENE).unwrap().stop_when_settled);
         assert!((rpm - 5275.0).abs() < 1e-9);
         assert!(base.scene(SPEED_SCENE).unwrap().duration < FE_SWEEP_DURATION_S);
         let longer = vec![Override::set(

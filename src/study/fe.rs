@@ -475,6 +475,10 @@ pub struct FeSummary {
     pub diverged: Option<String>,
     /// Where a stop request ended the run early ([`crate::interrupt`]).
     pub interrupted: Option<String>,
+    /// Where the run ended before the scene's duration because its DTE had settled (the
+    /// scene's `stop_when_settled`, [`crate::explicit::scene::SettledStop`]) [s]; None: it ran
+    /// its duration.
+    pub settled_at_s: Option<f64>,
     pub dt_critical_coupled_s: Option<f64>,
     pub dt_critical_coupled_checks: Vec<CoupledStep>,
     /// Which stable step the run's step followed; `dt_s` is the step it started with.
@@ -810,6 +814,7 @@ pub fn run(
         wall_phases_us_per_step: outcome.phase_wall.per_step_us(),
         diverged: outcome.diverged,
         interrupted: outcome.interrupted,
+        settled_at_s: outcome.settled_at_s,
         dt_critical_coupled_s: outcome
             .coupled_steps
             .iter()

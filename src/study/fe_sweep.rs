@@ -45,7 +45,9 @@ use serde::Serialize;
 
 use super::compare::FeDte;
 use crate::lumped::{steady_state, MeshModel};
-use crate::signal::{amplitude_spectrum, harmonic_amplitudes, rms_about_mean};
+use crate::signal::{
+    amplitude_spectrum, harmonic_amplitudes, rms_about_mean, settling_drift, thirds_rms,
+};
 
 /// What the FE did at one speed of the sweep (its statistics window).
 #[derive(Debug, Clone, Serialize)]
@@ -65,7 +67,7 @@ pub struct FeSpeed {
     /// The statistics window [s] (after the ramp's ringing).
     pub window_s: (f64, f64),
     /// rms about the mean of the window's last third over its first (the last three stretches
-    /// of whole mesh periods, [`whole_period_thirds`]): about 1 when the
+    /// of whole mesh periods, [`crate::signal::whole_period_thirds`]): about 1 when the
     /// response settled, above 1 while it grows.
     pub growth: f64,
     /// How far the rms is still to move after the window, relative to the last third's
@@ -98,17 +100,14 @@ impl FeSpeed {
         let (_, start) = run.window_starts();
         let window = &run.dte[start..];
         let mesh_hz = run.speed_rpm / 60.0 * teeth;
-        let thirds = whole_period_thirds(window.len(), run.dt, mesh_hz);
-        let rms = thirds
-            .clone()
-            .map(|t| t.map(|r| rms_about_mean(&window[r])));
-        let (growth, drift) = match rms {
-            Some(r) => (r[2] / r[0], settling_drift(r)),
+        let thirds = thirds_rms(window, run.dt, mesh_hz);
+        let (growth, drift) = match &thirds {
+            Some((r, _)) => (r[2] / r[0], settling_drift(*r)),
             None => (f64::NAN, f64::NAN),
         };
         // Too short a window to split: all of it.
         let last = match thirds {
-            Some([_, _, last]) => &window[last],
+            Some((_, [_, _, last])) => &window[last],
             None => window,
         };
         let (lo, hi) = crate::signal::extremes(window);
@@ -143,68 +142,9 @@ impl FeSpeed {
     }
 }
 
-/// The window's last three stretches of equal whole numbers of mesh periods (`len` samples every
-/// `dt`, mesh frequency `mesh_hz`), contiguous and ending at the window's end, as sample ranges:
-/// a periodic response has the same rms over each, whatever its phase, where thirds of a
-/// fractional number of periods differ by up to a few tenths of a per cent (the part period's
-/// share of the rms). Shorter than three mesh periods: plain thirds; shorter than three
-/// samples: `None`.
-pub fn whole_period_thirds(
-    len: usize,
-    dt: f64,
-    mesh_hz: f64,
-) -> Option<[std::ops::Range<usize>; 3]> {
-    let third = crate::signal::whole_period_samples(len / 3, dt, mesh_hz).unwrap_or(len / 3);
-    match third {
-        0 => None,
-        n => Some([len - 3 * n..len - 2 * n, len - 2 * n..len - n, len - n..len]),
-    }
-}
-
-/// Relative change of the rms between consecutive thirds of a window below which the response
-/// counts as flat and its drift as the last change: the floor of what three thirds can tell
-/// from a response's content away from the mesh harmonics (a body mode's residual ringing,
-/// the hunting of unequal teeth) beating across them. Whole-period thirds of a steady periodic
-/// response agree to within the one-sample rounding of their length (below 1e-6 at the FE's
-/// steps, `whole_period_thirds_of_a_steady_response_agree`). Below the floor a slow approach is
-/// not seen: with thirds of length T, a remainder up to about FLAT_THIRDS·τ/T is hidden (at 6 ms
-/// thirds, 3 % for τ ≳ 60 ms; a 4.4 % approach with τ = 0.1 s reads 0.27 %), and the drift jumps
-/// at the floor (changes of 0.29 % read 0.29 %, of 0.31 % slowing by q = 0.97 read about 9 %).
-pub const FLAT_THIRDS: f64 = 0.003;
-
 /// The settling drift an FE speed may have and still count as settled: 3 % of its rms, a
 /// fifth of the 15 % the rms is held to and a third of the peak's 10 % (issue 29).
 pub const SETTLED_DRIFT: f64 = 0.03;
-
-/// How far a response's rms is still to move after its window, relative to the last third's,
-/// from the rms of the window's thirds r₁, r₂, r₃ ([`whole_period_thirds`]), d₁ = r₂ − r₁,
-/// d₂ = r₃ − r₂: where the change slows geometrically (q = d₂/d₁ ∈ (0, 1)), Aitken's Δ² limit
-/// r₃ + d₂ q/(1 − q), however small the changes — exact for r_k = r∞ + c q^k, a response
-/// approaching its level as e^(−t/τ) (the thirds' means then form a geometric series); where
-/// they alternate and the last change is the smaller (q ∈ (−1, 0): a rise that went flat, or a
-/// beat), the last change — at 5 275 rpm on 1 mm flanks the rms reads 275.5, 296.6, 295.5 µrad
-/// over its thirds (0.37 %) and 297.0, 297.4, 295.5, 295.3 over the last 20 ms in 5 ms blocks,
-/// where Aitken's limit for q < 0 would read any beat whose last change is small as settled;
-/// where they alternate without shrinking (q ≤ −1), the largest change; where the change does
-/// not slow (q ≥ 1: growth), infinite; where both changes are within [`FLAT_THIRDS`], the last
-/// change (zero for a response that is zero throughout). A beat whose thirds happen to change
-/// little reads as settled: three thirds cannot tell it.
-pub fn settling_drift([r1, r2, r3]: [f64; 3]) -> f64 {
-    let (d1, d2) = (r2 - r1, r3 - r2);
-    if d1.abs().max(d2.abs()) <= FLAT_THIRDS * r3 {
-        return match r3 > 0.0 {
-            true => d2.abs() / r3,
-            false => 0.0,
-        };
-    }
-    let q = d2 / d1;
-    match q {
-        q if (0.0..1.0).contains(&q) => (d2 * q / (1.0 - q)).abs() / r3,
-        q if q < 0.0 && q > -1.0 => d2.abs() / r3,
-        q if q <= -1.0 || !q.is_finite() => d1.abs().max(d2.abs()) / r3,
-        _ => f64::INFINITY,
-    }
-}
 
 /// A lumped model's periodic steady state at one speed, reached from the static state (as the
 /// FE's run starts from its load ramp, not from the speed before).
@@ -1385,11 +1325,15 @@ mod tests {
         assert!((steady.dte_rms_rad / (a / 2f64.sqrt()) - 1.0).abs() < 1e-3);
         // 20 periods of 294.99 steps: the last third starts 5 900 steps before the end.
         assert!((steady.measured_s.0 - (0.03 - 5900e-6)).abs() < 1e-9);
-        let thirds = super::whole_period_thirds(18_000, 1e-6, 5650.0 / 60.0 * 36.0).unwrap();
+        let thirds =
+            crate::signal::whole_period_thirds(18_000, 1e-6, 5650.0 / 60.0 * 36.0).unwrap();
         assert_eq!(thirds, [300..6200, 6200..12_100, 12_100..18_000]);
         // Under three mesh periods: plain thirds; under three samples: none.
-        assert_eq!(super::whole_period_thirds(7, 1.0, 0.1).unwrap()[2], 5..7);
-        assert!(super::whole_period_thirds(2, 1.0, 0.5).is_none());
+        assert_eq!(
+            crate::signal::whole_period_thirds(7, 1.0, 0.1).unwrap()[2],
+            5..7
+        );
+        assert!(crate::signal::whole_period_thirds(2, 1.0, 0.5).is_none());
         // A response that is zero throughout is settled, not 0/0.
         assert_eq!(super::settling_drift([0.0; 3]), 0.0);
     }

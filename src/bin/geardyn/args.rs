@@ -298,8 +298,10 @@ pub struct CompareArgs {
     pub chart_fe_runs: Vec<PathBuf>,
     /// The explicit FE's speed sweep through the mesh resonance: scene high-unmodified at N
     /// speeds from FROM to TO [rpm] (e.g. 4400:6600:8 on the paper pair, 0.8–1.2 × the
-    /// driver-held resonance; --fe-run folders at those speeds are reused, and those at
-    /// other speeds inside the range join the sweep), against the
+    /// driver-held resonance; --fe-run folders at those speeds are reused, and those and
+    /// --speed-rpm speeds elsewhere inside the range join the sweep, in place of a grid
+    /// speed within a quarter of its spacing; each run up to 0.05 s, ended once its DTE has
+    /// settled: the scene's stop_when_settled), against the
     /// lumped twin swept four times as densely: resonance speeds, the peak mesh-harmonic
     /// amplitude and the DTE rms (fe_sweep in summary.json, fe_sweep.csv, fe_sweep.png).
     #[arg(long, value_name = "FROM:TO:N")]

@@ -307,20 +307,12 @@ pub struct CompareAsk<'a> {
 }
 
 impl CompareAsk<'_> {
-    /// The sweep's speeds, with the given finished runs on the case's explicit mesh inside its
-    /// range joining it (a point added near the peak).
+    /// The sweep's speeds, with the given finished runs on the case's explicit mesh and
+    /// compare's own speeds inside its range joining it (a point added near the peak), an
+    /// own speed in place of an inner grid speed next to it
+    /// ([`study::compare::sweep_speeds_with`]).
     fn sweep_speeds(&self, given_rpm: &[f64]) -> Vec<f64> {
-        let mut fe_sweep = self.fe_sweep.clone();
-        if let (Some(&from), Some(&to)) = (fe_sweep.first(), fe_sweep.last()) {
-            let inside: Vec<f64> = given_rpm
-                .iter()
-                .copied()
-                .filter(|rpm| (from..=to).contains(rpm))
-                .collect();
-            fe_sweep.extend(inside);
-            fe_sweep = distinct_speeds(fe_sweep);
-        }
-        fe_sweep
+        study::compare::sweep_speeds_with(&self.fe_sweep, self.speeds, given_rpm)
     }
 
     /// The explicit runs compare makes into `dir` (the speeds not given as finished runs on
@@ -338,12 +330,17 @@ impl CompareAsk<'_> {
         let all_speeds =
             distinct_speeds(self.speeds.iter().chain(&sweep_speeds).copied().collect());
         let mut requests = Vec::new();
-        for rpm in cmp::speeds_to_run(&all_speeds, given_rpm) {
-            // A sweep speed runs long enough for the response near resonance to settle.
-            let overrides = match sweep_speeds
+        let in_sweep = |rpm: f64| {
+            sweep_speeds
                 .iter()
                 .any(|r| study::fe_sweep::same_speed(*r, rpm))
-            {
+        };
+        // The sweep's longer runs first, so that two runs side by side end close together.
+        let mut to_run = cmp::speeds_to_run(&all_speeds, given_rpm);
+        to_run.sort_by_key(|rpm| !in_sweep(*rpm));
+        for rpm in to_run {
+            // A sweep speed runs long enough for the response near resonance to settle.
+            let overrides = match in_sweep(rpm) {
                 true => cmp::sweep_speed_overrides(case, rpm),
                 false => cmp::speed_overrides(rpm),
             };
@@ -428,6 +425,8 @@ fn compare(args: &CommonArgs, ask: &CompareAsk) -> Result<()> {
             runs.push(report::compare::read_fe_run(&request.dir).map_err(anyhow::Error::msg)?);
         }
     }
+    // By speed (the sweep's runs were made first): the summary's speeds in ascending order.
+    runs.sort_by(|a, b| a.speed_rpm.total_cmp(&b.speed_rpm));
     let stiffness_file = match ask.fe_stiffness {
         Some(file) => file.to_path_buf(),
         None => dir.join("fe-stiffness").join("stiffness.csv"),

@@ -171,5 +171,8 @@ pub fn fe_check_requests(
             }
         }
     }
+    // The speed scene's runs (several times a stiffness run's cost) first, so that runs side by
+    // side end close together: the last to start is a short one.
+    requests.sort_by_key(|(_, scene, _)| std::cmp::Reverse(*scene));
     Ok(requests)
 }

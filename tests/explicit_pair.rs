@@ -944,22 +944,38 @@ fn a_run_stops_where_its_record_settled() {
 
 /// A scene that asks to stop once settled gets its rule from `prepare`: judged from the
 /// statistics start, on the driver's mesh frequency, at the rule's own tolerances; also where
-/// the scene is lengthened to cover a base pitch (the stiffness scene).
+/// the scene is lengthened to cover a base pitch (the stiffness scene); on the paper pair, 24/40
+/// and its inverse 40/24 (the driver's pitch sets the mesh frequency).
 #[test]
 fn a_scene_that_stops_when_settled_is_prepared_with_its_rule() {
     use geardyn::explicit::scene::statistics_start;
-    for name in ["high-unmodified", "stiffness"] {
-        let case = coarse(vec![Override::set(
+    let pairs = [None, Some("24-40"), Some("40-24")];
+    for (pair, name) in pairs
+        .into_iter()
+        .flat_map(|p| ["high-unmodified", "stiffness"].map(|n| (p, n)))
+    {
+        let mut overrides = pair.map_or_else(Vec::new, |p| {
+            geardyn::samples::matrix_pair(p).unwrap().parsed_overrides()
+        });
+        overrides.push(Override::set(
             format!("scene[{name}].stop_when_settled"),
             true,
-        )]);
+        ));
+        let case = coarse(overrides);
         let scene = case.scene(name).unwrap();
         assert!(scene.stop_when_settled);
         let prepared = study::fe::prepare(&case, scene).unwrap();
         let stop = prepared.settled_stop.expect("the scene asks for it");
         let mesh_hz = scene.driver_speed / case.pair.gears[0].angular_pitch();
-        assert_eq!(stop.from_s, statistics_start(&prepared, scene), "{name}");
-        assert!((stop.mesh_hz / mesh_hz - 1.0).abs() < 1e-12, "{name}");
+        assert_eq!(
+            stop.from_s,
+            statistics_start(&prepared, scene),
+            "{pair:?} {name}"
+        );
+        assert!(
+            (stop.mesh_hz / mesh_hz - 1.0).abs() < 1e-12,
+            "{pair:?} {name}"
+        );
         assert_eq!(
             (stop.min_third_s, stop.drift, stop.growth),
             (

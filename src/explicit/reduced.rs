@@ -1834,16 +1834,19 @@ mod tests {
     /// fine sector widens (six fine teeth against three: the sector, not one tooth, vibrates).
     #[test]
     fn the_fine_sectors_lowest_mode_is_their_fixed_interface_fundamental() {
-        for (name, (mesh, body, in_block)) in windows() {
-            let beside = lowest_mode_beside_block(
+        let of = |mesh: &GearMesh, body: &ExplicitBody, in_block: &[bool]| {
+            lowest_mode_beside_block(
                 &mesh.nodes,
                 &mesh.elements,
-                &in_block,
+                in_block,
                 &mesh.bore_nodes,
                 &body.mass,
                 &body.material,
             )
-            .unwrap();
+            .unwrap()
+        };
+        for (name, (mesh, body, in_block)) in windows() {
+            let beside = of(&mesh, &body, &in_block);
             let fine: Vec<bool> = in_block.iter().map(|b| !b).collect();
             let as_block = block_of(&mesh, &body, &fine, 1.5 * beside, f64::INFINITY);
             let lowest = as_block.mode_frequencies_hz[0];
@@ -1860,17 +1863,6 @@ mod tests {
         let narrow_body =
             ExplicitBody::new(&narrow.nodes, &narrow.elements, body.material).unwrap();
         let narrow_block: Vec<bool> = narrow.element_fine.iter().map(|f| !f).collect();
-        let of = |mesh: &GearMesh, body: &ExplicitBody, in_block: &[bool]| {
-            lowest_mode_beside_block(
-                &mesh.nodes,
-                &mesh.elements,
-                in_block,
-                &mesh.bore_nodes,
-                &body.mass,
-                &body.material,
-            )
-            .unwrap()
-        };
         let (three, six) = (
             of(&narrow, &narrow_body, &narrow_block),
             of(&wide, &body, &in_block),

@@ -987,6 +987,72 @@ fn a_scene_that_stops_when_settled_is_prepared_with_its_rule() {
     }
 }
 
+/// An FE speed sweep run (compare's `sweep_speed_overrides`) starts at its speed with only the
+/// load ramping, on a cosine over `FE_SWEEP_LOAD_RAMP_S` (the ringing π²/((ω_n t_r)² − π²), no
+/// spin-up term), and its statistics (and its settled stop's thirds) start at the ramp's end
+/// plus the settling time of that ringing, which is none where the ringing is under
+/// `SETTLED_RINGING`: on the paper's pair (mesh mode 3.1 kHz, ringing 1.0e-3) and on 24/40 and
+/// 40/24, each at 0.8 and 1.2 times its driver-held mesh resonance speed, whose mesh modes are
+/// all above the 1.4 kHz where a 5 ms ramp's ringing reaches it.
+#[test]
+fn a_sweep_run_starts_at_speed_and_measures_after_its_load_ramp() {
+    use geardyn::explicit::scene::{statistics_start, SETTLED_RINGING};
+    use study::compare::{sweep_speed_overrides, FE_SWEEP_LOAD_RAMP_S, SPEED_SCENE};
+    for pair in [None, Some("24-40"), Some("40-24")] {
+        let pair_overrides = pair.map_or_else(Vec::new, |p| {
+            geardyn::samples::matrix_pair(p).unwrap().parsed_overrides()
+        });
+        let base = coarse(pair_overrides.clone());
+        let spin_up = study::fe::prepare(&base, base.scene(SPEED_SCENE).unwrap()).unwrap();
+        assert_eq!(
+            spin_up.drive.start,
+            Start::Rest,
+            "{pair:?}: the scene's own start"
+        );
+        // The driver-held mesh mode's speed: f_n over the driver's teeth.
+        let mode_hz = 1.0 / spin_up.mesh_mode_period;
+        let resonance_rpm = 60.0 * mode_hz / base.pair.gears[0].teeth() as f64;
+        for rpm in [0.8 * resonance_rpm, 1.2 * resonance_rpm] {
+            let mut overrides = pair_overrides.clone();
+            overrides.extend(sweep_speed_overrides(&base, rpm));
+            let case = coarse(overrides);
+            let scene = case.scene(SPEED_SCENE).unwrap();
+            let prepared = study::fe::prepare(&case, scene).unwrap();
+            let drive = &prepared.drive;
+            assert_eq!(
+                (drive.start, drive.ramp, drive.ramp_time),
+                (Start::AtSpeed, Ramp::Cosine, FE_SWEEP_LOAD_RAMP_S),
+                "{pair:?} at {rpm:.0} rpm"
+            );
+            assert!((drive.driver_speed * 60.0 / std::f64::consts::TAU / rpm - 1.0).abs() < 1e-12);
+            let omega = std::f64::consts::TAU / prepared.mesh_mode_period;
+            let wt = omega * FE_SWEEP_LOAD_RAMP_S;
+            let pi2 = std::f64::consts::PI.powi(2);
+            let ringing = pi2 / (wt * wt - pi2);
+            assert!(
+                (prepared.ramp_ringing / ringing - 1.0).abs() < 1e-12,
+                "{pair:?}: ringing {} against {ringing}",
+                prepared.ramp_ringing
+            );
+            let start = statistics_start(&prepared, scene);
+            let stop = prepared
+                .settled_stop
+                .expect("a sweep run stops when settled");
+            assert_eq!(stop.from_s, start, "{pair:?}");
+            assert_eq!(
+                start,
+                FE_SWEEP_LOAD_RAMP_S + prepared.settling_time,
+                "{pair:?}"
+            );
+            assert!(ringing < SETTLED_RINGING, "{pair:?}: {ringing}");
+            assert_eq!(prepared.settling_time, 0.0, "{pair:?}");
+            if pair.is_none() {
+                assert!(ringing < 1.2e-3, "{ringing}");
+            }
+        }
+    }
+}
+
 /// Reduced far bodies on pairs of unequal gears (the test matrix's 24/40 and its inverse
 /// 40/24, coarse: pitches of 15° and 9°, so the two gears' windows advance by different turns
 /// and their blocks' patterns differ): against the same windows in full, held to the windows'

@@ -56,7 +56,8 @@
 //! The state lives in the reduced block's own modes z = V η (K_red V = M_red V Ω²,
 //! Vᵀ M_red V = I), where M_red and K_red are diagonal: a step takes u_b = V_b η and
 //! u̇_b = V_b η̇ (to place the interface nodes), V_bᵀ F_b and Ĝ (η̇, η) with Ĝ = Vᵀ G V, and
-//! O(n) work besides; no solve.
+//! O(n) work besides; no solve. Ĝ is skew (G is), so the step holds its upper triangle only
+//! ([`SkewMatrix`]) and reads each entry once for both products and both triangles.
 //!
 //! Ĝ couples every pair of own modes, a dense n × n product, yet its term 2ω Ĝ η̇ is small
 //! beside the modes' elastic forces Ω_j² η_j wherever Ω_j ≫ ω. With Ĝ's entries bounded
@@ -116,7 +117,7 @@ pub const CORIOLIS_TOLERANCE: f64 = 1e-3;
 /// same bits on every one (no sum is reordered, no multiply and add fused): the bodies are
 /// `#[inline(always)]` and so built again inside each `#[target_feature]` function.
 mod widest {
-    use super::{DMatrix, Kernel};
+    use super::{DMatrix, Kernel, SkewMatrix};
 
     type Pair<'a> = (&'a [f64], &'a [f64]);
     type PairMut<'a> = (&'a mut [f64], &'a mut [f64]);
@@ -134,10 +135,22 @@ mod widest {
         }
     }
 
+    pub(super) fn skew_product_twice(matrix: &SkewMatrix, x: Pair, y: PairMut) {
+        match Kernel::best() {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `best` returns a kernel this CPU runs.
+            Kernel::Avx512 => unsafe { x86::skew_product_twice_avx512(matrix, x, y) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: as above.
+            Kernel::Avx2 => unsafe { x86::skew_product_twice_avx2(matrix, x, y) },
+            _ => super::skew_product_twice(matrix, x, y),
+        }
+    }
+
     pub(super) fn modal_products(
         interface_modes: &DMatrix<f64>,
         interface_force: &[f64],
-        gyroscopic: &DMatrix<f64>,
+        gyroscopic: &SkewMatrix,
         rates: Pair,
         out: TripleMut,
     ) {
@@ -155,8 +168,8 @@ mod widest {
 
     #[cfg(target_arch = "x86_64")]
     mod x86 {
-        use super::{DMatrix, Pair, PairMut, TripleMut};
-        type Args<'a> = (&'a DMatrix<f64>, &'a [f64], &'a DMatrix<f64>);
+        use super::{DMatrix, Pair, PairMut, SkewMatrix, TripleMut};
+        type Args<'a> = (&'a DMatrix<f64>, &'a [f64], &'a SkewMatrix);
 
         #[target_feature(enable = "avx512f,avx512dq,avx2,fma")]
         pub(super) unsafe fn product_twice_avx512(m: &DMatrix<f64>, x: Pair, y: PairMut) {
@@ -166,6 +179,16 @@ mod widest {
         #[target_feature(enable = "avx2,fma")]
         pub(super) unsafe fn product_twice_avx2(m: &DMatrix<f64>, x: Pair, y: PairMut) {
             super::super::product_twice(m, x, y)
+        }
+
+        #[target_feature(enable = "avx512f,avx512dq,avx2,fma")]
+        pub(super) unsafe fn skew_product_twice_avx512(m: &SkewMatrix, x: Pair, y: PairMut) {
+            super::super::skew_product_twice(m, x, y)
+        }
+
+        #[target_feature(enable = "avx2,fma")]
+        pub(super) unsafe fn skew_product_twice_avx2(m: &SkewMatrix, x: Pair, y: PairMut) {
+            super::super::skew_product_twice(m, x, y)
         }
 
         #[target_feature(enable = "avx512f,avx512dq,avx2,fma")]
@@ -235,7 +258,7 @@ const ROWS: usize = 16;
 fn modal_products(
     interface_modes: &DMatrix<f64>,
     interface_force: &[f64],
-    gyroscopic: &DMatrix<f64>,
+    gyroscopic: &SkewMatrix,
     rates: (&[f64], &[f64]),
     (force, g_rate, g_eta): (&mut [f64], &mut [f64], &mut [f64]),
 ) {
@@ -246,8 +269,156 @@ fn modal_products(
     {
         *f = dot(column, interface_force);
     }
-    product_twice(gyroscopic, rates, (g_rate, g_eta));
+    skew_product_twice(gyroscopic, rates, (g_rate, g_eta));
 }
+
+/// A skew-symmetric matrix (Aᵀ = −A, zero diagonal) held by its strict upper triangle, column
+/// after column (column j: A₀ⱼ … A_{j−1,j}): half the entries of the dense matrix, so that a
+/// step's products with Ĝ read half the memory (at the FE sweep's speeds Ĝ couples all of a
+/// block's modes, about 290 × 290 on the paper's gears, and the two blocks' Ĝ no longer fit
+/// a core's cache beside the rest of the step).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SkewMatrix {
+    dim: usize,
+    upper: Vec<f64>,
+}
+
+impl SkewMatrix {
+    /// The skew part ½(A − Aᵀ) of the square matrix `a`.
+    pub fn skew_part_of(a: &DMatrix<f64>) -> Self {
+        assert!(a.is_square(), "a square matrix");
+        let dim = a.nrows();
+        let mut upper = Vec::with_capacity(dim * dim.saturating_sub(1) / 2);
+        for j in 0..dim {
+            for i in 0..j {
+                upper.push(0.5 * (a[(i, j)] - a[(j, i)]));
+            }
+        }
+        SkewMatrix { dim, upper }
+    }
+
+    /// The number of rows (and columns).
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
+    /// Column j above the diagonal: A₀ⱼ … A_{j−1,j}.
+    #[inline(always)]
+    fn column(&self, j: usize) -> &[f64] {
+        let start = j * j.saturating_sub(1) / 2;
+        &self.upper[start..start + j]
+    }
+
+    /// Every entry times `factor`.
+    pub fn scale(&mut self, factor: f64) {
+        self.upper.iter_mut().for_each(|a| *a *= factor);
+    }
+
+    /// The dense matrix.
+    pub fn to_dense(&self) -> DMatrix<f64> {
+        DMatrix::from_fn(self.dim, self.dim, |i, j| match i.cmp(&j) {
+            std::cmp::Ordering::Less => self.column(j)[i],
+            std::cmp::Ordering::Greater => -self.column(i)[j],
+            std::cmp::Ordering::Equal => 0.0,
+        })
+    }
+
+    /// A x, by the step's product ([`skew_product_twice`]).
+    pub fn times(&self, x: &[f64]) -> Vec<f64> {
+        let (mut y, mut unused) = (vec![0.0; self.dim], vec![0.0; self.dim]);
+        widest::skew_product_twice(self, (x, x), (&mut y, &mut unused));
+        y
+    }
+}
+
+/// (y1, y2) = A (x1, x2) for a skew-symmetric A held by its upper triangle: column j adds
+/// A_ij x_j to the rows i < j above it and gives row j its part below the diagonal,
+/// y_j = −Σ_{i<j} A_ij x_i (in [`LANES`] sums, row i in lane i mod [`LANES`]), before any later
+/// column adds to it; each matrix entry is read once for four products. The columns go in
+/// groups of [`GROUP`] that share each load and store of x and y; every y_i is summed in the
+/// same order whatever the grouping and on every vector unit.
+#[inline(always)]
+fn skew_product_twice(
+    matrix: &SkewMatrix,
+    x: (&[f64], &[f64]),
+    (y1, y2): (&mut [f64], &mut [f64]),
+) {
+    let n = matrix.dim;
+    assert!(x.0.len() == n && x.1.len() == n && y1.len() == n && y2.len() == n);
+    let mut first = 0;
+    while first + GROUP <= n {
+        skew_columns::<GROUP>(matrix, first, x, (y1, y2));
+        first += GROUP;
+    }
+    for j in first..n {
+        skew_columns::<1>(matrix, j, x, (y1, y2));
+    }
+}
+
+/// Columns `first` .. `first` + G of [`skew_product_twice`].
+#[inline(always)]
+fn skew_columns<const G: usize>(
+    matrix: &SkewMatrix,
+    first: usize,
+    (x1, x2): (&[f64], &[f64]),
+    (y1, y2): (&mut [f64], &mut [f64]),
+) {
+    let columns: [&[f64]; G] = std::array::from_fn(|k| matrix.column(first + k));
+    let a1: [f64; G] = std::array::from_fn(|k| x1[first + k]);
+    let a2: [f64; G] = std::array::from_fn(|k| x2[first + k]);
+    let (mut d1, mut d2) = ([[0.0; LANES]; G], [[0.0; LANES]; G]);
+    // The rows above the group, which every column of it has: whole lanes, then the rest.
+    let whole = first / LANES * LANES;
+    for start in (0..whole).step_by(LANES) {
+        let lanes = |v: &[f64]| -> [f64; LANES] {
+            v[start..start + LANES].try_into().expect("a lane's width")
+        };
+        let (u1, u2) = (lanes(x1), lanes(x2));
+        let (mut v1, mut v2) = (lanes(y1), lanes(y2));
+        for k in 0..G {
+            let c = lanes(columns[k]);
+            for l in 0..LANES {
+                d1[k][l] += c[l] * u1[l];
+                d2[k][l] += c[l] * u2[l];
+                v1[l] += c[l] * a1[k];
+                v2[l] += c[l] * a2[k];
+            }
+        }
+        y1[start..start + LANES].copy_from_slice(&v1);
+        y2[start..start + LANES].copy_from_slice(&v2);
+    }
+    for i in whole..first {
+        let l = i % LANES;
+        for k in 0..G {
+            let c = columns[k][i];
+            d1[k][l] += c * x1[i];
+            d2[k][l] += c * x2[i];
+            y1[i] += c * a1[k];
+            y2[i] += c * a2[k];
+        }
+    }
+    // The group's own triangle: each row set by its own column before the later ones add.
+    for k in 0..G {
+        let j = first + k;
+        for i in first..j {
+            let (c, l) = (columns[k][i], i % LANES);
+            d1[k][l] += c * x1[i];
+            d2[k][l] += c * x2[i];
+            y1[i] += c * a1[k];
+            y2[i] += c * a2[k];
+        }
+        y1[j] = -d1[k].iter().sum::<f64>();
+        y2[j] = -d2[k].iter().sum::<f64>();
+    }
+}
+
+/// Columns [`skew_product_twice`] takes at once (with their sums, 24 of AVX-512's 32
+/// registers).
+const GROUP: usize = 4;
+
+/// The sums a column of [`skew_product_twice`] keeps for its row below the diagonal (one
+/// AVX-512 register each).
+const LANES: usize = 8;
 
 /// The elements `in_block` and the others, each in the mesh's order.
 pub fn split_elements(
@@ -390,7 +561,7 @@ pub struct ReducedBlock {
     interface_modes: DMatrix<f64>,
     /// Ĝ = Vᵀ G V among the own modes whose Coriolis couplings are kept (the lowest ones,
     /// module doc), m̂ = Vᵀ m_X, ĝ = Vᵀ g_X.
-    modal_gyroscopic: DMatrix<f64>,
+    modal_gyroscopic: SkewMatrix,
     /// The largest |ω| [rad/s] the couplings kept hold for: ε/2 times the first own mode left
     /// out (infinite if none is), at or above the bound [`Self::new`] was asked for.
     rate_bound: f64,
@@ -717,8 +888,8 @@ impl ReducedBlock {
             .map_or(f64::INFINITY, |l| 0.5 * CORIOLIS_TOLERANCE * l.sqrt());
         let interface_modes = own_modes.rows(0, nb).into_owned();
         let kept_modes = own_modes.columns(0, coriolis_modes);
-        let mut modal_gyroscopic = kept_modes.transpose() * &gyroscopic * kept_modes;
-        modal_gyroscopic = (&modal_gyroscopic - modal_gyroscopic.transpose()) * 0.5;
+        let modal_gyroscopic =
+            SkewMatrix::skew_part_of(&(kept_modes.transpose() * &gyroscopic * kept_modes));
         let modal_radial = own_modes.transpose() * &radial_reference;
         let modal_turning = own_modes.transpose() * &turning_reference;
         Ok(Self {
@@ -758,7 +929,7 @@ impl ReducedBlock {
 
     /// The own modes whose Coriolis couplings are kept (the first entries of η).
     pub fn coriolis_modes(&self) -> usize {
-        self.modal_gyroscopic.nrows()
+        self.modal_gyroscopic.dim()
     }
 
     /// The largest |ω| of the hub [rad/s] the kept Coriolis couplings hold for (module doc): ε/2
@@ -972,7 +1143,7 @@ impl ReducedBlock {
     fn inertia_and_turning(&self, eta: &[f64]) -> (f64, DVector<f64>) {
         let r = self.coriolis_modes();
         let mut turning = self.modal_turning.clone();
-        let coupled = &self.modal_gyroscopic * DVector::from_column_slice(&eta[..r]);
+        let coupled = DVector::from_vec(self.modal_gyroscopic.times(&eta[..r]));
         let mut kept = turning.rows_mut(0, r);
         kept += &coupled;
         let eta = DVector::from_column_slice(eta);
@@ -1700,10 +1871,44 @@ mod tests {
         let mut histories = vec![full_history];
         for &rate_bound in rate_bounds {
             let mut block = block_of(&mesh, &full, &in_block, turning.cutoff, rate_bound);
-            block.modal_gyroscopic *= turning.coriolis;
+            block.modal_gyroscopic.scale(turning.coriolis);
             histories.push(reduced_history(&block));
         }
         histories
+    }
+
+    /// The step's product with a skew-symmetric matrix held by its upper triangle is the dense
+    /// product of the same matrix (to round-off: 1e-13 of |A| |x|) at sizes around the lane
+    /// width and at a block's size, and the dispatch to this CPU's widest vector unit gives the
+    /// same bits as the portable build; the triangle is exactly the skew part.
+    #[test]
+    fn the_skew_product_is_the_dense_product() {
+        for n in [0, 1, 2, 7, 8, 9, 16, 17, 31, 64, 293] {
+            let general = DMatrix::from_fn(n, n, |i, j| ((3 * i + 7 * j + 1) as f64).sin());
+            let skew = SkewMatrix::skew_part_of(&general);
+            let dense = (&general - general.transpose()) * 0.5;
+            assert_eq!(skew.to_dense(), dense, "n = {n}");
+            let x1: Vec<f64> = (0..n).map(|k| (0.3 * k as f64).cos()).collect();
+            let x2: Vec<f64> = (0..n).map(|k| 1.0 + (0.7 * k as f64).sin()).collect();
+            let (mut y1, mut y2) = (vec![f64::NAN; n], vec![f64::NAN; n]);
+            super::skew_product_twice(&skew, (&x1, &x2), (&mut y1, &mut y2));
+            let (mut w1, mut w2) = (vec![f64::NAN; n], vec![f64::NAN; n]);
+            widest::skew_product_twice(&skew, (&x1, &x2), (&mut w1, &mut w2));
+            let bits = |v: &[f64]| v.iter().map(|a| a.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&y1), bits(&w1), "n = {n}");
+            assert_eq!(bits(&y2), bits(&w2), "n = {n}");
+            assert_eq!(bits(&skew.times(&x1)), bits(&y1), "n = {n}");
+            for (x, y) in [(&x1, &y1), (&x2, &y2)] {
+                let exact = &dense * DVector::from_column_slice(x);
+                let scale = dense.norm() * x.iter().map(|a| a * a).sum::<f64>().sqrt();
+                for (a, b) in y.iter().zip(exact.iter()) {
+                    assert!(
+                        (a - b).abs() <= 1e-13 * scale.max(1e-300),
+                        "n = {n}: {a} {b}"
+                    );
+                }
+            }
+        }
     }
 
     /// [`turning_comparison`] at 3000 rpm: the loaded node, the interface node and the hub's
@@ -1869,38 +2074,5 @@ mod tests {
         );
         eprintln!("paper 36: three fine teeth {three:.1} Hz, six {six:.1} Hz");
         assert!(six < three, "{six} against {three}");
-    }
-
-    /// Feasibility numbers for the 3000 rpm scene's window mesh (not a check).
-    #[test]
-    #[ignore]
-    fn probe_the_window_block() {
-        let (mesh, body, in_block) = window_mesh();
-        for cutoff in [Cutoff::BesideBlockTimes(5.0), Cutoff::BesideBlockTimes(6.0)] {
-            let start = std::time::Instant::now();
-            let block = ReducedBlock::new(
-                &mesh.nodes,
-                &mesh.elements,
-                &in_block,
-                &mesh.bore_nodes,
-                &body.mass,
-                &body.material,
-                cutoff,
-                f64::INFINITY,
-            )
-            .unwrap();
-            eprintln!(
-                "cutoff {cutoff:?}: {} of {} elements in the block, {} interface nodes, {} internal, {} held, {} modes ({:.0?} Hz), {} reduced DOFs, {:.2} s",
-                in_block.iter().filter(|b| **b).count(),
-                mesh.elements.len(),
-                block.interface.len(),
-                block.internal.len(),
-                block.held.len(),
-                block.mode_frequencies_hz.len(),
-                block.mode_frequencies_hz,
-                block.dofs(),
-                start.elapsed().as_secs_f64()
-            );
-        }
     }
 }

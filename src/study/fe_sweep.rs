@@ -7,7 +7,10 @@
 //! FE's boundary conditions (speed drive, elastic bodies, the FE's mesh dashpot where the FE
 //! has it — on the driven hub's DTE rate while a flank touches —, no shafts or bearings) are set
 //! against it, each swept up and down over the same range four times as
-//! densely and solved at each FE speed from rest (as the FE starts). Each model's dashpot
+//! densely and solved at each FE speed from its static state at that speed ("from rest" below:
+//! at rest relative to the turning gears), as the sweep's own FE runs start at their speed
+//! with only the load ramping ([`super::compare::sweep_speed_overrides`]; runs given with
+//! `--fe-run` start as they were made). Each model's dashpot
 //! acts on its mesh mode as the FE's does on the FE modal analysis's mesh mode: the same modal
 //! damping coefficient c g, g the unit dashpot's share in the mass-normalized mode
 //! ([`super::compare::with_dashpot_share`]; `mesh_damping_n_s_per_m`,

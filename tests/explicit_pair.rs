@@ -991,14 +991,16 @@ fn a_scene_that_stops_when_settled_is_prepared_with_its_rule() {
 /// load ramping, on a cosine over `FE_SWEEP_LOAD_RAMP_S` (the ringing π²/((ω_n t_r)² − π²), no
 /// spin-up term), and its statistics (and its settled stop's thirds) start at the ramp's end
 /// plus the settling time of that ringing, which is none where the ringing is under
-/// `SETTLED_RINGING`: on the paper's pair (mesh mode 3.1 kHz, ringing 1.0e-3) and on 24/40 and
-/// 40/24, each at 0.8 and 1.2 times its driver-held mesh resonance speed, whose mesh modes are
-/// all above the 1.4 kHz where a 5 ms ramp's ringing reaches it.
+/// `SETTLED_RINGING`: on the paper's pair (mesh mode 3.2 kHz on this coarse mesh, ringing
+/// 1.0e-3), 24/40 (2.9 kHz, 1.2e-3), its inverse 40/24 (5.0 kHz, 4.0e-4) and the shifted 19/57
+/// (1.9 kHz, 2.7e-3), each at 0.8 and 1.2 times its driver-held mesh resonance speed: all above
+/// the 1.4 kHz where a 5 ms ramp's ringing reaches it (the settling time below that is
+/// `the_ramp_leaves_the_ringing_the_settling_time_assumes`'s).
 #[test]
 fn a_sweep_run_starts_at_speed_and_measures_after_its_load_ramp() {
     use geardyn::explicit::scene::{statistics_start, SETTLED_RINGING};
     use study::compare::{sweep_speed_overrides, FE_SWEEP_LOAD_RAMP_S, SPEED_SCENE};
-    for pair in [None, Some("24-40"), Some("40-24")] {
+    for pair in [None, Some("24-40"), Some("40-24"), Some("19-57-shift")] {
         let pair_overrides = pair.map_or_else(Vec::new, |p| {
             geardyn::samples::matrix_pair(p).unwrap().parsed_overrides()
         });

@@ -1098,7 +1098,7 @@ pub fn sweep_speeds_with(grid: &[f64], asked: &[f64], given: &[f64]) -> Vec<f64>
     };
     let (asked, given) = (inside(asked), inside(given));
     let last = grid.len() - 1;
-    let mut speeds: Vec<f64> = grid
+    let speeds: Vec<f64> = grid
         .iter()
         .enumerate()
         .filter(|&(i, g)| {
@@ -1112,9 +1112,7 @@ pub fn sweep_speeds_with(grid: &[f64], asked: &[f64], given: &[f64]) -> Vec<f64>
         .chain(asked.iter().copied())
         .chain(given.iter().copied())
         .collect();
-    speeds.sort_by(f64::total_cmp);
-    speeds.dedup_by(|a, b| super::fe_sweep::same_speed(*a, *b));
-    speeds
+    super::fe_sweep::distinct_speeds(speeds)
 }
 
 /// The first resonance speed's reference for the accuracy chart: the explicit FE's speed sweep

@@ -728,6 +728,13 @@ pub fn same_speed(a: f64, b: f64) -> bool {
     (a - b).abs() <= 1e-6 * a.abs().max(b.abs())
 }
 
+/// Speeds in ascending order, each once ([`same_speed`]).
+pub fn distinct_speeds(mut rpm: Vec<f64>) -> Vec<f64> {
+    rpm.sort_by(f64::total_cmp);
+    rpm.dedup_by(|a, b| same_speed(*a, *b));
+    rpm
+}
+
 fn amplitude_points(fe: &[FeSpeed]) -> Vec<(f64, f64)> {
     fe.iter()
         .map(|s| (s.speed_rpm, s.mesh_amplitude_rad))

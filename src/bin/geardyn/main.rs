@@ -327,8 +327,9 @@ impl CompareAsk<'_> {
     ) -> Result<Vec<executor::FeRunRequest>> {
         use study::compare as cmp;
         let sweep_speeds = self.sweep_speeds(given_rpm);
-        let all_speeds =
-            distinct_speeds(self.speeds.iter().chain(&sweep_speeds).copied().collect());
+        let all_speeds = study::fe_sweep::distinct_speeds(
+            self.speeds.iter().chain(&sweep_speeds).copied().collect(),
+        );
         let mut requests = Vec::new();
         let in_sweep = |rpm: f64| {
             sweep_speeds
@@ -372,13 +373,6 @@ impl CompareAsk<'_> {
         }
         Ok(requests)
     }
-}
-
-/// Speeds in ascending order, those within 1e-6 of each other once.
-fn distinct_speeds(mut rpm: Vec<f64>) -> Vec<f64> {
-    rpm.sort_by(f64::total_cmp);
-    rpm.dedup_by(|a, b| study::fe_sweep::same_speed(*a, *b));
-    rpm
 }
 
 /// The finished FE runs given to compare, read.

@@ -466,6 +466,7 @@ fn write_fe_sweep(
         "fe_settled",
         "fe_back_flank_share",
         "fe_back_flank_force_max_n",
+        "fe_on_body_crossing",
     ]
     .map(String::from)
     .to_vec();
@@ -496,6 +497,7 @@ fn write_fe_sweep(
                 s.settled.to_string(),
                 format!("{:.4}", s.back_flank_share),
                 format!("{:.1}", s.back_flank_force_max_n),
+                s.on_body_crossing.to_string(),
             ];
             for m in &sweep.models {
                 let l = &m.at_fe_speeds[i];
@@ -634,7 +636,7 @@ fn write_fe_sweep(
         write_fe_sweep_levels(dir, sweep)?;
     }
     let mut text = format!(
-        "\nFE speed sweep ({} speeds{}, scene {}): FE resonance {:.0} rpm (fitted ζ {:.3}), peak 1st mesh harmonic {:.3} urad. {}\n",
+        "\nFE speed sweep ({} speeds{}, scene {}): FE resonance {:.0} rpm (fitted ζ {:.3}), peak 1st mesh harmonic {:.3} urad. {}. Body modes: {}\n",
         sweep.fe.len(),
         sweep
             .fine_element_mm
@@ -643,7 +645,8 @@ fn write_fe_sweep(
         sweep.resonance_rpm_fe,
         sweep.fitted_damping_ratio_fe,
         um(sweep.peak_dte_mesh_amplitude_fe_rad),
-        sweep.settling_note
+        sweep.settling_note,
+        sweep.body_mode_note,
     );
     for m in &sweep.models {
         text += &format!(

@@ -286,6 +286,7 @@ fn answers(
         (Drive::Speed, true),
         torque,
         damping,
+        None,
     )
     .or_else(|_| {
         lumped_twin(
@@ -295,6 +296,7 @@ fn answers(
             (Drive::Speed, false),
             torque,
             damping,
+            None,
         )
     })?;
     // With a force law: its tangent about the design load, what small vibrations feel.

@@ -595,6 +595,19 @@ pub fn drivetrain_with(
     shafts: [Option<crate::lumped::Shaft>; 2],
     bearings: bool,
 ) -> Result<Structure, StudyError> {
+    let gears = gear_bodies(case, bodies);
+    drivetrain_of(case, drive, (gears, spring_damping), shafts, bearings)
+}
+
+/// [`drivetrain_with`] on the gear bodies `gears` as given (e.g. an inertia split other than
+/// [`gear_bodies`]'s).
+pub fn drivetrain_of(
+    case: &Case,
+    drive: Drive,
+    (gears, spring_damping): ([GearBody; 2], SpringDamping),
+    shafts: [Option<crate::lumped::Shaft>; 2],
+    bearings: bool,
+) -> Result<Structure, StudyError> {
     let settings = &case.lumped;
     let pair = &case.pair;
     let bearings = (bearings && settings.bearings).then(|| {
@@ -616,7 +629,7 @@ pub fn drivetrain_with(
     Structure::drivetrain(&DrivetrainSpec {
         drive,
         base_radii: [pair.gears[0].base_radius, pair.gears[1].base_radius],
-        gears: gear_bodies(case, bodies),
+        gears,
         shafts,
         bearings,
         spring_damping,

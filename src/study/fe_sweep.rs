@@ -1987,6 +1987,38 @@ mod tests {
         assert!(super::on_body_crossing(1000.0, 36.0, 9.0 * 600.0).is_none());
     }
 
+    /// A model's own crossings: the paper pair's twin (speed drive, elastic bodies, two DOF)
+    /// meets its body mode with the 4th mesh harmonic at f_b · 60/(4 · 36) rpm and within
+    /// 1.5 % of it, not 3 % off; the one-DOF model has no body mode and never does.
+    #[test]
+    fn a_model_meets_its_own_body_mode_where_its_harmonic_does() {
+        use crate::lumped::Drive;
+        use crate::stiffness::MeshStiffness;
+        let case = crate::case::Case::embedded_default().unwrap();
+        let damping = crate::study::compare::FeDamping {
+            mesh_n_s_per_m: 2000.0,
+            stiffness_beta_s: 1e-9,
+        };
+        let mesh = MeshStiffness::constant("k", std::f64::consts::TAU / 36.0, 4.0e8);
+        let twin = crate::study::compare::lumped_twin(
+            &case,
+            mesh,
+            (None, None),
+            (Drive::Speed, true),
+            143.6,
+            damping,
+            None,
+        )
+        .unwrap();
+        let body_hz = crate::study::lumped::mode_frequencies_hz(&twin)[1];
+        let on = body_hz * 60.0 / (4.0 * 36.0);
+        assert!(super::on_own_crossing(&twin, on));
+        assert!(super::on_own_crossing(&twin, on * 1.012));
+        assert!(!super::on_own_crossing(&twin, on * 1.03));
+        let (one_dof, _) = one_dof(1e-6, None, 0.05);
+        assert!(!super::on_own_crossing(&one_dof, on));
+    }
+
     /// A speed on a body mode's crossing is named and left out of the one-DOF fits. The "FE" is
     /// the linear one-DOF model's own response 1.5 % higher (as above), one of its speeds
     /// doubled in its first harmonic and given a line at the 4th harmonic, as the paper pair's

@@ -896,19 +896,22 @@ pub fn run(
     body: Option<(f64, f64)>,
 ) -> Option<FeSweep> {
     let mut levels = mesh_levels(fe);
-    // Each mesh's speeds on a crossing that its own lines show met.
-    if let Some((teeth, hz)) = body {
-        for level in &mut levels {
-            let met: Vec<f64> = body_mode_crossings(level, teeth, hz)
-                .into_iter()
-                .filter(|c| c.excited)
-                .map(|c| c.speed_rpm)
-                .collect();
+    // Each mesh's crossings, and its speeds on one that its own lines show met.
+    let level_crossings: Vec<Vec<BodyModeCrossing>> = levels
+        .iter_mut()
+        .map(|level| {
+            let Some((teeth, hz)) = body else {
+                return Vec::new();
+            };
+            let crossings = body_mode_crossings(level, teeth, hz);
             for s in level.iter_mut() {
-                s.on_body_crossing = met.iter().any(|r| same_speed(*r, s.speed_rpm));
+                s.on_body_crossing = crossings
+                    .iter()
+                    .any(|c| c.excited && same_speed(c.speed_rpm, s.speed_rpm));
             }
-        }
-    }
+            crossings
+        })
+        .collect();
     // A fit through three speeds interpolates them (and has no jackknife): the finest level
     // with four speeds to fit, else the finest with three.
     let fits = |level: &Vec<FeSpeed>| resonance_fit(&amplitude_points(level)).is_some();
@@ -1004,8 +1007,7 @@ pub fn run(
         ),
     };
     let case_model = &models[0];
-    let body_mode_crossings =
-        body.map_or_else(Vec::new, |(teeth, hz)| body_mode_crossings(&fe, teeth, hz));
+    let body_mode_crossings = level_crossings[headline].clone();
     let dte_rms_max_rel_err_off_body_crossings = largest_abs(
         fe.iter()
             .zip(&case_model.dte_rms_rel_err)
@@ -1158,16 +1160,23 @@ fn mesh_level(
     }
 }
 
-/// One model of [`run`]: `fe_fit` is the FE's fitted (resonance speed, peak amplitude).
-/// Whether a mesh harmonic of `model` meets its own first mode above the mesh mode at `rpm`
-/// ([`on_body_crossing`]; never with one DOF).
-fn on_own_crossing(model: &MeshModel, rpm: f64) -> bool {
+/// A model's own first mode above its mesh mode: the driver's teeth as its mesh period counts
+/// them (2π over the period) and the mode at the mean linearized stiffness [Hz]; `None` with
+/// one DOF.
+fn own_body_mode(model: &MeshModel) -> Option<(f64, f64)> {
     let teeth = std::f64::consts::TAU / model.mesh.period();
     super::lumped::mode_frequencies_hz(model)
         .get(1)
-        .is_some_and(|hz| on_body_crossing(rpm, teeth, *hz).is_some())
+        .map(|hz| (teeth, *hz))
 }
 
+/// Whether a mesh harmonic meets the model's own body mode `own` ([`own_body_mode`]) at `rpm`
+/// ([`on_body_crossing`]).
+fn on_own_crossing(own: Option<(f64, f64)>, rpm: f64) -> bool {
+    own.is_some_and(|(teeth, hz)| on_body_crossing(rpm, teeth, hz).is_some())
+}
+
+/// One model of [`run`]: `fe_fit` is the FE's fitted (resonance speed, peak amplitude).
 fn model_sweep(
     label: &str,
     model: &MeshModel,
@@ -1213,10 +1222,10 @@ fn model_sweep(
     });
     // Off the model's own body-mode crossings (as the FE's fit is off the FE modal's) where
     // three points are left: the one-DOF fit is of the mesh resonance.
-    let body_hz = super::lumped::mode_frequencies_hz(model).get(1).copied();
+    let own = own_body_mode(model);
     let settled = || dense.iter().filter(|s| !s.diverged);
     let off_crossings: Vec<(f64, f64)> = settled()
-        .filter(|s| !on_own_crossing(model, s.speed_rpm))
+        .filter(|s| !on_own_crossing(own, s.speed_rpm))
         .map(|s| (s.speed_rpm, s.mesh_amplitude_rad))
         .filter(fits)
         .collect();
@@ -1260,7 +1269,7 @@ fn model_sweep(
         .iter()
         .zip(&held.probes)
         .zip(&dte_rms_rel_err_at_fe_resonance)
-        .filter(|((s, p), _)| !s.on_body_crossing && !on_own_crossing(model, p.speed_rpm))
+        .filter(|((s, p), _)| !s.on_body_crossing && !on_own_crossing(own, p.speed_rpm))
         .map(|(_, e)| *e)
         .collect();
     Some(ModelSweep {
@@ -1269,7 +1278,7 @@ fn model_sweep(
         mesh_damping_n_s_per_m: model.damping,
         mesh_mode_dashpot_share_per_kg: super::compare::dashpot_share(model),
         mesh_mode_damping_ratio: model.mesh_mode_damping_ratio(),
-        body_mode_hz: body_hz.unwrap_or(f64::NAN),
+        body_mode_hz: own.map_or(f64::NAN, |(_, hz)| hz),
         diverged_at_fe_rpm: at_fe_speeds
             .iter()
             .filter(|s| s.diverged)
@@ -1349,6 +1358,7 @@ fn held_at_fe_resonance(
     // The FE's fit points ([`amplitude_points`]: off the body mode's crossings where three
     // are left), the model's at the same places, less those on the model's own crossings.
     let taken = amplitude_points(fe);
+    let own = own_body_mode(model);
     let (mut c, mut probes) = (start, first.clone());
     let mut read: Option<(Vec<LumpedSpeed>, f64, f64)> = None;
     let mut diverged_rpm = Vec::new();
@@ -1362,7 +1372,7 @@ fn held_at_fe_resonance(
             .zip(fe)
             .filter(|(_, s)| fits(&(s.speed_rpm, s.mesh_amplitude_rad)))
             .filter(|(_, s)| taken.iter().any(|t| same_speed(t.0, s.speed_rpm)))
-            .filter(|(p, _)| !on_own_crossing(model, p.speed_rpm))
+            .filter(|(p, _)| !on_own_crossing(own, p.speed_rpm))
             .map(|(p, _)| (p.speed_rpm, p.mesh_amplitude_rad))
             .collect();
         let Some((resonance, _, _)) = resonance_fit(&points) else {
@@ -1987,36 +1997,53 @@ mod tests {
         assert!(super::on_body_crossing(1000.0, 36.0, 9.0 * 600.0).is_none());
     }
 
-    /// A model's own crossings: the paper pair's twin (speed drive, elastic bodies, two DOF)
-    /// meets its body mode with the 4th mesh harmonic at f_b · 60/(4 · 36) rpm and within
-    /// 1.5 % of it, not 3 % off; the one-DOF model has no body mode and never does.
+    /// A model's own crossings: the twin (speed drive, elastic bodies, two DOF) of the paper
+    /// pair, a shifted 24/40 pair and its inverse meets its body mode with the 4th mesh
+    /// harmonic at f_b · 60/(4 z₁) rpm (z₁ counted by its mesh period) and within 1.5 % of
+    /// it, not 3 % off; the one-DOF model has no body mode and never does.
     #[test]
     fn a_model_meets_its_own_body_mode_where_its_harmonic_does() {
+        use crate::case::{Case, Override};
         use crate::lumped::Drive;
         use crate::stiffness::MeshStiffness;
-        let case = crate::case::Case::embedded_default().unwrap();
+        let unequal = |z1: i64, z2: i64| {
+            vec![
+                Override::set("gear1.teeth", z1),
+                Override::set("gear2.teeth", z2),
+                Override::set("gear1.profile_shift", 0.2),
+                Override::set("gear2.profile_shift", -0.1),
+            ]
+        };
         let damping = crate::study::compare::FeDamping {
             mesh_n_s_per_m: 2000.0,
             stiffness_beta_s: 1e-9,
         };
-        let mesh = MeshStiffness::constant("k", std::f64::consts::TAU / 36.0, 4.0e8);
-        let twin = crate::study::compare::lumped_twin(
-            &case,
-            mesh,
-            (None, None),
-            (Drive::Speed, true),
-            143.6,
-            damping,
-            None,
-        )
-        .unwrap();
-        let body_hz = crate::study::lumped::mode_frequencies_hz(&twin)[1];
-        let on = body_hz * 60.0 / (4.0 * 36.0);
-        assert!(super::on_own_crossing(&twin, on));
-        assert!(super::on_own_crossing(&twin, on * 1.012));
-        assert!(!super::on_own_crossing(&twin, on * 1.03));
-        let (one_dof, _) = one_dof(1e-6, None, 0.05);
-        assert!(!super::on_own_crossing(&one_dof, on));
+        for (overrides, z1) in [
+            (vec![], 36.0),
+            (unequal(24, 40), 24.0),
+            (unequal(40, 24), 40.0),
+        ] {
+            let case = Case::load_with(None, &overrides).unwrap();
+            let mesh = MeshStiffness::constant("k", std::f64::consts::TAU / z1, 4.0e8);
+            let twin = crate::study::compare::lumped_twin(
+                &case,
+                mesh,
+                (None, None),
+                (Drive::Speed, true),
+                143.6,
+                damping,
+                None,
+            )
+            .unwrap();
+            let body_hz = crate::study::lumped::mode_frequencies_hz(&twin)[1];
+            let on = body_hz * 60.0 / (4.0 * z1);
+            let own = super::own_body_mode(&twin);
+            assert!(super::on_own_crossing(own, on), "z1 {z1}");
+            assert!(super::on_own_crossing(own, on * 1.012), "z1 {z1}");
+            assert!(!super::on_own_crossing(own, on * 1.03), "z1 {z1}");
+            let (one_dof, _) = one_dof(1e-6, None, 0.05);
+            assert!(!super::on_own_crossing(super::own_body_mode(&one_dof), on));
+        }
     }
 
     /// A speed on a body mode's crossing is named and left out of the one-DOF fits. The "FE" is

@@ -691,27 +691,49 @@ fn write_fe_sweep(
         );
     }
     if sweep.mesh_levels.len() > 1 {
+        let common = match sweep.common_rpm.is_empty() {
+            true => "each fitted over its own speeds (no coarser mesh shares the headline's speeds; a mesh with fewer than three speeds is not fitted)".to_string(),
+            false => format!(
+                "the finest fitted one and the next coarser both ran {} speeds ({} rpm), fitted over those in parentheses",
+                sweep.common_rpm.len(),
+                sweep
+                    .common_rpm
+                    .iter()
+                    .map(|r| format!("{r:.0}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        };
         text += &format!(
-            "\n* The FE on {} meshes (fe_sweep_levels.csv); the finest fitted one and the next coarser both ran {} speeds ({} rpm), fitted over those in parentheses:",
+            "\n* The FE on {} meshes (fe_sweep_levels.csv); {common}:",
             sweep.mesh_levels.len(),
-            sweep.common_rpm.len(),
-            sweep
-                .common_rpm
-                .iter()
-                .map(|r| format!("{r:.0}"))
-                .collect::<Vec<_>>()
-                .join(", ")
         );
         for (i, level) in sweep.mesh_levels.iter().enumerate() {
+            let name = level
+                .fine_element_mm
+                .map_or("mesh not recorded".to_string(), |mm| {
+                    format!("{mm:.2} mm flanks")
+                });
+            let headline = match i == sweep.headline_level {
+                true => " (the headline)",
+                false => "",
+            };
+            if !level.resonance_rpm.is_finite() {
+                text += &format!(
+                    "\n  * {name}{headline}: {} speeds ({} rpm), no resonance fitted from them (it takes three speeds and a peak among them); the case's model's DTE rms against it differs by {:.1} % at most",
+                    level.fe.len(),
+                    level
+                        .fe
+                        .iter()
+                        .map(|s| format!("{:.0}", s.speed_rpm))
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                    100.0 * level.case_model_dte_rms_max_rel_err,
+                );
+                continue;
+            }
             text += &format!(
-                "\n  * {}{}: {} speeds, resonance {:.0} rpm, peak {:.3} urad{}; the case's model against it: resonance {:+.2} %, peak {:+.1} %, DTE rms largest difference {:.1} %",
-                level
-                    .fine_element_mm
-                    .map_or("mesh not recorded".to_string(), |mm| format!("{mm:.2} mm flanks")),
-                match i == sweep.headline_level {
-                    true => " (the headline)",
-                    false => "",
-                },
+                "\n  * {name}{headline}: {} speeds, resonance {:.0} rpm, peak {:.3} urad{}; the case's model against it: resonance {:+.2} %, peak {:+.1} %, DTE rms largest difference {:.1} %",
                 level.fe.len(),
                 level.resonance_rpm,
                 um(level.peak_dte_mesh_amplitude_rad),

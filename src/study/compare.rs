@@ -1436,7 +1436,7 @@ pub fn label_line(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// An FE run meshed with another tooth layout than the case's is refused before anything
@@ -1590,7 +1590,7 @@ mod tests {
     }
 
     /// The paper pair, an unequal shifted pair (24/40, x = 0.2 / −0.1) and its inverse.
-    fn paper_and_unequal_pairs() -> Vec<Case> {
+    pub(crate) fn paper_and_unequal_pairs() -> Vec<Case> {
         use crate::case::Override;
         let unequal = |z1: i64, z2: i64| {
             vec![

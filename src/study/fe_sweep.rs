@@ -2003,27 +2003,14 @@ mod tests {
     /// it, not 3 % off; the one-DOF model has no body mode and never does.
     #[test]
     fn a_model_meets_its_own_body_mode_where_its_harmonic_does() {
-        use crate::case::{Case, Override};
         use crate::lumped::Drive;
         use crate::stiffness::MeshStiffness;
-        let unequal = |z1: i64, z2: i64| {
-            vec![
-                Override::set("gear1.teeth", z1),
-                Override::set("gear2.teeth", z2),
-                Override::set("gear1.profile_shift", 0.2),
-                Override::set("gear2.profile_shift", -0.1),
-            ]
-        };
         let damping = crate::study::compare::FeDamping {
             mesh_n_s_per_m: 2000.0,
             stiffness_beta_s: 1e-9,
         };
-        for (overrides, z1) in [
-            (vec![], 36.0),
-            (unequal(24, 40), 24.0),
-            (unequal(40, 24), 40.0),
-        ] {
-            let case = Case::load_with(None, &overrides).unwrap();
+        for case in crate::study::compare::tests::paper_and_unequal_pairs() {
+            let z1 = case.pair.gears[0].teeth() as f64;
             let mesh = MeshStiffness::constant("k", std::f64::consts::TAU / z1, 4.0e8);
             let twin = crate::study::compare::lumped_twin(
                 &case,

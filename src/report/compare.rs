@@ -75,6 +75,17 @@ pub fn read_fe_run(dir: &Path) -> Result<FeDte, String> {
         }
     }
     let speed = number(&["scene", "driver_speed"])?;
+    let scaling = number(&["mass_scaling", "factor"]).unwrap_or(1.0);
+    let target_step = summary
+        .pointer("/mass_scaling/target_steps_s")
+        .is_some_and(|v| !v.is_null());
+    let unscaled = |key: &str| {
+        summary
+            .get(key)
+            .and_then(|v| v.as_f64())
+            .filter(|_| scaling <= 1.0 || !target_step)
+            .map(|value| value / scaling.sqrt())
+    };
     let mut reader = csv::Reader::from_path(dir.join("history.csv"))
         .map_err(|e| format!("{shown}/history.csv: {e}"))?;
     let headers = reader
@@ -131,19 +142,11 @@ pub fn read_fe_run(dir: &Path) -> Result<FeDte, String> {
         ramp_end_s: number(&["scene", "ramp_time"])?,
         statistics_start_s: number(&["statistics_start_s"])?,
         wall_s: number(&["total_wall_s"])?,
-        // β = 2ζ/ω_max grows with √ of a uniform mass scaling: the unscaled bodies' β. A
-        // target step lowers ω_max by more, by how much the summary does not say: no β then.
-        stiffness_damping_beta_s: summary
-            .get("stiffness_damping_beta_s")
-            .and_then(|v| v.as_f64())
-            .filter(|_| {
-                let factor = number(&["mass_scaling", "factor"]).unwrap_or(1.0);
-                let target_step = summary
-                    .pointer("/mass_scaling/target_steps_s")
-                    .is_some_and(|v| !v.is_null());
-                factor <= 1.0 || !target_step
-            })
-            .map(|beta| beta / number(&["mass_scaling", "factor"]).unwrap_or(1.0).sqrt()),
+        // β = 2ζ/ω_max and the dashpot 2ζ√(k r² I) grow with √ of a uniform mass scaling:
+        // the unscaled bodies' values. A target step scales each element by its own factor,
+        // which the summary does not give: neither then.
+        stiffness_damping_beta_s: unscaled("stiffness_damping_beta_s"),
+        mesh_damping_n_m_s: unscaled("mesh_damping_n_m_s"),
     })
 }
 
@@ -718,6 +721,14 @@ fn write_fe_sweep(
                 true => " (the headline)",
                 false => "",
             };
+            // Each run sizes its dashpot on its own mesh's LTCA k̄; the model takes the level's.
+            let name = match level.mesh_damping_n_s_per_m.is_finite() {
+                true => format!(
+                    "{name} (FE dashpot {:.0} N·s/m; the case's model {:.0} against it)",
+                    level.mesh_damping_n_s_per_m, level.case_model_mesh_damping_n_s_per_m
+                ),
+                false => name,
+            };
             if !level.resonance_rpm.is_finite() {
                 text += &format!(
                     "\n  * {name}{headline}: {} speeds ({} rpm), no resonance fitted from them (it takes three speeds and a peak among them); the case's model's DTE rms against it differs by {:.1} % at most",
@@ -788,6 +799,16 @@ fn write_fe_sweep(
                 100.0 * x.case_model_resonance_rpm_rel_err,
                 100.0 * x.case_model_peak_rel_err,
             ),
+        };
+        // Each run sizes its dashpot on its own mesh's LTCA k̄: the meshes' values then differ
+        // in their damping too.
+        let [c1, c2, c3] = x.mesh_damping_n_s_per_m;
+        let spread = c1.max(c2).max(c3) / c1.min(c2).min(c3) - 1.0;
+        let fits = match spread > 1e-3 {
+            true => format!(
+                "{fits} (the three meshes' runs carry dashpots of {c1:.0} / {c2:.0} / {c3:.0} N·s/m, each sized on its own mesh's LTCA k̄, so the extrapolation takes the dashpot's change with the mesh as part of the mesh's; the case's model carries the headline's)"
+            ),
+            false => fits,
         };
         text += &format!(
             "\n* The FE extrapolated to zero flank size (fe_sweep_extrapolated.csv). {fits}. Speed by speed, each from the three finest meshes that ran it: {} of the {} speeds converged monotonically (the others carry the finest mesh's value), the case's model's DTE rms at most {:.1} % from it{}",
@@ -895,6 +916,7 @@ fn write_fe_sweep_levels(
             "fe_growth",
             "fe_settling_drift",
             "fe_back_flank_share",
+            "fe_mesh_damping_n_s_per_m",
         ],
         sweep.mesh_levels.iter().flat_map(|level| {
             level.fe.iter().map(move |s| {
@@ -908,6 +930,8 @@ fn write_fe_sweep_levels(
                     format!("{:.4}", s.growth),
                     format!("{:.4}", s.settling_drift),
                     format!("{:.4}", s.back_flank_share),
+                    s.mesh_damping_n_s_per_m
+                        .map_or(String::new(), |c| format!("{c:.2}")),
                 ]
             })
         }),

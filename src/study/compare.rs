@@ -85,6 +85,11 @@ pub struct FeDte {
     /// unscaled masses (a mass-scaled run's β over √ of its scaling factor; `None`: not
     /// recorded, e.g. a synthetic run).
     pub stiffness_damping_beta_s: Option<f64>,
+    /// The run's mesh dashpot on the driven hub's DTE rate [N·m·s] (`fe.mesh_damping_ratio`
+    /// on the LTCA k̄ of the run's own explicit mesh and the driven inertia, so it differs
+    /// between meshes: 3.3 % less on 0.25 mm flanks than on 1 mm, paper pair), of the unscaled
+    /// masses as β above (`None`: not recorded, or a target-step mass scaling).
+    pub mesh_damping_n_m_s: Option<f64>,
 }
 
 /// The explicit FE's damping, which its lumped twin carries where the FE has it.
@@ -650,6 +655,30 @@ pub fn with_dashpot_share(mut model: MeshModel, share: f64) -> MeshModel {
     model
 }
 
+/// An FE run's mesh dashpot along the line of action [N·s/m]: its torsional coefficient on
+/// the driven hub over r_b2² (`None`: not recorded).
+pub fn run_dashpot(run: &FeDte, rb2: f64) -> Option<f64> {
+    run.mesh_damping_n_m_s.map(|c| c / (rb2 * rb2))
+}
+
+/// `model`, built for the FE mesh dashpot `built_for` [N·s/m], carrying instead the dashpot
+/// `fe_dashpot` [N·s/m] of the FE runs it is held against: its coefficient times their ratio
+/// (the share scaling of [`with_dashpot_share`] is linear in it). Each explicit run sizes its
+/// dashpot on the LTCA k̄ of its own mesh (`fe.mesh_damping_ratio`, [`crate::study::fe::prepare`]),
+/// so runs on finer flanks carry less (paper pair: 3.3 % from 1.0 to 0.25 mm flanks), and near
+/// the resonance the response's peak moves by about 5 % per 1 % of it
+/// (validation/lumped-twin): the twin of a run carries the run's own coefficient. `None` (not
+/// recorded), or a coefficient that is not positive and finite, keeps the model's.
+pub fn with_fe_dashpot(model: &MeshModel, fe_dashpot: Option<f64>, built_for: f64) -> MeshModel {
+    let mut model = model.clone();
+    if let Some(c) = fe_dashpot.filter(|c| *c > 0.0 && c.is_finite()) {
+        if built_for > 0.0 && built_for.is_finite() {
+            model.damping *= c / built_for;
+        }
+    }
+    model
+}
+
 /// The FE run the headline numbers, the paper-stiffness study and the chart use: the one
 /// nearest the speed of the case's `high-unmodified` scene (the seed paper's 3000 rpm), else
 /// the first; of several runs at that speed, the one on the finest explicit mesh.
@@ -890,9 +919,13 @@ pub fn run(
         .fe_runs
         .iter()
         .map(|run| {
+            // Each run's twins with its own dashpot.
+            let own = |model: &MeshModel| {
+                with_fe_dashpot(model, run_dashpot(run, rb[1]), damping_of(Drive::Speed))
+            };
             compare_speed(
                 run,
-                [&rim_model, &rigid_model],
+                [&own(&rim_model), &own(&rigid_model)],
                 teeth,
                 rb[1],
                 (held_modal, held_body),
@@ -972,7 +1005,12 @@ pub fn run(
                     &fe_mean_model,
                 ),
             ];
-            Some(fe_sweep(case, input, &models, (rpms, held_body))?)
+            Some(fe_sweep(
+                case,
+                input,
+                (&models, damping_of(Drive::Speed)),
+                (rpms, held_body),
+            )?)
         }
     };
     let first = primary.map(|i| &speeds[i]);
@@ -1153,13 +1191,13 @@ pub fn fe_sweep_runs<'a>(fe_runs: &'a [FeDte], rpms: &[f64]) -> Result<Vec<&'a F
     Ok(inside)
 }
 
-/// The FE runs of `input` at `rpms` against `models`, the case's
-/// model first, with the FE modal's first body mode, driver held, `body_hz`
-/// ([`super::fe_sweep::run`]).
+/// The FE runs of `input` at `rpms` against `models` (built for the FE mesh dashpot
+/// `models_dashpot` [N·s/m]), the case's model first, with the FE modal's first body mode,
+/// driver held, `body_hz` ([`super::fe_sweep::run`]).
 fn fe_sweep(
     case: &Case,
     input: &CompareInput,
-    models: &[(&str, &str, &MeshModel)],
+    (models, models_dashpot): (&[(&str, &str, &MeshModel)], f64),
     (rpms, body_hz): (&[f64], Option<f64>),
 ) -> Result<super::fe_sweep::FeSweep, StudyError> {
     let rb2 = case.pair.gears[1].base_radius;
@@ -1171,13 +1209,16 @@ fn fe_sweep(
         // A back-flank force above 1e-3 of the static mesh force counts as contact.
         .map(|run| {
             let threshold = 1e-3 * run.torque_nm / rb2;
-            super::fe_sweep::FeSpeed::measure(run, teeth, back_contact, threshold)
+            super::fe_sweep::FeSpeed {
+                mesh_damping_n_s_per_m: run_dashpot(run, rb2),
+                ..super::fe_sweep::FeSpeed::measure(run, teeth, back_contact, threshold)
+            }
         })
         .collect();
     fe.sort_by(|a, b| a.speed_rpm.total_cmp(&b.speed_rpm));
     let decay_time = 1.0 / (case.fe.mesh_damping_ratio * models[0].2.natural_frequency());
     let body = body_hz.map(|hz| (teeth, hz));
-    super::fe_sweep::run(fe, models, rb2, decay_time, body).ok_or_else(|| {
+    super::fe_sweep::run(fe, models, rb2, models_dashpot, decay_time, body).ok_or_else(|| {
         StudyError::Input(
             "--fe-sweep needs at least three FE speeds with a mesh-harmonic response, and lumped models that settle at three of four times as many".into(),
         )
@@ -1458,6 +1499,7 @@ pub(crate) mod tests {
             statistics_start_s: 0.0,
             wall_s: 0.0,
             stiffness_damping_beta_s: None,
+            mesh_damping_n_m_s: None,
         };
         let input = |layout| CompareInput {
             fe_runs: vec![run(layout)],
@@ -1764,6 +1806,19 @@ pub(crate) mod tests {
             2000.0
         );
         assert_eq!(with_dashpot_share(elastic, -1.0).damping, 2000.0);
+        // A run's own dashpot scales the coefficient by its ratio to the one the model was
+        // built for, and with it the mesh mode's damping ratio (first order, linear in c);
+        // none recorded, or not a coefficient, keeps it.
+        let built = same.damping;
+        let of_run = with_fe_dashpot(&same, Some(0.967 * 2000.0), 2000.0);
+        assert!((of_run.damping / (0.967 * built) - 1.0).abs() < 1e-12);
+        let ratio =
+            (of_run.mesh_mode_damping_ratio() - own) / (same.mesh_mode_damping_ratio() - own);
+        assert!((ratio - 0.967).abs() < 1e-9, "{ratio}");
+        for kept in [None, Some(f64::NAN), Some(0.0), Some(-5.0)] {
+            assert_eq!(with_fe_dashpot(&same, kept, 2000.0).damping, built);
+        }
+        assert_eq!(with_fe_dashpot(&same, Some(1900.0), 0.0).damping, built);
     }
 
     #[test]

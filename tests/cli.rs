@@ -1712,7 +1712,10 @@ fn lumped_bodies_shafts_and_relief_choose_the_model() {
 /// beside it. Runs on two more meshes form mesh levels: four on 1.5 mm flanks (resonance at
 /// 5 200 rpm, one point off the curve) and three on 0.7 mm (4 900 rpm). The headline stays on
 /// the finest level with four speeds (1.0 mm); each level's fit over the speeds the headline
-/// shares with the next coarser level gives its own resonance back.
+/// shares with the next coarser level gives its own resonance back. Each level's runs record
+/// their own mesh dashpot (the 0.7 mm runs mass-scaled ×4 to a target step, so twice theirs):
+/// the models carry the headline level's, the case's model against each other level that
+/// level's.
 #[test]
 fn compare_fe_sweep_finds_a_known_resonance() {
     use std::f64::consts::TAU;
@@ -1725,8 +1728,21 @@ fn compare_fe_sweep_finds_a_known_resonance() {
         .into_iter()
         .chain([4250.0, 4500.0, 5000.0, 5500.0].map(|rpm| (rpm, coarse_nr, 1.5)))
         .chain([4500.0, 5000.0, 5500.0].map(|rpm| (rpm, fine_nr, 0.7)));
+    // Each level's torsional dashpot on the driven hub [N·m·s], 6.2 (1 + 0.04 h) as a run sizes
+    // it on its own mesh's k̄, and the 0.7 mm runs' mass scaling.
+    let dashpot_n_m_s = |fine_mm: f64| 6.2 * (1.0 + 0.04 * fine_mm);
     for (rpm, nr, fine_mm) in runs {
         let run = dir.path().join(format!("fe-{rpm}-{fine_mm}"));
+        let (scaling, recorded) = match fine_mm {
+            0.7 => (
+                r#"{"factor": 4.0, "target_steps_s": [2e-8, 2e-8]}"#,
+                2.0 * dashpot_n_m_s(fine_mm),
+            ),
+            _ => (
+                r#"{"factor": 1.0, "target_steps_s": null}"#,
+                dashpot_n_m_s(fine_mm),
+            ),
+        };
         std::fs::create_dir_all(&run).unwrap();
         let r: f64 = rpm / nr;
         // The coarse mesh's 4 250 rpm point lies 30 % off its curve.
@@ -1749,6 +1765,7 @@ fn compare_fe_sweep_finds_a_known_resonance() {
                 r#"{{"scene": {{"driver_speed": {}, "torque": 143.6, "ramp_time": 0.01}},
                     "statistics_start_s": 0.016, "total_wall_s": 1.0, "diverged": null,
                     "fine_element_mm": {fine_mm}, "stiffness_damping_beta_s": 1e-9,
+                    "mesh_damping_n_m_s": {recorded}, "mass_scaling": {scaling},
                     "tooth_layout": "stable-step"}}"#,
                 rpm * TAU / 60.0
             ),
@@ -1816,12 +1833,13 @@ fn compare_fe_sweep_finds_a_known_resonance() {
     // The twins' bodies carry the FE runs' element damping, not the case's drivetrain ratio.
     let beta = summary["twin_body_damping_beta_s"].as_f64().unwrap();
     assert!((beta / 1e-9 - 1.0).abs() < 1e-12, "{beta}");
-    // Each model's dashpot acts on its mesh mode as the FE's on the FE modal analysis's: the
-    // same modal damping coefficient c g.
-    let fe_modal = summary["mesh_damping_n_s_per_m"].as_f64().unwrap()
-        * summary["mesh_mode_dashpot_share_fe_modal_per_kg"]
-            .as_f64()
-            .unwrap();
+    // Each model's dashpot acts on its mesh mode as the headline level's runs' (1.0 mm) on the
+    // FE modal analysis's: the same modal damping coefficient c g, c = c_t/r_b2².
+    let rb2 = 0.5 * 36.0 * 3.18e-3 * 20f64.to_radians().cos();
+    let share_fe_modal = summary["mesh_mode_dashpot_share_fe_modal_per_kg"]
+        .as_f64()
+        .unwrap();
+    let fe_modal = dashpot_n_m_s(1.0) / (rb2 * rb2) * share_fe_modal;
     assert!(fe_modal > 0.0);
     for m in models {
         assert_eq!(m["dense"].as_array().unwrap().len(), 20);
@@ -1897,10 +1915,25 @@ fn compare_fe_sweep_finds_a_known_resonance() {
         close(common_rpm, peak_of(nr), &format!("{mm} mm common fit"));
         let own = level["resonance_rpm"].as_f64().unwrap();
         let error = level["case_model_resonance_rpm_rel_err"].as_f64().unwrap();
+        // The case's model against each level carries that level's runs' dashpot (the 0.7 mm
+        // runs' unscaled), acting on its mesh mode as theirs on the FE modal's.
+        let c_level = level["mesh_damping_n_s_per_m"].as_f64().unwrap();
+        let c_runs = dashpot_n_m_s(mm) / (rb2 * rb2);
+        assert!((c_level / c_runs - 1.0).abs() < 1e-12, "{mm} mm: {c_level}");
+        let c_model = level["case_model_mesh_damping_n_s_per_m"].as_f64().unwrap();
+        let model_share = model["mesh_mode_dashpot_share_per_kg"].as_f64().unwrap();
         assert!(
-            ((1.0 + error) * own / model_rpm - 1.0).abs() < 1e-9,
-            "{mm} mm"
+            (c_model * model_share / (c_runs * share_fe_modal) - 1.0).abs() < 1e-9,
+            "{mm} mm: {c_model}"
         );
+        match mm {
+            // The headline's model is the sweep's.
+            1.0 => assert!(
+                ((1.0 + error) * own / model_rpm - 1.0).abs() < 1e-9,
+                "{mm} mm"
+            ),
+            _ => assert!(error.is_finite(), "{mm} mm"),
+        }
         match mm {
             // Its 4 250 rpm point is off the curve: the full fit moves, the common one not.
             1.5 => assert!((own - common_rpm).abs() > 5.0, "{own} vs {common_rpm}"),
@@ -1989,8 +2022,25 @@ fn compare_fe_sweep_finds_a_known_resonance() {
     assert_eq!(resonance["order"].as_f64(), order);
     // 5 200 -> 5 000 -> 4 900 rpm converges (order about 1.47) below the finest mesh's.
     assert!(order.is_some() && value < fits[2], "{value} vs {fits:?}");
+    // The case's model against it carries the three meshes' dashpots extrapolated alike (first
+    // order here: 6.2 N·m·s).
+    let (c_zero, _, c_order) = geardyn::study::accuracy::richardson(
+        [1.5, 1.0, 0.7],
+        [1.5, 1.0, 0.7].map(|mm| dashpot_n_m_s(mm) / (rb2 * rb2)),
+    );
+    assert!(
+        c_order.is_some_and(|p| (p - 1.0).abs() < 1e-6),
+        "{c_order:?}"
+    );
+    assert!((c_zero * rb2 * rb2 / 6.2 - 1.0).abs() < 1e-9, "{c_zero}");
+    let c_model = x["case_model_mesh_damping_n_s_per_m"].as_f64().unwrap();
+    let model_share = model["mesh_mode_dashpot_share_per_kg"].as_f64().unwrap();
+    assert!(
+        (c_model * model_share / (c_zero * share_fe_modal) - 1.0).abs() < 1e-9,
+        "{c_model}"
+    );
     let error = x["case_model_resonance_rpm_rel_err"].as_f64().unwrap();
-    assert!(((1.0 + error) * value / model_rpm - 1.0).abs() < 1e-9);
+    assert!(error.is_finite());
     // The accuracy chart's resonance reference is that extrapolation, made undamped with the
     // headline fit's ζ (0.05 here: n_n = n_peak/√(1 − 2ζ²)), as uncertain as the larger of it
     // and the headline fit's jackknife.

@@ -79,11 +79,12 @@ pub fn read_fe_run(dir: &Path) -> Result<FeDte, String> {
     let target_step = summary
         .pointer("/mass_scaling/target_steps_s")
         .is_some_and(|v| !v.is_null());
+    // Each gear's inertia is s times its own either way (uniformly, or element by element to
+    // a target step): the dashpot 2ζ√(k r² I) of the unscaled masses is the run's over √s.
     let unscaled = |key: &str| {
         summary
             .get(key)
             .and_then(|v| v.as_f64())
-            .filter(|_| scaling <= 1.0 || !target_step)
             .map(|value| value / scaling.sqrt())
     };
     let mut reader = csv::Reader::from_path(dir.join("history.csv"))
@@ -142,10 +143,10 @@ pub fn read_fe_run(dir: &Path) -> Result<FeDte, String> {
         ramp_end_s: number(&["scene", "ramp_time"])?,
         statistics_start_s: number(&["statistics_start_s"])?,
         wall_s: number(&["total_wall_s"])?,
-        // β = 2ζ/ω_max and the dashpot 2ζ√(k r² I) grow with √ of a uniform mass scaling:
-        // the unscaled bodies' values. A target step scales each element by its own factor,
-        // which the summary does not give: neither then.
-        stiffness_damping_beta_s: unscaled("stiffness_damping_beta_s"),
+        // β = 2ζ/ω_max grows with √ of a uniform mass scaling: the unscaled bodies' β. A
+        // target step lowers ω_max by more, by how much the summary does not say: no β then.
+        stiffness_damping_beta_s: unscaled("stiffness_damping_beta_s")
+            .filter(|_| scaling <= 1.0 || !target_step),
         mesh_damping_n_m_s: unscaled("mesh_damping_n_m_s"),
     })
 }
@@ -437,7 +438,7 @@ pub fn write(dir: OutputDir, case: &Case, summary: &CompareSummary) -> Result<St
         );
     }
     table += &format!(
-        "\nThe mesh dashpot ({:.4e} N s/m on the line of action, on the driven hub's DTE rate) damps the mesh mode (driver held) by ζ = {:.4} in the lumped twin and {:.4} in the FE modal analysis (first order, c φ²/2ω of each one's mode shape)\n",
+        "\nThe mesh dashpot as sized on the LTCA of the case's explicit mesh ({:.4e} N s/m on the line of action, on the driven hub's DTE rate; each run's twin carries the run's own) damps the mesh mode (driver held) by ζ = {:.4} in the lumped twin and {:.4} in the FE modal analysis (first order, c φ²/2ω of each one's mode shape)\n",
         summary.mesh_damping_n_s_per_m,
         summary.mesh_mode_damping_ratio_fe_twin,
         summary.mesh_mode_damping_ratio_fe_modal,
@@ -722,12 +723,15 @@ fn write_fe_sweep(
                 false => "",
             };
             // Each run sizes its dashpot on its own mesh's LTCA k̄; the model takes the level's.
-            let name = match level.mesh_damping_n_s_per_m.is_finite() {
+            let headline = match level.mesh_damping_n_s_per_m.is_finite() {
                 true => format!(
-                    "{name} (FE dashpot {:.0} N·s/m; the case's model {:.0} against it)",
+                    "{headline} (FE dashpot {:.0} N·s/m; the case's model {:.0} against it, the same acting on its mesh mode)",
                     level.mesh_damping_n_s_per_m, level.case_model_mesh_damping_n_s_per_m
                 ),
-                false => name,
+                false => format!(
+                    "{headline} (its runs recorded no dashpot: the case's model carries {:.0} N·s/m, sized on the LTCA of the case's explicit mesh)",
+                    level.case_model_mesh_damping_n_s_per_m
+                ),
             };
             if !level.resonance_rpm.is_finite() {
                 text += &format!(
@@ -806,7 +810,8 @@ fn write_fe_sweep(
         let spread = c1.max(c2).max(c3) / c1.min(c2).min(c3) - 1.0;
         let fits = match spread > 1e-3 {
             true => format!(
-                "{fits} (the three meshes' runs carry dashpots of {c1:.0} / {c2:.0} / {c3:.0} N·s/m, each sized on its own mesh's LTCA k̄, so the extrapolation takes the dashpot's change with the mesh as part of the mesh's; the case's model carries the headline's)"
+                "{fits} (the three meshes' runs carry dashpots of {c1:.0} / {c2:.0} / {c3:.0} N·s/m, each sized on its own mesh's LTCA k̄, so the extrapolation takes the dashpot's change with the mesh beside the mesh's; the case's model against it carries them extrapolated alike, {:.0} N·s/m acting on its mesh mode)",
+                x.case_model_mesh_damping_n_s_per_m
             ),
             false => fits,
         };

@@ -284,6 +284,10 @@ pub struct CompareSummary {
     pub speeds: Vec<SpeedComparison>,
     /// FE modal at every position and boundary condition.
     pub modal: Vec<PairModes>,
+    /// The FE mesh dashpot as `fe.mesh_damping_ratio` sizes it on the LTCA of the case's
+    /// explicit mesh [N·s/m]: the one the twins are built for, and carry where the FE runs
+    /// recorded none (each twin held against a run carries the run's own,
+    /// [`with_fe_dashpot`]).
     pub mesh_damping_n_s_per_m: f64,
     /// The FE runs' element damping β [s] ([`runs_element_damping`]), which the twins' body
     /// springs carry as c = β k ([`FeDamping`]).
@@ -666,7 +670,8 @@ pub fn run_dashpot(run: &FeDte, rb2: f64) -> Option<f64> {
 /// (the share scaling of [`with_dashpot_share`] is linear in it). Each explicit run sizes its
 /// dashpot on the LTCA k̄ of its own mesh (`fe.mesh_damping_ratio`, [`crate::study::fe::prepare`]),
 /// so runs on finer flanks carry less (paper pair: 3.3 % from 1.0 to 0.25 mm flanks), and near
-/// the resonance the response's peak moves by about 5 % per 1 % of it
+/// the resonance the fitted peak moves by about 5.5 % per 1 % of it, the rms at the sweep's
+/// speeds by about 3 %
 /// (validation/lumped-twin): the twin of a run carries the run's own coefficient. `None` (not
 /// recorded), or a coefficient that is not positive and finite, keeps the model's.
 pub fn with_fe_dashpot(model: &MeshModel, fe_dashpot: Option<f64>, built_for: f64) -> MeshModel {
@@ -1022,7 +1027,11 @@ pub fn run(
             ))
         }
         (true, Some(i)) => Some(paper_stiffness_study(
-            &rigid_model,
+            &with_fe_dashpot(
+                &rigid_model,
+                run_dashpot(&input.fe_runs[i], rb[1]),
+                damping_of(Drive::Speed),
+            ),
             inertias,
             rb,
             teeth,

@@ -608,8 +608,8 @@ pub struct ExtrapolatedFe {
     /// The three meshes the resonance fits are on: their flank sizes [mm], coarsest first, and
     /// their runs' mesh dashpots [N·s/m] ([`level_dashpot`]; NaN: not recorded). Each run sizes
     /// its dashpot on its own mesh's LTCA k̄, so the extrapolation carries the dashpot's change
-    /// with the mesh beside the mesh's own; the case's model is held against it with the
-    /// headline level's dashpot.
+    /// with the mesh beside the mesh's own, and the case's model is held against it with the
+    /// dashpots extrapolated alike (`case_model_mesh_damping_n_s_per_m`).
     pub fine_element_mm: [f64; 3],
     pub mesh_damping_n_s_per_m: [f64; 3],
     /// How many speeds those three share (the fits' points).
@@ -640,6 +640,10 @@ pub struct ExtrapolatedFe {
     pub case_model_resonance_rpm_rel_err: f64,
     pub case_model_peak_rel_err: f64,
     pub case_model_dte_rms_max_rel_err: f64,
+    /// The case's model's dashpot against it [N·s/m]: the three meshes' dashpots extrapolated
+    /// alike ([`super::accuracy::richardson`], the finest's where they do not converge), the
+    /// headline's where any is not recorded (NaN until [`run`] holds the model against it).
+    pub case_model_mesh_damping_n_s_per_m: f64,
 }
 
 /// The FE extrapolated to zero flank size ([`ExtrapolatedFe`], without a model) from the
@@ -762,14 +766,15 @@ pub fn extrapolate_levels(levels: &[Vec<FeSpeed>]) -> Option<ExtrapolatedFe> {
         case_model_resonance_rpm_rel_err: f64::NAN,
         case_model_peak_rel_err: f64::NAN,
         case_model_dte_rms_max_rel_err: f64::NAN,
+        case_model_mesh_damping_n_s_per_m: f64::NAN,
     })
 }
 
-/// [`extrapolate_levels`] with the case's model (the headline level's dashpot) held against
-/// it: the model's response from rest at each of its speeds.
-fn extrapolated_fe(levels: &[Vec<FeSpeed>], case: &CaseModel, rb2: f64) -> Option<ExtrapolatedFe> {
+/// The FE extrapolated to zero flank size ([`extrapolate_levels`]) with the case's model `case`
+/// held against it: the model's response from rest at each of its speeds.
+fn held_against_extrapolation(mut x: ExtrapolatedFe, case: &CaseModel, rb2: f64) -> ExtrapolatedFe {
     use rayon::prelude::*;
-    let mut x = extrapolate_levels(levels)?;
+    x.case_model_mesh_damping_n_s_per_m = case.model.damping;
     x.speeds.par_iter_mut().for_each(|s| {
         let lumped = case.at(s.speed_rpm, rb2);
         s.case_model_dte_rms_rel_err = lumped.dte_rms_rad / s.dte_rms.value - 1.0;
@@ -778,27 +783,45 @@ fn extrapolated_fe(levels: &[Vec<FeSpeed>], case: &CaseModel, rb2: f64) -> Optio
     x.case_model_peak_rel_err = case.peak_rad / x.peak_dte_mesh_amplitude.value - 1.0;
     x.case_model_dte_rms_max_rel_err =
         largest_abs(x.speeds.iter().map(|s| s.case_model_dte_rms_rel_err));
-    Some(x)
+    x
 }
 
 /// The case's model as a mesh level (or the extrapolated FE) is held against it: with that
 /// level's FE dashpot, its fitted resonance [rpm] and peak first mesh harmonic [rad], and its
 /// responses at hand (the headline level's speeds, from its [`ModelSweep`]).
-struct CaseModel<'a> {
-    model: &'a MeshModel,
+struct CaseModel {
+    model: MeshModel,
     resonance_rpm: f64,
     peak_rad: f64,
-    at_hand: &'a [LumpedSpeed],
+    at_hand: Vec<LumpedSpeed>,
 }
 
-impl<'a> CaseModel<'a> {
+impl CaseModel {
     /// The headline's: `model` as `sweep` swept it.
-    fn of(model: &'a MeshModel, sweep: &'a ModelSweep) -> Self {
+    fn of(model: &MeshModel, sweep: &ModelSweep) -> Self {
         Self {
-            model,
+            model: model.clone(),
             resonance_rpm: sweep.resonance_rpm,
             peak_rad: sweep.peak_dte_mesh_amplitude_rad,
-            at_hand: &sweep.at_fe_speeds,
+            at_hand: sweep.at_fe_speeds.clone(),
+        }
+    }
+
+    /// `model` from rest at `dense_rpm` and fitted there ([`fit_dense`]; NaN where it does not
+    /// fit).
+    fn fitted(model: MeshModel, dense_rpm: &[f64], rb2: f64) -> Self {
+        use rayon::prelude::*;
+        let dense: Vec<LumpedSpeed> = dense_rpm
+            .par_iter()
+            .map(|rpm| lumped_at(&model, *rpm, rb2))
+            .collect();
+        let nan3 = (f64::NAN, f64::NAN, f64::NAN);
+        let (resonance_rpm, _, peak_rad) = fit_dense(&dense, own_body_mode(&model)).unwrap_or(nan3);
+        Self {
+            model,
+            resonance_rpm,
+            peak_rad,
+            at_hand: dense,
         }
     }
 
@@ -808,7 +831,7 @@ impl<'a> CaseModel<'a> {
             .iter()
             .find(|l| same_speed(l.speed_rpm, rpm))
             .cloned()
-            .unwrap_or_else(|| lumped_at(self.model, rpm, rb2))
+            .unwrap_or_else(|| lumped_at(&self.model, rpm, rb2))
     }
 }
 
@@ -1014,33 +1037,32 @@ pub fn run(
     };
     let fine_element_mm = fe[0].fine_element_mm;
     let headline_case = CaseModel::of(case_model_in, &models[0]);
-    let extrapolated = extrapolated_fe(&levels, &headline_case, rb2);
+    // The case's model with the FE dashpot `dashpot`, fitted on its own; `None` where that is
+    // the headline's coefficient.
+    let own_case = |dashpot: Option<f64>| {
+        let own = with_fe_dashpot(case_model_built, dashpot, models_dashpot);
+        (own.damping != case_model_in.damping).then(|| CaseModel::fitted(own, &dense, rb2))
+    };
+    let extrapolated = extrapolate_levels(&levels).map(|x| {
+        // The extrapolated FE's dashpot: its meshes' coefficients extrapolated alike.
+        let dashpot = x
+            .mesh_damping_n_s_per_m
+            .iter()
+            .all(|c| c.is_finite())
+            .then(|| Extrapolated::of(x.fine_element_mm, x.mesh_damping_n_s_per_m).value);
+        let own = own_case(dashpot);
+        held_against_extrapolation(x, own.as_ref().unwrap_or(&headline_case), rb2)
+    });
     let mesh_levels = levels
         .into_iter()
         .map(|level| {
-            // The case's model with this level's dashpot: the headline's where it is the same.
-            let own = with_fe_dashpot(case_model_built, level_dashpot(&level), models_dashpot);
-            match own.damping == case_model_in.damping {
-                true => mesh_level(level, &common_rpm, &headline_case, rb2),
-                false => {
-                    let dense: Vec<LumpedSpeed> = {
-                        use rayon::prelude::*;
-                        dense
-                            .par_iter()
-                            .map(|rpm| lumped_at(&own, *rpm, rb2))
-                            .collect()
-                    };
-                    let (resonance_rpm, _, peak_rad) = fit_dense(&dense, own_body_mode(&own))
-                        .unwrap_or((f64::NAN, f64::NAN, f64::NAN));
-                    let case = CaseModel {
-                        model: &own,
-                        resonance_rpm,
-                        peak_rad,
-                        at_hand: &[],
-                    };
-                    mesh_level(level, &common_rpm, &case, rb2)
-                }
-            }
+            let own = own_case(level_dashpot(&level));
+            mesh_level(
+                level,
+                &common_rpm,
+                own.as_ref().unwrap_or(&headline_case),
+                rb2,
+            )
         })
         .collect();
     let unstable_band_runs = models

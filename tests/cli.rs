@@ -1800,6 +1800,8 @@ fn compare_fe_sweep_finds_a_known_resonance() {
     let peak = a / (2.0 * zeta * (1.0 - zeta * zeta).sqrt());
     let got_peak = sweep["peak_dte_mesh_amplitude_fe_rad"].as_f64().unwrap();
     assert!((got_peak / peak - 1.0).abs() < 2e-2, "{got_peak} vs {peak}");
+    // Exact one-DOF points: every leave-one-out fit finds the same peak, which they pin down.
+    assert_eq!(sweep["peak_pinned"].as_bool(), Some(true));
     let fe = sweep["fe"].as_array().unwrap();
     assert_eq!(fe.len(), 5);
     // The back flanks (zero backlash: DTE < 0) carry the share of the cycle where

@@ -640,7 +640,7 @@ fn write_fe_sweep(
         write_fe_sweep_levels(dir, sweep)?;
     }
     let mut text = format!(
-        "\nFE speed sweep ({} speeds{}, scene {}): FE resonance {:.0} rpm (fitted ζ {:.3}), peak 1st mesh harmonic {:.3} urad. {}. Body modes: {}\n",
+        "\nFE speed sweep ({} speeds{}, scene {}): FE resonance {:.0} rpm (fitted ζ {:.3}), peak 1st mesh harmonic {:.3} urad{}. {}. Body modes: {}\n",
         sweep.fe.len(),
         sweep
             .fine_element_mm
@@ -649,6 +649,7 @@ fn write_fe_sweep(
         sweep.resonance_rpm_fe,
         sweep.fitted_damping_ratio_fe,
         um(sweep.peak_dte_mesh_amplitude_fe_rad),
+        peak_pinning_text(sweep),
         sweep.settling_note,
         sweep.body_mode_note,
     );
@@ -903,6 +904,29 @@ fn write_fe_sweep_extrapolated(
         }),
     )?;
     Ok(())
+}
+
+/// How well the FE speeds pin the fitted peak down, and what to run where they do not.
+fn peak_pinning_text(sweep: &crate::study::fe_sweep::FeSweep) -> String {
+    let error = sweep.peak_dte_mesh_amplitude_fe_uncertainty_rad;
+    let measured = match error.is_finite() {
+        true => format!(
+            " (jackknife ± {:.3} urad, {:.1} %)",
+            error * 1e6,
+            100.0 * error / sweep.peak_dte_mesh_amplitude_fe_rad
+        ),
+        false => " (no jackknife: fewer than four speeds)".to_string(),
+    };
+    match sweep.peak_pinned {
+        true => measured,
+        false => {
+            let (below, above) = sweep.peak_bracket_rpm;
+            format!(
+                "{measured}; NOT pinned down by these speeds (the nearest {below:.0} rpm below and {above:.0} rpm above the fitted resonance): the peak's height and the models' peak errors are not measured; run the FE near {:.0} rpm (geardyn fe --speed-rpm, then compare --fe-run)",
+                sweep.resonance_rpm_fe
+            )
+        }
+    }
 }
 
 /// fe_sweep_levels.csv: every FE speed of every explicit mesh the sweep's runs came on.

@@ -653,9 +653,13 @@ fn write_fe_sweep(
         sweep.settling_note,
         sweep.body_mode_note,
     );
+    let unpinned = match sweep.peak_pinned {
+        true => "",
+        false => ", against an FE peak not pinned down",
+    };
     for m in &sweep.models {
         text += &format!(
-            "\n* {} (dashpot {:.0} N·s/m, acting on its mesh mode as the FE's on the FE modal's: ζ {:.4}): resonance {:.0} rpm ({:+.2} %), peak 1st mesh harmonic {:.3} urad ({:+.1} %), DTE rms largest difference {:.1} % where it settled ({:.1} % at the FE's speeds taken relative to each one's resonance, {}; the rms's log-slope over speed there up to {:.1}, so a resonance 1 % off alone moves it by about {:.0} %){}{}",
+            "\n* {} (dashpot {:.0} N·s/m, acting on its mesh mode as the FE's on the FE modal's: ζ {:.4}): resonance {:.0} rpm ({:+.2} %), peak 1st mesh harmonic {:.3} urad ({:+.1} %{unpinned}), DTE rms largest difference {:.1} % where it settled ({:.1} % at the FE's speeds taken relative to each one's resonance, {}; the rms's log-slope over speed there up to {:.1}, so a resonance 1 % off alone moves it by about {:.0} %){}{}",
             m.label,
             m.mesh_damping_n_s_per_m,
             m.mesh_mode_damping_ratio,
@@ -749,7 +753,7 @@ fn write_fe_sweep(
                 continue;
             }
             text += &format!(
-                "\n  * {name}{headline}: {} speeds, resonance {:.0} rpm, peak {:.3} urad{}; the case's model against it: resonance {:+.2} %, peak {:+.1} %, DTE rms largest difference {:.1} %",
+                "\n  * {name}{headline}: {} speeds, resonance {:.0} rpm, peak {:.3} urad{}; the case's model against it: resonance {:+.2} %, peak {:+.1} %{}, DTE rms largest difference {:.1} %",
                 level.fe.len(),
                 level.resonance_rpm,
                 um(level.peak_dte_mesh_amplitude_rad),
@@ -763,6 +767,10 @@ fn write_fe_sweep(
                 },
                 100.0 * level.case_model_resonance_rpm_rel_err,
                 100.0 * level.case_model_peak_rel_err,
+                match i == sweep.headline_level {
+                    true => unpinned,
+                    false => "",
+                },
                 100.0 * level.case_model_dte_rms_max_rel_err,
             );
         }
@@ -915,14 +923,20 @@ fn peak_pinning_text(sweep: &crate::study::fe_sweep::FeSweep) -> String {
             error * 1e6,
             100.0 * error / sweep.peak_dte_mesh_amplitude_fe_rad
         ),
-        false => " (no jackknife: fewer than four speeds)".to_string(),
+        false => " (no jackknife: fewer than four fitted speeds)".to_string(),
+    };
+    let side = |rpm: f64, which: &str| match rpm.is_finite() {
+        true => format!("{rpm:.0} rpm {which}"),
+        false => format!("none {which}"),
     };
     match sweep.peak_pinned {
         true => measured,
         false => {
             let (below, above) = sweep.peak_bracket_rpm;
             format!(
-                "{measured}; NOT pinned down by these speeds (the nearest {below:.0} rpm below and {above:.0} rpm above the fitted resonance): the peak's height and the models' peak errors are not measured; run the FE near {:.0} rpm (geardyn fe --speed-rpm, then compare --fe-run)",
+                "{measured}; NOT pinned down by these speeds (the nearest FE speed {} and {} the fitted resonance, none in its half-power band or the leave-one-out fits apart): the peak's height and the models' peak errors are not measured; run the FE near {:.0} rpm (geardyn fe --speed-rpm, then compare --fe-run)",
+                side(below, "below"),
+                side(above, "above"),
                 sweep.resonance_rpm_fe
             )
         }

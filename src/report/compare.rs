@@ -929,9 +929,23 @@ fn peak_pinning_text(sweep: &crate::study::fe_sweep::FeSweep) -> String {
         true => format!("{rpm:.0} rpm {which}"),
         false => format!("none {which}"),
     };
-    match sweep.peak_pinned {
-        true => measured,
-        false => {
+    // Speeds inside the fitted half-power band (first harmonic at least peak/√2).
+    let peak = sweep.peak_dte_mesh_amplitude_fe_rad;
+    let in_band: Vec<f64> = sweep
+        .fe
+        .iter()
+        .filter(|s| s.mesh_amplitude_rad >= peak / std::f64::consts::SQRT_2)
+        .map(|s| s.speed_rpm)
+        .collect();
+    let (nr, zeta) = (sweep.resonance_rpm_fe, sweep.fitted_damping_ratio_fe);
+    match (sweep.peak_pinned, in_band.as_slice()) {
+        (true, _) => measured,
+        (false, [one]) => format!(
+            "{measured}; NOT pinned down: one speed lies in its half-power band ({one:.0} rpm), so the fit's peak rests on it alone (without it the skirts' fit is the one-DOF shape's guess); a second speed in the band pins it, e.g. {:.0} or {:.0} rpm (the band about ± ζ n_r)",
+            nr * (1.0 - zeta),
+            nr * (1.0 + zeta),
+        ),
+        (false, _) => {
             let (below, above) = sweep.peak_bracket_rpm;
             format!(
                 "{measured}; NOT pinned down by these speeds (the nearest FE speed {} and {} the fitted resonance, none in its half-power band or the leave-one-out fits apart): the peak's height and the models' peak errors are not measured; run the FE near {:.0} rpm (geardyn fe --speed-rpm, then compare --fe-run)",

@@ -176,6 +176,15 @@ impl FeSpeed {
 /// 5 % of it (jackknife), half the 10 % the models' peak is held to (issue 29).
 pub const PEAK_PINNED: f64 = 0.05;
 
+/// The speeds of `points` next below (or at) and above `rpm` (NaN where none is).
+fn peak_bracket(points: &[(f64, f64)], rpm: f64) -> (f64, f64) {
+    let speeds = || points.iter().map(|p| p.0);
+    (
+        speeds().filter(|n| *n <= rpm).fold(f64::NAN, f64::max),
+        speeds().filter(|n| *n > rpm).fold(f64::NAN, f64::min),
+    )
+}
+
 /// Whether the fit's `points` pin its `peak` down: the leave-one-out fits agree
 /// (`uncertainty`, their jackknife, within [`PEAK_PINNED`] of it), a speed lies on either side
 /// of the fitted resonance (`bracket`), and one inside its half-power band (a sample of at
@@ -1024,18 +1033,7 @@ pub fn run(
     let fe_points = amplitude_points(&fe);
     let (fe_rpm, fe_zeta, fe_peak) = resonance_fit(&fe_points)?;
     let peak_uncertainty = jackknife(&fe_points, |p| resonance_fit(p).map(|f| f.2));
-    let bracket = (
-        fe_points
-            .iter()
-            .map(|p| p.0)
-            .filter(|n| *n <= fe_rpm)
-            .fold(f64::NAN, f64::max),
-        fe_points
-            .iter()
-            .map(|p| p.0)
-            .filter(|n| *n > fe_rpm)
-            .fold(f64::NAN, f64::min),
-    );
+    let bracket = peak_bracket(&fe_points, fe_rpm);
     let every: Vec<FeSpeed> = levels.iter().flatten().cloned().collect();
     let (lo, hi) = every.iter().fold((f64::INFINITY, 0.0f64), |(l, h), s| {
         (l.min(s.speed_rpm), h.max(s.speed_rpm))
@@ -2429,16 +2427,9 @@ mod tests {
             (peak / true_peak - 1.0).abs() < 2e-3,
             "{peak} vs {true_peak} ± {error}"
         );
-        let bracket = |points: &[(f64, f64)], rpm: f64| {
-            let below = points.iter().map(|p| p.0).filter(|n| *n <= rpm);
-            let above = points.iter().map(|p| p.0).filter(|n| *n > rpm);
-            (
-                below.fold(f64::NAN, f64::max),
-                above.fold(f64::NAN, f64::min),
-            )
-        };
         let (rpm, _, _) = resonance_fit(&near).unwrap();
-        assert!(super::peak_pinned(&near, peak, error, bracket(&near, rpm)));
+        let bracket = super::peak_bracket(&near, rpm);
+        assert!(super::peak_pinned(&near, peak, error, bracket));
         // Exact one-DOF points on the skirts: the jackknife agrees, the half-power band is empty.
         let (model, rpm_n) = one_dof(1e-6, None, 0.016);
         let exact: Vec<FeSpeed> = [0.922, 0.974, 1.025, 1.077]

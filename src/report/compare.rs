@@ -657,6 +657,9 @@ fn write_fe_sweep(
         true => "",
         false => ", against an FE peak not pinned down",
     };
+    if !sweep.fit_describes_fe {
+        text += "* The one-DOF fit does not describe the FE's response (its largest sample lies more than a speed spacing from the fitted resonance or above the fitted peak): the response is bent by the flanks, the fitted resonance and peak describe neither branch, and the errors against them below are not measured; the FE's points and the models' curves (fe_sweep.csv, fe_sweep_lumped.csv) are the comparison.\n";
+    }
     for m in &sweep.models {
         text += &format!(
             "\n* {} (dashpot {:.0} N·s/m, acting on its mesh mode as the FE's on the FE modal's: ζ {:.4}): resonance {:.0} rpm ({:+.2} %), peak 1st mesh harmonic {:.3} urad ({:+.1} %{unpinned}), DTE rms largest difference {:.1} % where it settled ({:.1} % at the FE's speeds taken relative to each one's resonance, {}; the rms's log-slope over speed there up to {:.1}, so a resonance 1 % off alone moves it by about {:.0} %){}{}",
@@ -696,7 +699,14 @@ fn write_fe_sweep(
             },
             m.unstable_band_rpm.map_or(String::new(), |(lo, hi)| format!(
                 "; unstable (the sweep diverged) at {lo:.0}–{hi:.0} rpm"
-            )),
+            )) + &match m.fit_describes_response {
+                true => String::new(),
+                false => format!(
+                    "; its one-DOF fit does NOT describe its response, which peaks at {:.3} urad at {:.0} rpm (bent by the flanks): its resonance and peak errors above are not measured",
+                    um(m.largest_mesh_amplitude_rad),
+                    m.largest_response_rpm,
+                ),
+            },
         );
     }
     if sweep.mesh_levels.len() > 1 {

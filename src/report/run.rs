@@ -1035,15 +1035,25 @@ fn sections(
         .filter(|v| !v.is_null())
     {
         let n = |key: &str| number(compare, &["fe_sweep", key]);
+        // A response the one-DOF fit does not describe (FE's or the case's model's): its
+        // resonance and peak errors measure neither branch.
+        let bent = ["fit_describes_fe", "fit_describes_lumped"]
+            .iter()
+            .any(|key| sweep.get(*key).and_then(|v| v.as_bool()) == Some(false));
         frequency_text.push(format!(
             "The explicit FE through the resonance ({} speeds, speed drive as the FE): resonance {} rpm (FE) against {} rpm (the case's lumped model, {}); peak first mesh harmonic {}; DTE rms at most {} apart ({} at the FE's speeds taken relative to each one's resonance; there a resonance 1 % off alone moves the rms by up to {}). Where a lumped model's sweep diverged, compare/table.md says what the FE did there.",
             sweep.get("fe").and_then(|f| f.as_array()).map_or(0, |f| f.len()),
             show(n("resonance_rpm_fe"), 0),
             show(n("resonance_rpm_lumped"), 0),
-            n("resonance_rpm_rel_err").map_or("–".into(), |r| format!("{:+.2} %", 100.0 * r)),
-            match sweep.get("peak_pinned").and_then(|p| p.as_bool()) {
+            match bent {
+                true => "not measured: the one-DOF fit does not describe the bent response; compare/table.md".into(),
+                false => n("resonance_rpm_rel_err")
+                    .map_or("–".into(), |r| format!("{:+.2} %", 100.0 * r)),
+            },
+            match (bent, sweep.get("peak_pinned").and_then(|p| p.as_bool())) {
+                (true, _) => "not measured (bent response)".into(),
                 // Speeds only on the resonance's skirts leave the peak's height unmeasured.
-                Some(false) => "not measured (the FE speeds do not pin the peak down: compare/table.md says where to run one more)".into(),
+                (_, Some(false)) => "not measured (the FE speeds do not pin the peak down: compare/table.md says where to run one more)".into(),
                 _ => n("peak_dte_mesh_amplitude_rel_err")
                     .map_or("–".into(), |r| format!("{:+.1} %", 100.0 * r)),
             },

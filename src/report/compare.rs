@@ -657,8 +657,13 @@ fn write_fe_sweep(
         true => "",
         false => ", against an FE peak not pinned down",
     };
+    // The case's model's own errors measure nothing where its fit does not describe it.
+    let case_fit = match sweep.fit_describes_lumped {
+        true => "",
+        false => " (its one-DOF fit does not describe its response: not measured)",
+    };
     if !sweep.fit_describes_fe {
-        text += "* The one-DOF fit does not describe the FE's response (its largest sample lies more than a speed spacing from the fitted resonance or above the fitted peak): the response is bent by the flanks, the fitted resonance and peak describe neither branch, and the errors against them below are not measured; the FE's points and the models' curves (fe_sweep.csv, fe_sweep_lumped.csv) are the comparison.\n";
+        text += "* The one-DOF fit does not describe the FE's response (its largest sample lies more than a speed spacing from the fitted resonance or more than 5 % above the fitted peak): the response is bent by the flanks, the fitted resonance and peak describe neither branch, and the errors against them below are not measured; the FE's points and the models' curves (fe_sweep.csv, fe_sweep_lumped.csv) are the comparison.\n";
     }
     for m in &sweep.models {
         text += &format!(
@@ -702,9 +707,16 @@ fn write_fe_sweep(
             )) + &match m.fit_describes_response {
                 true => String::new(),
                 false => format!(
-                    "; its one-DOF fit does NOT describe its response, which peaks at {:.3} urad at {:.0} rpm (bent by the flanks): its resonance and peak errors above are not measured",
+                    "; its one-DOF fit does NOT describe its response, which peaks at {:.3} urad at {:.0} rpm ({}): its resonance and peak errors above are not measured",
                     um(m.largest_mesh_amplitude_rad),
                     m.largest_response_rpm,
+                    match m
+                        .unstable_band_rpm
+                        .is_some_and(|(lo, hi)| (lo..=hi).contains(&m.resonance_rpm))
+                    {
+                        true => "the fit puts its peak in its unstable band",
+                        false => "bent by the flanks",
+                    },
                 ),
             },
         );
@@ -763,7 +775,7 @@ fn write_fe_sweep(
                 continue;
             }
             text += &format!(
-                "\n  * {name}{headline}: {} speeds, resonance {:.0} rpm, peak {:.3} urad{}; the case's model against it: resonance {:+.2} %, peak {:+.1} %{}, DTE rms largest difference {:.1} %",
+                "\n  * {name}{headline}: {} speeds, resonance {:.0} rpm, peak {:.3} urad{}; the case's model against it: resonance {:+.2} %, peak {:+.1} %{}{case_fit}, DTE rms largest difference {:.1} %",
                 level.fe.len(),
                 level.resonance_rpm,
                 um(level.peak_dte_mesh_amplitude_rad),
@@ -808,7 +820,7 @@ fn write_fe_sweep(
                 x.fit_speeds
             ),
             n => format!(
-                "On {h1:.2} / {h2:.2} / {h3:.2} mm, over the {n} speeds all three ran, each mesh's fitted resonance {r1:.0} / {r2:.0} / {r3:.0} rpm and peak {p1:.3} / {p2:.3} / {p3:.3} urad{}, extrapolated: resonance {:.0} ± {:.0} rpm ({}), peak {:.3} ± {:.3} urad ({}); the case's model against it: resonance {:+.2} %, peak {:+.1} %",
+                "On {h1:.2} / {h2:.2} / {h3:.2} mm, over the {n} speeds all three ran, each mesh's fitted resonance {r1:.0} / {r2:.0} / {r3:.0} rpm and peak {p1:.3} / {p2:.3} / {p3:.3} urad{}, extrapolated: resonance {:.0} ± {:.0} rpm ({}), peak {:.3} ± {:.3} urad ({}); the case's model against it: resonance {:+.2} %, peak {:+.1} %{case_fit}",
                 match x.fits_interpolate {
                     true => " (three speeds: each fit interpolates them)",
                     false => "",

@@ -1035,8 +1035,8 @@ fn sections(
         .filter(|v| !v.is_null())
     {
         let n = |key: &str| number(compare, &["fe_sweep", key]);
-        // A response the one-DOF fit does not describe (FE's or the case's model's): its
-        // resonance and peak errors measure neither branch.
+        // A response the one-DOF fit does not describe (FE's or the case's model's: bent, or
+        // the fit in an unstable band): its resonance and peak errors measure nothing.
         let bent = ["fit_describes_fe", "fit_describes_lumped"]
             .iter()
             .any(|key| sweep.get(*key).and_then(|v| v.as_bool()) == Some(false));
@@ -1046,12 +1046,12 @@ fn sections(
             show(n("resonance_rpm_fe"), 0),
             show(n("resonance_rpm_lumped"), 0),
             match bent {
-                true => "not measured: the one-DOF fit does not describe the bent response; compare/table.md".into(),
+                true => "not measured: the one-DOF fit does not describe the response (bent by the flanks, or in a model's unstable band; compare/table.md)".into(),
                 false => n("resonance_rpm_rel_err")
                     .map_or("–".into(), |r| format!("{:+.2} %", 100.0 * r)),
             },
             match (bent, sweep.get("peak_pinned").and_then(|p| p.as_bool())) {
-                (true, _) => "not measured (bent response)".into(),
+                (true, _) => "not measured (the fit does not describe the response)".into(),
                 // Speeds only on the resonance's skirts leave the peak's height unmeasured.
                 (_, Some(false)) => "not measured (the FE speeds do not pin the peak down: compare/table.md says where to run one more)".into(),
                 _ => n("peak_dte_mesh_amplitude_rel_err")

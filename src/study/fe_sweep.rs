@@ -192,11 +192,20 @@ fn peak_bracket(points: &[(f64, f64)], rpm: f64) -> (f64, f64) {
 /// not whether any is near the peak: exact one-DOF points on the skirts agree to 1e-4 wherever
 /// they lie.
 fn peak_pinned(points: &[(f64, f64)], peak: f64, uncertainty: f64, bracket: (f64, f64)) -> bool {
-    let largest = points.iter().map(|p| p.1).fold(0.0, f64::max);
+    let largest = largest_sample(points).map_or(0.0, |p| p.1);
     uncertainty <= PEAK_PINNED * peak
         && bracket.0.is_finite()
         && bracket.1.is_finite()
         && largest >= peak / std::f64::consts::SQRT_2
+}
+
+/// The sample (speed, amplitude) of largest amplitude among those [`resonance_fit`] takes.
+fn largest_sample(points: &[(f64, f64)]) -> Option<(f64, f64)> {
+    points
+        .iter()
+        .copied()
+        .filter(fits)
+        .max_by(|a, b| a.1.total_cmp(&b.1))
 }
 
 /// How far a response's largest sample may stand above its one-DOF fit's peak and the fit
@@ -220,11 +229,7 @@ pub const FIT_PEAK_SLACK: f64 = 0.05;
 /// the largest; there [`peak_pinned`] is the stronger test. `false` without a sample or a
 /// second speed.
 pub fn fit_describes(points: &[(f64, f64)], speeds: &[f64], (rpm, peak): (f64, f64)) -> bool {
-    let Some(&(largest_rpm, largest)) = points
-        .iter()
-        .filter(|p| fits(p))
-        .max_by(|a, b| a.1.total_cmp(&b.1))
-    else {
+    let Some((largest_rpm, largest)) = largest_sample(points) else {
         return false;
     };
     // The nearest neighbour on each side; the farther of the two (the one there is, at an
@@ -552,6 +557,12 @@ fn rms_rel_errs<'a>(lumped: impl IntoIterator<Item = &'a LumpedSpeed>, fe: &[FeS
         .collect()
 }
 
+/// The dynamic amplification of a one-degree-of-freedom oscillator driven at r = ω/ω_n with
+/// damping ratio ζ: 1/√((1 − r²)² + (2ζr)²) (the shape [`resonance_fit`] fits).
+pub fn one_dof_amplification(r: f64, zeta: f64) -> f64 {
+    1.0 / ((1.0 - r * r).powi(2) + (2.0 * zeta * r).powi(2)).sqrt()
+}
+
 /// The peak of a one-degree-of-freedom response fitted to `points` (speed, amplitude > 0):
 /// |X(n)| = A/√((1 − r²)² + (2ζr)²), r = n/n_r, A by linear least squares for each (n_r, ζ),
 /// (n_r, ζ) by a grid over the points' speed range and ζ ∈ [0.005, 0.5] (log), refined by
@@ -562,10 +573,7 @@ pub fn resonance_fit(points: &[(f64, f64)]) -> Option<(f64, f64, f64)> {
     if points.len() < 3 {
         return None;
     }
-    let shape = |n: f64, nr: f64, zeta: f64| {
-        let r = n / nr;
-        1.0 / ((1.0 - r * r).powi(2) + (2.0 * zeta * r).powi(2)).sqrt()
-    };
+    let shape = |n: f64, nr: f64, zeta: f64| one_dof_amplification(n / nr, zeta);
     // Relative residual: every point weighs alike whatever its amplitude.
     let cost = |nr: f64, zeta: f64| {
         let (mut num, mut den) = (0.0, 0.0);
@@ -1462,11 +1470,8 @@ fn model_sweep(
                 .map(|s| s.speed_rpm),
         )
         .collect();
-    let (largest_response_rpm, largest_mesh_amplitude_rad) = responses
-        .iter()
-        .copied()
-        .max_by(|a, b| a.1.total_cmp(&b.1))
-        .unwrap_or((f64::NAN, f64::NAN));
+    let (largest_response_rpm, largest_mesh_amplitude_rad) =
+        largest_sample(&responses).unwrap_or((f64::NAN, f64::NAN));
     let dte_rms_rel_err = rms_rel_errs(&at_fe_speeds, fe);
     let dte_rms_max_rel_err = largest_abs(dte_rms_rel_err.iter().copied());
     // The model beside each FE speed: the log-slope's two ends.
@@ -1923,7 +1928,7 @@ mod tests {
         let (a, nr, zeta, p) = (2.0e-5, 5200.0, 0.04, 2.0);
         let f0 = |n: f64| {
             let r = n / nr;
-            a / ((1.0 - r * r).powi(2) + (2.0 * zeta * r).powi(2)).sqrt()
+            a * super::one_dof_amplification(r, zeta)
         };
         // The discretization error grows above the resonance (as the FE's did).
         let c = |n: f64| 4.0e-5 * (n / nr - 0.9);
@@ -2074,7 +2079,7 @@ mod tests {
         let speed = |n: f64, h: f64| {
             let (nr, a) = (n0 + d * h.powf(p), a0 * (1.0 + e * h.powf(p)));
             let r = n / nr;
-            let amplitude = a / ((1.0 - r * r).powi(2) + (2.0 * zeta * r).powi(2)).sqrt();
+            let amplitude = a * super::one_dof_amplification(r, zeta);
             steady_speed(n, Some(h), amplitude, amplitude / 2f64.sqrt())
         };
         let shared = [4800.0, 5000.0, 5200.0, 5400.0, 5600.0];
@@ -2496,7 +2501,7 @@ mod tests {
                 .enumerate()
                 .map(|(i, r)| {
                     let scatter = if i % 2 == 0 { 1.02 } else { 0.98 };
-                    let amplitude = a / ((1.0 - r * r).powi(2) + (2.0 * zeta * r).powi(2)).sqrt();
+                    let amplitude = a * super::one_dof_amplification(*r, zeta);
                     (r * nr, scatter * amplitude)
                 })
                 .collect()
@@ -2557,7 +2562,7 @@ mod tests {
     #[test]
     fn the_fit_describes_a_linear_response_but_not_a_bent_one() {
         let zeta = 0.02;
-        let linear = |r: f64| 1.0 / ((1.0 - r * r).powi(2) + (2.0 * zeta * r).powi(2)).sqrt();
+        let linear = |r: f64| super::one_dof_amplification(r, zeta);
         let describes = |points: &[(f64, f64)]| {
             let (rpm, _, peak) = resonance_fit(points).unwrap();
             let speeds: Vec<f64> = points.iter().map(|p| p.0).collect();
@@ -2632,13 +2637,7 @@ mod tests {
                 (5000.0 * r, duffing(r))
             })
             .collect();
-        let (jump_rpm, largest) = bent
-            .iter()
-            .copied()
-            .fold((0.0, 0.0), |m, p| match p.1 > m.1 {
-                true => p,
-                false => m,
-            });
+        let (jump_rpm, largest) = super::largest_sample(&bent).unwrap();
         // The known answer: the peak at the jump, well above the linear skirt.
         assert!(
             jump_rpm > 1.06 * 5000.0 && largest > 20.0,
@@ -2668,10 +2667,7 @@ mod tests {
                 .map(|i| {
                     let n = nr * (0.8 + 0.4 * i as f64 / 7.0 + 0.013);
                     let r: f64 = n / nr;
-                    (
-                        n,
-                        a / ((1.0 - r * r).powi(2) + (2.0 * zeta * r).powi(2)).sqrt(),
-                    )
+                    (n, a * super::one_dof_amplification(r, zeta))
                 })
                 .collect();
             let (got_nr, got_zeta, peak) = resonance_fit(&points).unwrap();

@@ -98,3 +98,79 @@ fn mesh_mode_is_the_one_dof_oscillator_of_the_tangent_stiffness() {
         assert!(free.modes[free.mesh_mode].frequency_hz > held.modes[held.mesh_mode].frequency_hz);
     }
 }
+
+/// Each mode's shares of the gears' rigid motions (modal effective inertia and mass) name the
+/// body modes. Known answer: the free pair's rigid mode turns the gears as a tied mesh does,
+/// r_b1 θ₁ = −r_b2 θ₂, so it holds the share I₁θ₁²/(I₁θ₁² + I₂θ₂²) of the driver's rotation,
+/// the rest of the driven gear's, and (the bodies being balanced) none of their translation.
+/// On an unequal pair with a small pinion (24/40) the driven gear's lateral pair (its rim
+/// swaying against the held bore, along and across the line of action) lies below the pinion's
+/// torsion: the torsion is the mode with the pinion's rotation share, not the next one up, and
+/// a lateral mode carries no rotation.
+#[test]
+fn body_modes_are_named_by_their_shares_of_the_rigid_motions() {
+    use geardyn::case::{Case, Override};
+    let case = Case::load_with(
+        None,
+        &[
+            Override::set("gear1.teeth", 24i64),
+            Override::set("gear2.teeth", 40i64),
+        ],
+    )
+    .unwrap();
+    let mods = case.relief_variant("none").unwrap().modifications;
+    let model = geardyn::study::ltca::model_with_sizes(&case, &mods, 1e-3, 3e-3).unwrap();
+    let run = |hubs| {
+        pair_modes(
+            &model,
+            (0, POSITIONS),
+            TORQUE,
+            case.ltca_material(),
+            case.material.density,
+            hubs,
+            10,
+        )
+        .unwrap()
+    };
+    let free = run(Hubs::BothFree);
+    let rigid = &free.modes[0];
+    assert_eq!(rigid.kind, "rigid");
+    let [i1, i2] = free.inertias;
+    let rb = [
+        model.pair.gears[0].base_radius,
+        model.pair.gears[1].base_radius,
+    ];
+    let theta2 = rb[0] / rb[1];
+    let expected = i1 / (i1 + i2 * theta2 * theta2);
+    // The tie's 1e-4 compliance and the shift's 10 Hz leave the rigid mode rigid to ~1e-6.
+    assert!(
+        (rigid.rotation_share[0] / expected - 1.0).abs() < 1e-4
+            && (rigid.rotation_share[1] / (1.0 - expected) - 1.0).abs() < 1e-4,
+        "rigid mode's rotation shares {:?}, expected {expected:.6} / {:.6}",
+        rigid.rotation_share,
+        1.0 - expected
+    );
+    assert!(rigid.lateral_share.iter().all(|s| *s < 1e-6));
+
+    let held = run(Hubs::DriverHeld);
+    let torsion = held
+        .torsion_mode(0)
+        .expect("the pinion's torsion among ten modes");
+    assert_eq!(torsion.kind, "driver torsion");
+    assert!(torsion.rotation_share[0] > 0.8, "{torsion:?}");
+    let next_up = &held.modes[held.mesh_mode + 1];
+    assert_eq!(next_up.kind, "driven lateral", "{:?}", held.modes);
+    assert!(next_up.frequency_hz < torsion.frequency_hz);
+    assert!(next_up.rotation_share.iter().all(|s| *s < 0.01));
+    // The lateral pair: along and across the line of action, nearly one frequency (the mesh
+    // spring stiffens the one along it).
+    let lateral: Vec<_> = held
+        .modes
+        .iter()
+        .filter(|m| m.kind == "driven lateral")
+        .collect();
+    assert_eq!(lateral.len(), 2, "{:?}", held.modes);
+    assert!(lateral[1].frequency_hz / lateral[0].frequency_hz - 1.0 < 0.05);
+    // The mesh excites the one along the line of action, not the one across it.
+    assert!(lateral[1].mesh_share > 1e3 * lateral[0].mesh_share);
+}

@@ -62,9 +62,26 @@ pub struct PairMode {
     /// Share of the driven hub's static torsional compliance (Γ²/ω² over the sum of the elastic
     /// modes found): near 1 for the mesh mode.
     pub mesh_share: f64,
-    /// `rigid`, `mesh`, or `tooth/body`.
+    /// Each gear's share of its rigid rotation in the mode, Γ²/(rᵀMr) with Γ = φᵀMr, r the
+    /// gear's rigid rotation ψ ẑ × X over its free nodes (and its hub when free), φ
+    /// mass-normalized: the mode's effective polar inertia over the gear's. The shares of one
+    /// gear sum to 1 over all modes (modal effective mass; Clough & Penzien §13-3); a torsional
+    /// body mode carries a large share of its gear's, a lateral or tooth mode next to none.
+    pub rotation_share: [f64; 2],
+    /// Each gear's share of its in-plane translation in the mode, (Γ_x² + Γ_y²)/(tᵀMt) with t
+    /// a unit translation of the gear's free nodes (the bore cannot translate: the bearings
+    /// are rigid): large for a lateral body mode, the rim swaying on the body against the
+    /// held bore, which the mesh force excites along the line of action.
+    pub lateral_share: [f64; 2],
+    /// `rigid`, `mesh`, `driver torsion`, `driven torsion`, `driver lateral`, `driven lateral`
+    /// (the largest of the shares above, when at least [`BODY_MODE_SHARE`]; a lateral mode
+    /// with both gears' shares within a factor 2, [`BOTH_LATERAL`]), or `tooth/body`.
     pub kind: &'static str,
 }
+
+/// The least share of a gear's rigid rotation or translation for a mode to be named that
+/// gear's torsional or lateral body mode (else `tooth/body`).
+pub const BODY_MODE_SHARE: f64 = 0.05;
 
 /// The modes of the pair at one mesh position.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -93,6 +110,69 @@ pub struct PairModes {
     pub dofs: usize,
     pub residual: f64,
 }
+
+impl PairModes {
+    /// The mode above the mesh mode that twists gear `gear`'s body most, its rim against its
+    /// hub: the largest [`PairMode::rotation_share`] of that gear, when named its torsion
+    /// (share at least [`BODY_MODE_SHARE`]). Not simply the next mode up: the bodies' lateral
+    /// modes (the rim swaying against the held bore, in pairs along and across the line of
+    /// action) can lie below it — on a 24/40 pair the driven gear's at 14.7 / 15.1 kHz, the
+    /// pinion's torsion at 28.4 kHz.
+    pub fn torsion_mode(&self, gear: usize) -> Option<&PairMode> {
+        self.modes
+            .iter()
+            .skip(self.mesh_mode + 1)
+            .max_by(|a, b| a.rotation_share[gear].total_cmp(&b.rotation_share[gear]))
+            .filter(|m| m.rotation_share[gear] >= BODY_MODE_SHARE)
+    }
+
+    /// The body modes above the mesh mode that the mesh drives: of each named body kind
+    /// ([`ALL_BODY_MODE_KINDS`]) the mode with
+    /// the largest [`PairMode::mesh_share`], when that is at least [`EXCITED_MESH_SHARE`]; in
+    /// the order of the kinds. Of a lateral pair this is the one along the line of action (the
+    /// one across it has a share near round-off).
+    pub fn excited_body_modes(&self) -> Vec<&PairMode> {
+        ALL_BODY_MODE_KINDS
+            .iter()
+            .filter_map(|kind| {
+                self.modes
+                    .iter()
+                    .skip(self.mesh_mode + 1)
+                    .filter(|m| m.kind == *kind)
+                    .max_by(|a, b| a.mesh_share.total_cmp(&b.mesh_share))
+                    .filter(|m| m.mesh_share >= EXCITED_MESH_SHARE)
+            })
+            .collect()
+    }
+}
+
+/// The named body modes of one gear, in order.
+pub const BODY_MODE_KINDS: [&str; 4] = [
+    "driver torsion",
+    "driven torsion",
+    "driver lateral",
+    "driven lateral",
+];
+
+/// A lateral mode of both gears at once (each with at least half the other's share): equal
+/// gears' lateral modes share a frequency and mix.
+pub const BOTH_LATERAL: &str = "lateral, both gears";
+
+/// Every kind a body mode is named ([`PairMode::kind`]), in order.
+pub const ALL_BODY_MODE_KINDS: [&str; 5] = [
+    BODY_MODE_KINDS[0],
+    BODY_MODE_KINDS[1],
+    BODY_MODE_KINDS[2],
+    BODY_MODE_KINDS[3],
+    BOTH_LATERAL,
+];
+
+/// The least share of the mesh's compliance for a body mode to count as driven by the mesh
+/// ([`PairModes::excited_body_modes`]): 1e-6. The body modes the mesh couples to carry 1e-5 to
+/// 1e-3 (paper pair: the driver's torsion 5e-4, the lateral mode along the line of action
+/// 1.3e-4; 24/40: 1e-5 to 2.5e-4); those it does not (across the line of action, or
+/// symmetric) 1e-10 and below.
+pub const EXCITED_MESH_SHARE: f64 = 1e-6;
 
 /// Where each DOF of a body goes in the pair's unknowns: (unknown, coefficient) terms.
 type DofMap = Vec<Vec<(usize, f64)>>;
@@ -166,6 +246,10 @@ struct PairSystem {
     hubs: [Option<usize>; 2],
     /// Rotary inertia of each gear [kg·m²].
     inertias: [f64; 2],
+    /// Each gear's rigid rotation and its translations along x and y in the pair's unknowns,
+    /// each with M times it: what [`PairMode::rotation_share`] and
+    /// [`PairMode::lateral_share`] project the modes on.
+    rigid: [[(Vec<f64>, Vec<f64>); 3]; 2],
 }
 
 fn assemble(
@@ -205,6 +289,37 @@ fn assemble(
         inertias[g] = rotation.iter().zip(&mr).map(|(a, b)| a * b).sum::<f64>();
         maps.push(map);
     }
+    let mut rigid: [[Vec<f64>; 3]; 2] = Default::default();
+    for (g, body) in model.bodies.iter().enumerate() {
+        // The gear's rigid motions on its own unknowns: the free nodes carry them one to one,
+        // the bore's rotation is the hub's (1 when free); the bore does not translate.
+        let shapes: [&dyn Fn(Point2<f64>) -> [f64; 2]; 3] =
+            [&|p| [-p.y, p.x], &|_| [1.0, 0.0], &|_| [0.0, 1.0]];
+        for (motion, shape) in shapes.iter().enumerate() {
+            let mut v = vec![0.0; next];
+            for (n, &p) in body.mesh.nodes.iter().enumerate() {
+                for (axis, value) in shape(p).into_iter().enumerate() {
+                    if let [(unknown, coefficient)] = maps[g][2 * n + axis][..] {
+                        if Some(unknown) != hub_index[g] {
+                            v[unknown] = coefficient * value;
+                        }
+                    }
+                }
+            }
+            if motion == 0 {
+                if let Some(hub) = hub_index[g] {
+                    v[hub] = 1.0;
+                }
+            }
+            rigid[g][motion] = v;
+        }
+    }
+    let rigid = rigid.map(|motions| {
+        motions.map(|v| {
+            let mv = symmetric_product(&mass, &v);
+            (v, mv)
+        })
+    });
     for tie in &contacts.active {
         // Gap gradient b: Δg = bᵀ x over the pair's unknowns; the tie adds k_c b bᵀ.
         let mut b: Vec<(usize, f64)> = Vec::new();
@@ -229,6 +344,7 @@ fn assemble(
     }
     PairSystem {
         inertias,
+        rigid,
         n: next,
         stiffness,
         mass,
@@ -280,20 +396,55 @@ pub fn pair_modes(
         .max_by(|&a, &b| compliance[a].total_cmp(&compliance[b]))
         .unwrap_or(0);
     let mesh_mode_driven_hub_shape = modes.get(mesh_mode).map_or(f64::NAN, |m| m.shape[driven]);
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    // Γ²/(vᵀMv) of the mode `shape` on the rigid motion (v, Mv).
+    let share = |shape: &[f64], (v, mv): &(Vec<f64>, Vec<f64>)| {
+        let norm = dot(v, mv);
+        match norm > 0.0 {
+            true => dot(shape, mv).powi(2) / norm,
+            false => 0.0,
+        }
+    };
     let modes = modes
         .iter()
         .zip(&compliance)
         .enumerate()
-        .map(|(i, (m, c))| PairMode {
-            frequency_hz: m.frequency_hz,
-            mesh_share: c / total,
-            kind: if m.frequency_hz < RIGID_HZ {
-                "rigid"
-            } else if i == mesh_mode {
-                "mesh"
-            } else {
-                "tooth/body"
-            },
+        .map(|(i, (m, c))| {
+            let [driver, driven] = &system.rigid;
+            let rotation_share = [share(&m.shape, &driver[0]), share(&m.shape, &driven[0])];
+            let lateral_of =
+                |g: &[(Vec<f64>, Vec<f64>); 3]| share(&m.shape, &g[1]) + share(&m.shape, &g[2]);
+            let lateral_share = [lateral_of(driver), lateral_of(driven)];
+            let body = [
+                rotation_share[0],
+                rotation_share[1],
+                lateral_share[0],
+                lateral_share[1],
+            ]
+            .into_iter()
+            .zip(BODY_MODE_KINDS)
+            .max_by(|a, b| a.0.total_cmp(&b.0))
+            .filter(|(s, _)| *s >= BODY_MODE_SHARE)
+            .map_or("tooth/body", |(s, name)| {
+                // Equal gears' lateral modes lie at one frequency and mix.
+                match lateral_share[0].min(lateral_share[1]) >= 0.5 * s {
+                    true if name.ends_with("lateral") => BOTH_LATERAL,
+                    _ => name,
+                }
+            });
+            PairMode {
+                frequency_hz: m.frequency_hz,
+                mesh_share: c / total,
+                rotation_share,
+                lateral_share,
+                kind: if m.frequency_hz < RIGID_HZ {
+                    "rigid"
+                } else if i == mesh_mode {
+                    "mesh"
+                } else {
+                    body
+                },
+            }
         })
         .collect();
     Ok(PairModes {

@@ -589,11 +589,69 @@ impl Structure {
             .max_by(|a, b| a.mesh_energy_share.total_cmp(&b.mesh_energy_share))
             .expect("at least one mode")
     }
+
+    /// The mode other than the mesh mode with the largest share of its kinetic energy in the
+    /// coordinate `name` (φ_i (Mφ)_i / φᵀMφ): with `rim1 lag` (the speed drive), the driver
+    /// body's torsion, its rim against the held hub. `None` without that coordinate or a
+    /// second mode.
+    pub fn body_mode(&self, mesh_stiffness: f64, name: &str) -> Option<Mode> {
+        let i = self.names.iter().position(|n| n == name)?;
+        let modes = self.modes(mesh_stiffness);
+        let mesh = modes
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.mesh_energy_share.total_cmp(&b.1.mesh_energy_share))?
+            .0;
+        let share = |m: &Mode| {
+            let phi = DVector::from_column_slice(&m.shape);
+            let m_phi = &self.mass * &phi;
+            phi[i] * m_phi[i] / phi.dot(&m_phi)
+        };
+        modes
+            .into_iter()
+            .enumerate()
+            .filter(|(j, _)| *j != mesh)
+            .map(|(_, m)| m)
+            .max_by(|a, b| share(a).total_cmp(&share(b)))
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The speed drive's driver held at its hub: its rim m_r on the body spring k_b, the mesh
+    /// k_m to the driven gear m₂ (rigid, base radii 1 m). det(K − ω²M) = 0 with
+    /// K = [[k_b + k_m, −k_m], [−k_m, k_m]], M = diag(m_r, m₂):
+    /// ω⁴ m_r m₂ − ω² ((k_b + k_m) m₂ + k_m m_r) + k_b k_m = 0. With m₂ = 10 m_r and k_b = 10 k_m
+    /// the upper root is the rim's (its kinetic energy almost all in rim1), the lower the mesh
+    /// mode, which `body_mode` leaves out however the shares fall.
+    #[test]
+    fn the_body_mode_is_the_rims_root_of_the_two_dof_pair() {
+        let (m_r, m2, k_m) = (0.2, 2.0, 3e8);
+        let k_b = 10.0 * k_m;
+        let driver = GearBody {
+            hub_inertia: 0.05,
+            rim_inertia: m_r,
+            torsional_compliance: 1.0 / k_b,
+        };
+        let structure = Structure::drivetrain(&DrivetrainSpec {
+            drive: Drive::Speed,
+            base_radii: [1.0, 1.0],
+            gears: [driver, GearBody::rigid(m2)],
+            shafts: [None; 2],
+            bearings: None,
+            spring_damping: SpringDamping::Ratio(0.0),
+        })
+        .expect("a valid pair");
+        assert_eq!(structure.names, ["rim1 lag", "rim2 lag"]);
+        let (a, b, c) = (m_r * m2, (k_b + k_m) * m2 + k_m * m_r, k_b * k_m);
+        let root = |sign: f64| ((b + sign * (b * b - 4.0 * a * c).sqrt()) / (2.0 * a)).sqrt();
+        let body = structure.body_mode(k_m, "rim1 lag").expect("two modes");
+        assert!((body.frequency / root(1.0) - 1.0).abs() < 1e-9);
+        assert!((structure.mesh_mode(k_m).frequency / root(-1.0) - 1.0).abs() < 1e-9);
+        assert!(structure.body_mode(k_m, "hub1").is_none());
+    }
 
     fn chain(drive: Drive, inertia: f64, stiffness: f64) -> Structure {
         // Base radii 1 m: the line-of-action coordinates are the rotations themselves.

@@ -224,29 +224,7 @@ pub fn write(dir: OutputDir, case: &Case, summary: &CompareSummary) -> Result<St
         &["boundary", "method", "frequency_hz"],
         rows.clone(),
     )?;
-    dir.csv(
-        "modal.csv",
-        &[
-            "hubs",
-            "driver_rotation_deg",
-            "mode",
-            "frequency_hz",
-            "mesh_share",
-            "kind",
-        ],
-        summary.modal.iter().flat_map(|p| {
-            p.modes.iter().enumerate().map(move |(i, m)| {
-                vec![
-                    format!("{:?}", p.hubs),
-                    format!("{:.4}", p.driver_rotation.to_degrees()),
-                    i.to_string(),
-                    format!("{:.2}", m.frequency_hz),
-                    format!("{:.3e}", m.mesh_share),
-                    m.kind.into(),
-                ]
-            })
-        }),
-    )?;
+    modal_csv(dir, &summary.modal)?;
     dir.csv(
         "harmonics.csv",
         &[
@@ -1179,6 +1157,46 @@ pub fn write_accuracy_cost(dir: OutputDir, chart: &AccuracyCost) -> Result<Strin
     }
     dir.bytes("accuracy_cost.md", table.as_bytes())?;
     Ok(table)
+}
+
+/// Writes `modal.csv`: every FE modal mode at every position, with its shares of the mesh's
+/// compliance and of each gear's rigid rotation and translation, and its kind
+/// ([`crate::ltca::modal::PairMode`]).
+pub(crate) fn modal_csv(
+    dir: OutputDir,
+    modal: &[crate::ltca::modal::PairModes],
+) -> Result<(), ReportError> {
+    dir.csv(
+        "modal.csv",
+        &[
+            "hubs",
+            "driver_rotation_deg",
+            "mode",
+            "frequency_hz",
+            "mesh_share",
+            "driver_rotation_share",
+            "driven_rotation_share",
+            "driver_lateral_share",
+            "driven_lateral_share",
+            "kind",
+        ],
+        modal.iter().flat_map(|p| {
+            p.modes.iter().enumerate().map(move |(i, m)| {
+                vec![
+                    format!("{:?}", p.hubs),
+                    format!("{:.4}", p.driver_rotation.to_degrees()),
+                    i.to_string(),
+                    format!("{:.2}", m.frequency_hz),
+                    format!("{:.3e}", m.mesh_share),
+                    format!("{:.3e}", m.rotation_share[0]),
+                    format!("{:.3e}", m.rotation_share[1]),
+                    format!("{:.3e}", m.lateral_share[0]),
+                    format!("{:.3e}", m.lateral_share[1]),
+                    m.kind.into(),
+                ]
+            })
+        }),
+    )
 }
 
 #[cfg(test)]

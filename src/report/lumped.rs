@@ -505,7 +505,7 @@ fn resonance_sweep_table(
     Ok(markdown)
 }
 
-/// Writes `validate frequencies`: mesh_modes.csv (per position), frequencies.md and
+/// Writes `validate frequencies`: mesh_modes.csv (per position), modal.csv, frequencies.md and
 /// summary.json; returns the Markdown table.
 pub fn write_mesh_modes(
     out: OutputDir,
@@ -514,6 +514,7 @@ pub fn write_mesh_modes(
 ) -> Result<String, ReportError> {
     out.case(case)?;
     out.json("summary.json", result)?;
+    super::compare::modal_csv(out, &result.modal)?;
     let both = [&result.driver_held, &result.both_free];
     out.csv(
         "mesh_modes.csv",
@@ -554,6 +555,32 @@ pub fn write_mesh_modes(
             if c.pass { "yes" } else { "**no**" },
             100.0 * c.lumped_rel_worst_position,
             c.lumped_at_mean_stiffness_hz
+        ));
+    }
+    let held = &result.driver_held;
+    markdown.push_str(&match (
+        held.driver_torsion_fe_modal_hz,
+        held.driver_torsion_lumped_hz,
+    ) {
+        (Some(fe), Some(lumped)) => format!(
+            "\nDriver body's torsion, driver held (its rim against the held hub; the FE modal's mode with the largest share of the driver's rigid rotation): FE modal {fe:.0} Hz, lumped {lumped:.0} Hz ({:+.2} %).\n",
+            100.0 * (lumped / fe - 1.0)
+        ),
+        (Some(fe), None) => format!(
+            "\nDriver body's torsion, driver held: FE modal {fe:.0} Hz; the lumped model has rigid bodies.\n"
+        ),
+        (None, _) => "\nDriver body's torsion, driver held: not among the FE modal's ten lowest modes.\n".into(),
+    });
+    let lateral: Vec<String> = held
+        .excited_body_modes_fe_modal
+        .iter()
+        .filter(|m| m.kind.contains("lateral"))
+        .map(|m| format!("{} {:.0} Hz", m.kind, m.hz))
+        .collect();
+    if !lateral.is_empty() {
+        markdown.push_str(&format!(
+            "Lateral body modes the mesh drives (a rim swaying on its body against the held bore, along the line of action; not in the lumped model, whose bearings and bodies are rigid laterally): {}.\n",
+            lateral.join(", ")
         ));
     }
     markdown.push_str(&format!("\nmodel: {}\n", result.model_note));

@@ -787,19 +787,20 @@ pub fn run(
     let k_fe = input.fe_stiffness.mean();
     let modal_mean = |hubs| mean(&|m| m.modes[m.mesh_mode].frequency_hz, hubs);
     let held_modal = modal_mean(Hubs::DriverHeld);
-    // The first tooth/body mode above the mesh mode, driver held, with the mesh mode at each
-    // position (the twins' driver body carries it, [`with_driver_body_mode`]), and its mean.
+    // The driver body's torsional mode, driver held, with the mesh mode at each position (the
+    // twins' driver body carries it, [`with_driver_body_mode`]), and its mean.
     let held_modes: Vec<(f64, f64)> = modal
         .iter()
         .filter(|m| m.hubs == Hubs::DriverHeld)
         .filter_map(|m| {
-            let body = m.modes.get(m.mesh_mode + 1)?;
+            let body = m.torsion_mode(0)?;
             Some((m.modes[m.mesh_mode].frequency_hz, body.frequency_hz))
         })
         .collect();
     let held_body = (!held_modes.is_empty())
         .then(|| held_modes.iter().map(|m| m.1).sum::<f64>() / held_modes.len() as f64);
     let held_modes = (!held_modes.is_empty()).then_some(held_modes.as_slice());
+    let body_modes = excited_body_modes(&modal);
 
     // The lumped model on the FE k(θ), the FE's mesh damping (ζ on the LTCA k̄ and the driven
     // inertia, as the explicit scene sizes it), the back flanks' own k and e.
@@ -1014,7 +1015,7 @@ pub fn run(
                 case,
                 input,
                 (&models, damping_of(Drive::Speed)),
-                (rpms, held_body),
+                (rpms, &body_modes),
             )?)
         }
     };
@@ -1200,14 +1201,41 @@ pub fn fe_sweep_runs<'a>(fe_runs: &'a [FeDte], rpms: &[f64]) -> Result<Vec<&'a F
     Ok(inside)
 }
 
+/// The body modes the mesh drives in the FE modal analysis with the driver held
+/// ([`PairModes::excited_body_modes`]), each kind's mean frequency over the positions, of the
+/// kinds found at every position.
+pub fn excited_body_modes(modal: &[PairModes]) -> Vec<super::fe_sweep::BodyMode> {
+    let held: Vec<&PairModes> = modal
+        .iter()
+        .filter(|m| m.hubs == Hubs::DriverHeld)
+        .collect();
+    crate::ltca::modal::ALL_BODY_MODE_KINDS
+        .iter()
+        .filter_map(|kind| {
+            let hz: Vec<f64> = held
+                .iter()
+                .filter_map(|m| {
+                    m.excited_body_modes()
+                        .into_iter()
+                        .find(|b| b.kind == *kind)
+                        .map(|b| b.frequency_hz)
+                })
+                .collect();
+            (!held.is_empty() && hz.len() == held.len()).then(|| {
+                super::fe_sweep::BodyMode::new(kind, hz.iter().sum::<f64>() / hz.len() as f64)
+            })
+        })
+        .collect()
+}
+
 /// The FE runs of `input` at `rpms` against `models` (built for the FE mesh dashpot
-/// `models_dashpot` [N·s/m]), the case's model first, with the FE modal's first body mode,
-/// driver held, `body_hz` ([`super::fe_sweep::run`]).
+/// `models_dashpot` [N·s/m]), the case's model first, with the body modes the mesh drives in
+/// the FE modal analysis, driver held, `body_modes` ([`super::fe_sweep::run`]).
 fn fe_sweep(
     case: &Case,
     input: &CompareInput,
     (models, models_dashpot): (&[(&str, &str, &MeshModel)], f64),
-    (rpms, body_hz): (&[f64], Option<f64>),
+    (rpms, body_modes): (&[f64], &[super::fe_sweep::BodyMode]),
 ) -> Result<super::fe_sweep::FeSweep, StudyError> {
     let rb2 = case.pair.gears[1].base_radius;
     let back_contact = -case.pair.backlash_normal.max(0.0) / rb2;
@@ -1226,7 +1254,7 @@ fn fe_sweep(
         .collect();
     fe.sort_by(|a, b| a.speed_rpm.total_cmp(&b.speed_rpm));
     let decay_time = 1.0 / (case.fe.mesh_damping_ratio * models[0].2.natural_frequency());
-    let body = body_hz.map(|hz| (teeth, hz));
+    let body = Some((teeth, body_modes));
     super::fe_sweep::run(fe, models, rb2, models_dashpot, decay_time, body).ok_or_else(|| {
         StudyError::Input(
             "--fe-sweep needs at least three FE speeds with a mesh-harmonic response, and lumped models that settle at three of four times as many".into(),

@@ -52,6 +52,16 @@ pub struct MeshModeComparison {
     pub lumped_rigid_rel: f64,
     /// Whether |lumped_rel| ≤ [`MESH_MODE_TOLERANCE`].
     pub pass: bool,
+    /// Driver held, elastic bodies: the driver body's torsion (its rim against the held hub),
+    /// the FE modal's ([`PairModes::torsion_mode`]) and the case's lumped model's, each the
+    /// mean over the positions [Hz], and lumped / FE modal − 1; `None` where either has none.
+    pub driver_torsion_fe_modal_hz: Option<f64>,
+    pub driver_torsion_lumped_hz: Option<f64>,
+    pub driver_torsion_rel: Option<f64>,
+    /// The FE modal's body modes that the mesh drives, each kind's mean over the positions
+    /// (the torsions and the lateral modes along the line of action; the lumped models have
+    /// the torsions only).
+    pub excited_body_modes_fe_modal: Vec<super::fe_sweep::BodyMode>,
 }
 
 /// Both boundary conditions.
@@ -66,6 +76,10 @@ pub struct MeshModes {
     pub both_free: MeshModeComparison,
     pub model_note: String,
     pub wall_s: f64,
+    /// The FE modal analysis's modes at every position, both boundary conditions
+    /// (`modal.csv`).
+    #[serde(skip)]
+    pub modal: Vec<PairModes>,
 }
 
 /// The mesh mode of `model`'s linearized mesh on the FE's boundary conditions under `drive`
@@ -74,7 +88,9 @@ pub struct MeshModes {
 /// their origin's roll angle): the linearized stiffness there (the force law's tangent at the
 /// quasi-static state, or the secant k(θ)), first given back, if hub to hub, the twist
 /// `twist_in_model` the case's model took out of it, then the bodies' own taken out. Returns
-/// those and the mode at the mean stiffness.
+/// those, the mode at the mean stiffness, and, with the driver held (speed drive) and elastic
+/// bodies, the driver body's torsion at each position (its rim against the held hub,
+/// [`crate::lumped::Structure::body_mode`] on `rim1 lag`, the speed drive's coordinate).
 ///
 /// The FE modal analysis gives one frequency per frozen position, so the compared quantity is
 /// the same mean of the same per-position frequencies. The mode at the mean stiffness (the one
@@ -88,7 +104,7 @@ fn lumped_mesh_modes(
     (drive, bodies): (Drive, BodyModel),
     twist_in_model: f64,
     rotations: &[f64],
-) -> Result<(Vec<f64>, f64), StudyError> {
+) -> Result<LumpedModes, StudyError> {
     let linear = model.linearized();
     // Undamped modes: the springs' damping does not enter.
     let springs = (bodies, crate::lumped::SpringDamping::Ratio(0.0));
@@ -98,20 +114,44 @@ fn lumped_mesh_modes(
         _ => 0.0,
     };
     // From the model's mesh back to hub to hub (+ the twist it lost), then to these bodies.
-    let hz = |k_mesh: f64| {
-        let k = 1.0 / (1.0 / k_mesh + twist_in_model - twist_out);
-        structure.mesh_mode(k).frequency / std::f64::consts::TAU
-    };
+    let k_of = |k_mesh: f64| 1.0 / (1.0 / k_mesh + twist_in_model - twist_out);
+    let hz = |k_mesh: f64| structure.mesh_mode(k_of(k_mesh)).frequency / std::f64::consts::TAU;
     let pair = &case.pair;
     let roll_pitch = pair.roll_angle_at(1, pair.contact_points.pitch);
-    let per_position = rotations
+    let stiffness: Vec<f64> = rotations
         .iter()
         .map(|rotation| {
             let theta = roll_pitch + rotation - linear.mesh.origin;
-            hz(linear.mesh.stiffness.at(theta))
+            linear.mesh.stiffness.at(theta)
         })
         .collect();
-    Ok((per_position, hz(linear.mesh.mean())))
+    let per_position = stiffness.iter().map(|k| hz(*k)).collect();
+    // The driver held with elastic bodies: the driver's rim against its held hub.
+    let torsion = match (drive, bodies) {
+        (Drive::Speed, BodyModel::Elastic) => stiffness
+            .iter()
+            .map(|k| {
+                structure
+                    .body_mode(k_of(*k), "rim1 lag")
+                    .map(|m| m.frequency / std::f64::consts::TAU)
+            })
+            .collect::<Option<Vec<f64>>>(),
+        _ => None,
+    };
+    Ok(LumpedModes {
+        mesh_hz: per_position,
+        mesh_hz_at_mean_stiffness: hz(linear.mesh.mean()),
+        driver_torsion_hz: torsion,
+    })
+}
+
+/// What [`lumped_mesh_modes`] finds [Hz].
+struct LumpedModes {
+    /// The mesh mode at each position.
+    mesh_hz: Vec<f64>,
+    mesh_hz_at_mean_stiffness: f64,
+    /// The driver body's torsion at each position (driver held, elastic bodies).
+    driver_torsion_hz: Option<Vec<f64>>,
 }
 
 /// The FE modal analysis of `ltca`'s pair at `positions` positions over a base pitch under
@@ -174,7 +214,9 @@ pub fn mesh_modes(
         false => 0.0,
     };
     let torque = setup.torque;
-    let modal = modal_at_positions(case, &ltca, positions, torque, 6, progress)?;
+    // Ten modes: the bodies' lateral pairs can lie below a small pinion's torsion (24/40: the
+    // pinion's torsion the fifth mode above the mesh mode, driver held).
+    let modal = modal_at_positions(case, &ltca, positions, torque, 10, progress)?;
     let compare = |hubs: Hubs, drive: Drive| -> Result<_, StudyError> {
         let at: Vec<&PairModes> = modal.iter().filter(|m| m.hubs == hubs).collect();
         let rotations: Vec<f64> = at.iter().map(|m| m.driver_rotation).collect();
@@ -189,20 +231,25 @@ pub fn mesh_modes(
             .collect();
         let mean = |hz: &[f64]| hz.iter().sum::<f64>() / hz.len() as f64;
         let fe_modal_mean_hz = mean(&fe_modal_hz.iter().map(|p| p.1).collect::<Vec<_>>());
-        let (per_position, lumped_at_mean_stiffness_hz) = lumped_mesh_modes(
+        let LumpedModes {
+            mesh_hz: per_position,
+            mesh_hz_at_mean_stiffness: lumped_at_mean_stiffness_hz,
+            driver_torsion_hz: torsion,
+        } = lumped_mesh_modes(
             case,
             &setup.model,
             (drive, case.lumped.bodies),
             twist_in_model,
             &rotations,
         )?;
-        let (rigid_per_position, _) = lumped_mesh_modes(
+        let rigid_per_position = lumped_mesh_modes(
             case,
             &setup.model,
             (drive, BodyModel::Rigid),
             twist_in_model,
             &rotations,
-        )?;
+        )?
+        .mesh_hz;
         let lumped_hz = mean(&per_position);
         let lumped_rigid_hz = mean(&rigid_per_position);
         let lumped_rel = lumped_hz / fe_modal_mean_hz - 1.0;
@@ -219,7 +266,28 @@ pub fn mesh_modes(
             .zip(per_position)
             .map(|(&(deg, _), hz)| (deg, hz))
             .collect();
+        let mean_of = |hz: Option<Vec<f64>>| hz.filter(|v| !v.is_empty()).map(|v| mean(&v));
+        let driver_torsion_fe_modal_hz = match hubs {
+            Hubs::DriverHeld => mean_of(
+                at.iter()
+                    .map(|m| m.torsion_mode(0).map(|b| b.frequency_hz))
+                    .collect(),
+            ),
+            Hubs::BothFree => None,
+        };
+        let driver_torsion_lumped_hz = mean_of(torsion);
+        let driver_torsion_rel = driver_torsion_fe_modal_hz
+            .zip(driver_torsion_lumped_hz)
+            .map(|(fe, lumped)| lumped / fe - 1.0);
+        let excited_body_modes_fe_modal = match hubs {
+            Hubs::DriverHeld => super::compare::excited_body_modes(&modal),
+            Hubs::BothFree => Vec::new(),
+        };
         Ok(MeshModeComparison {
+            driver_torsion_fe_modal_hz,
+            driver_torsion_lumped_hz,
+            driver_torsion_rel,
+            excited_body_modes_fe_modal,
             hubs,
             drive,
             lumped_hz,
@@ -246,6 +314,7 @@ pub fn mesh_modes(
         both_free,
         model_note: setup.model_note,
         wall_s: started.elapsed().as_secs_f64(),
+        modal,
     })
 }
 
@@ -302,7 +371,11 @@ mod tests {
                     PeriodicTable::constant(period, 0.0),
                 )
             };
-            let (per_position, at_mean) = lumped_mesh_modes(
+            let LumpedModes {
+                mesh_hz: per_position,
+                mesh_hz_at_mean_stiffness: at_mean,
+                ..
+            } = lumped_mesh_modes(
                 &case,
                 &model,
                 (Drive::Torque, BodyModel::Rigid),

@@ -188,7 +188,7 @@ pub struct Peak {
     pub frequency_hz: f64,
     pub amplitude_rad: f64,
     /// `n f_m`, `f_n` (FE modal mesh mode, driver held), `n f_m + f_n`, `n f_m - f_n`, `f_b`
-    /// (the first tooth/body mode), or `?` when none is within 1.5 bins.
+    /// (the driver body's torsion, driver held), or `?` when none is within 1.5 bins.
     pub label: String,
 }
 
@@ -435,7 +435,7 @@ pub fn body_twist(case: &Case) -> [f64; 2] {
 /// gears behind the whole hub-to-hub k.
 ///
 /// `driver_body_modes` (speed drive, elastic bodies): the FE modal analysis's mesh mode and
-/// first body mode with the driver held at each of its positions [Hz], whose body mode the
+/// driver torsion with the driver held at each of its positions [Hz], whose torsion the
 /// twin's driver body then carries ([`with_driver_body_mode`]).
 pub fn lumped_twin(
     case: &Case,
@@ -491,7 +491,7 @@ pub const BODY_MODE_MATCH_RANGE: f64 = 0.25;
 
 /// `model`, a twin as [`lumped_twin`] makes it (speed drive, elastic bodies, no shafts or
 /// bearings; `springs` their damping), with the driver body's inertia split between hub and
-/// rim so that it has the FE modal analysis's first body mode (driver held: the driver's rim
+/// rim so that it has the FE modal analysis's driver torsion (driver held: the driver's rim
 /// against its held hub). `modal` holds the FE modal's mesh mode and body mode at each of its
 /// positions [Hz]. The body is identified where the modal analysis has it: at each position
 /// the structure's mesh spring is set to the k at which its mesh mode is the modal's (the
@@ -1486,7 +1486,7 @@ fn paper_stiffness_study(
 }
 
 /// Names a spectral line: the nearest of n·f_m (n = 1 … 8), f_n and n·f_m ± f_n (n = 1 … 4),
-/// and the first tooth/body mode f_b when given, within `tolerance` [Hz], or `?`.
+/// and the driver body's torsion f_b when given, within `tolerance` [Hz], or `?`.
 pub fn label_line(
     f: f64,
     mesh_hz: f64,

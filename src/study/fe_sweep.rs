@@ -36,12 +36,14 @@
 //! measured.
 //!
 //! A mesh harmonic j f_mesh that meets a lightly damped body mode f_b (the driver's rim against
-//! its held hub, damped only by the elements' β) raises the response at that speed alone, a
-//! super-harmonic resonance of Q ≈ 10⁴ (paper pair: 4 f_mesh at 4 520 rpm,
-//! validation/lumped-twin). Such speeds are named against the FE modal's body mode
-//! ([`body_mode_crossings`]) and left out of the one-DOF fits of the mesh resonance
-//! ([`FeSpeed::on_body_crossing`]); the twins carry that body mode
-//! ([`super::compare::with_driver_body_mode`]).
+//! its held hub, or a rim swaying laterally on its body; damped only by the elements' β) raises
+//! the response at that speed alone, a super-harmonic resonance of Q ≈ 10⁴ (paper pair: 4 f_mesh
+//! at 4 520 rpm on the driver's torsion; 24/40: 6 f_mesh at 6 360 rpm on the driven gear's
+//! lateral mode; validation/lumped-twin). Such speeds are named against every body mode the
+//! mesh drives in the FE modal analysis ([`body_mode_crossings`], [`BodyMode`]) and, where the
+//! mode holds a part of the motion, left out of the one-DOF fits of the mesh resonance
+//! ([`FeSpeed::on_body_crossing`]); the twins carry the driver's torsion
+//! ([`super::compare::with_driver_body_mode`]), no lumped model the lateral modes.
 //!
 //! The FE is itself a discretization: its resonance moves as its flanks are refined (the
 //! explicit mesh's k̄ falls by 0.8 % from 1.0 to 0.7 mm flanks, validation/accuracy-cost).
@@ -75,8 +77,9 @@ pub struct FeSpeed {
     pub mesh_amplitude_rad: f64,
     pub dte_rms_rad: f64,
     pub measured_s: (f64, f64),
-    /// Whether a mesh harmonic meets the FE modal's first body mode at this speed
-    /// ([`on_body_crossing`]): the one-DOF fits of the mesh resonance leave such a speed out.
+    /// Whether a mesh harmonic meets a body mode the mesh drives in the FE modal at this speed
+    /// ([`on_body_crossing`]) and the FE's line shows it met ([`BodyModeCrossing::excited`]):
+    /// the one-DOF fits of the mesh resonance leave such a speed out.
     pub on_body_crossing: bool,
     /// The DTE's mesh harmonics 1 … [`BODY_CROSSING_MAX_ORDER`] over the same stretch [rad]
     /// (the first is `mesh_amplitude_rad`): where a harmonic meets a body mode

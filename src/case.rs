@@ -1500,6 +1500,33 @@ impl Case {
         for o in overrides {
             o.apply(&mut table)?;
         }
+        // A pair changed by its overrides is another pair: its name (in plot titles, summaries
+        // and the default output folder) says so, unless the overrides name it themselves.
+        let geometry: Vec<String> = overrides
+            .iter()
+            .filter(|o| {
+                let section = o.key().split(['.', '[']).next().unwrap_or_default();
+                PAIR_SECTIONS.contains(&section)
+            })
+            .map(|o| {
+                o.to_string()
+                    .chars()
+                    .map(|c| match c.is_ascii_alphanumeric() || "._=-".contains(c) {
+                        true => c,
+                        false => '_',
+                    })
+                    .collect()
+            })
+            .collect();
+        let renamed = overrides.iter().any(|o| o.key() == "name");
+        if let (false, false, Some(toml::Value::String(name))) =
+            (geometry.is_empty(), renamed, table.get("name").cloned())
+        {
+            table.insert(
+                "name".into(),
+                toml::Value::String(format!("{name}+{}", geometry.join("+"))),
+            );
+        }
         let effective = toml::to_string(&table).map_err(|e| CaseError::Parse {
             path: source.clone(),
             message: e.to_string(),
@@ -1516,6 +1543,10 @@ impl Case {
         Self::from_toml_str(&format!("{header}{effective}"), &source)
     }
 }
+
+/// The case file's sections that define the pair itself (its cutter, gears and centre
+/// distance): an override of one makes another pair, named after it ([`Case::load_with`]).
+const PAIR_SECTIONS: [&str; 4] = ["tool", "gear1", "gear2", "pair"];
 
 /// One change to a case file's TOML before it is checked (`--set KEY=VALUE` and the commands'
 /// shorthands for it).
@@ -1540,6 +1571,16 @@ pub enum Override {
         array: String,
         table: toml::Table,
     },
+}
+
+impl Override {
+    /// The dotted key it changes (an appended table's array).
+    pub fn key(&self) -> &str {
+        match self {
+            Override::Set { key, .. } | Override::Remove { key } => key,
+            Override::Append { array, .. } => array,
+        }
+    }
 }
 
 impl std::fmt::Display for Override {
@@ -1900,6 +1941,30 @@ mod tests {
         );
         let again = Case::from_toml_str(&case.text, "effective").unwrap();
         assert_eq!(again.file, case.file);
+    }
+
+    /// A pair changed by overrides of its cutter, gears or centre distance is named after
+    /// them (plot titles, summaries, the default output folder); other overrides, or a name
+    /// given with them, keep the name.
+    #[test]
+    fn a_pair_changed_by_overrides_is_named_after_them() {
+        let name = |o: &[&str]| {
+            let overrides: Vec<Override> = o.iter().copied().map(set).collect();
+            Case::load_with(None, &overrides)
+                .unwrap()
+                .name()
+                .to_string()
+        };
+        assert_eq!(
+            name(&[
+                "gear1.teeth=24",
+                "mesh.fine_element_mm=0.5",
+                "gear2.teeth=40"
+            ]),
+            "paper36+gear1.teeth=24+gear2.teeth=40"
+        );
+        assert_eq!(name(&["mesh.fine_element_mm=0.5"]), "paper36");
+        assert_eq!(name(&["gear1.teeth=24", "name=mine"]), "mine");
     }
 
     #[test]

@@ -113,17 +113,20 @@ pub struct PairModes {
 
 impl PairModes {
     /// The mode above the mesh mode that twists gear `gear`'s body most, its rim against its
-    /// hub: the largest [`PairMode::rotation_share`] of that gear, when named its torsion
-    /// (share at least [`BODY_MODE_SHARE`]). Not simply the next mode up: the bodies' lateral
-    /// modes (the rim swaying against the held bore, in pairs along and across the line of
-    /// action) can lie below it — on a 24/40 pair the driven gear's at 14.7 / 15.1 kHz, the
-    /// pinion's torsion at 28.4 kHz.
+    /// hub: of the modes named its torsion ([`PairMode::kind`]), the one with the largest
+    /// [`PairMode::rotation_share`] of that gear. Not simply the next mode up: the bodies'
+    /// lateral modes (the rim swaying against the held bore, in pairs across and along the line
+    /// of action) can lie below it — on a 24/40 pair the driven gear's at 14.7 / 15.3 kHz, the
+    /// pinion's torsion at 28.4 kHz. Meaningful for a held hub (the driver, driver held): a
+    /// rim turning against a light free hub has next to no net rigid rotation, so a free gear's
+    /// body torsion is not found this way. `None` when no mode among those computed is named
+    /// so (a pair whose torsion lies above them).
     pub fn torsion_mode(&self, gear: usize) -> Option<&PairMode> {
         self.modes
             .iter()
             .skip(self.mesh_mode + 1)
+            .filter(|m| m.kind == BODY_MODE_KINDS[gear])
             .max_by(|a, b| a.rotation_share[gear].total_cmp(&b.rotation_share[gear]))
-            .filter(|m| m.rotation_share[gear] >= BODY_MODE_SHARE)
     }
 
     /// The body modes above the mesh mode that the mesh drives: of each named body kind

@@ -483,8 +483,9 @@ pub fn lumped_twin(
 
 /// How far from the two-inertia body's own body mode (hub and rim by [`gear_bodies`]'s
 /// Rayleigh–Ritz row sums) an FE modal body mode may lie and still be taken for the same mode:
-/// ±25 % (paper pair: 2 %). Farther, the FE modal's first mode above the mesh mode is
-/// presumably another one (a tooth's), and the split stays.
+/// ±25 % (paper pair: 2 %; 24/40: 0.2 %). Farther, the FE modal's driver torsion is presumably
+/// not the two-inertia body's mode (a body the annulus model does not describe), and the split
+/// stays.
 ///
 /// [`gear_bodies`]: super::lumped::gear_bodies
 pub const BODY_MODE_MATCH_RANGE: f64 = 0.25;
@@ -797,10 +798,9 @@ pub fn run(
             Some((m.modes[m.mesh_mode].frequency_hz, body.frequency_hz))
         })
         .collect();
-    let held_body = (!held_modes.is_empty())
-        .then(|| held_modes.iter().map(|m| m.1).sum::<f64>() / held_modes.len() as f64);
+    let body_modes = fe_modal_body_modes(&modal);
+    let held_body = driver_torsion_hz(&body_modes);
     let held_modes = (!held_modes.is_empty()).then_some(held_modes.as_slice());
-    let body_modes = excited_body_modes(&modal);
 
     // The lumped model on the FE k(θ), the FE's mesh damping (ζ on the LTCA k̄ and the driven
     // inertia, as the explicit scene sizes it), the back flanks' own k and e.
@@ -1201,18 +1201,30 @@ pub fn fe_sweep_runs<'a>(fe_runs: &'a [FeDte], rpms: &[f64]) -> Result<Vec<&'a F
     Ok(inside)
 }
 
-/// The body modes the mesh drives in the FE modal analysis with the driver held
-/// ([`PairModes::excited_body_modes`]), each kind's mean frequency over the positions, of the
-/// kinds found at every position.
-pub fn excited_body_modes(modal: &[PairModes]) -> Vec<super::fe_sweep::BodyMode> {
+/// The FE modal analysis's body modes with the driver held, each kind's mean frequency over
+/// the positions where it is found, of the kinds found at half of them or more: first the
+/// driver body's torsion ([`PairModes::torsion_mode`], what the twins' driver body carries),
+/// then the other body modes the mesh drives ([`PairModes::excited_body_modes`]: the driven
+/// gear's torsion, the lateral modes along the line of action).
+pub fn fe_modal_body_modes(modal: &[PairModes]) -> Vec<super::fe_sweep::BodyMode> {
     let held: Vec<&PairModes> = modal
         .iter()
         .filter(|m| m.hubs == Hubs::DriverHeld)
         .collect();
-    crate::ltca::modal::ALL_BODY_MODE_KINDS
+    let mean_of = |kind: &str, hz: Vec<f64>| {
+        (!hz.is_empty() && 2 * hz.len() >= held.len())
+            .then(|| super::fe_sweep::BodyMode::new(kind, hz.iter().sum::<f64>() / hz.len() as f64))
+    };
+    let torsion_kind = crate::ltca::modal::BODY_MODE_KINDS[0];
+    let torsion = held
         .iter()
+        .filter_map(|m| m.torsion_mode(0).map(|b| b.frequency_hz))
+        .collect();
+    let driven = crate::ltca::modal::ALL_BODY_MODE_KINDS
+        .iter()
+        .filter(|kind| **kind != torsion_kind)
         .filter_map(|kind| {
-            let hz: Vec<f64> = held
+            let hz = held
                 .iter()
                 .filter_map(|m| {
                     m.excited_body_modes()
@@ -1221,11 +1233,20 @@ pub fn excited_body_modes(modal: &[PairModes]) -> Vec<super::fe_sweep::BodyMode>
                         .map(|b| b.frequency_hz)
                 })
                 .collect();
-            (!held.is_empty() && hz.len() == held.len()).then(|| {
-                super::fe_sweep::BodyMode::new(kind, hz.iter().sum::<f64>() / hz.len() as f64)
-            })
-        })
+            mean_of(kind, hz)
+        });
+    mean_of(torsion_kind, torsion)
+        .into_iter()
+        .chain(driven)
         .collect()
+}
+
+/// The driver body's torsion among `modes` [Hz] ([`fe_modal_body_modes`]).
+pub fn driver_torsion_hz(modes: &[super::fe_sweep::BodyMode]) -> Option<f64> {
+    modes
+        .iter()
+        .find(|m| m.kind == crate::ltca::modal::BODY_MODE_KINDS[0])
+        .map(|m| m.hz)
 }
 
 /// The FE runs of `input` at `rpms` against `models` (built for the FE mesh dashpot

@@ -58,9 +58,9 @@ pub struct MeshModeComparison {
     pub driver_torsion_fe_modal_hz: Option<f64>,
     pub driver_torsion_lumped_hz: Option<f64>,
     pub driver_torsion_rel: Option<f64>,
-    /// The FE modal's body modes that the mesh drives, each kind's mean over the positions
-    /// (the torsions and the lateral modes along the line of action; the lumped models have
-    /// the torsions only).
+    /// The FE modal's driver torsion and the other body modes the mesh drives, each kind's
+    /// mean over the positions ([`super::compare::fe_modal_body_modes`]; the lumped models
+    /// have the torsions only).
     pub excited_body_modes_fe_modal: Vec<super::fe_sweep::BodyMode>,
 }
 
@@ -267,22 +267,16 @@ pub fn mesh_modes(
             .map(|(&(deg, _), hz)| (deg, hz))
             .collect();
         let mean_of = |hz: Option<Vec<f64>>| hz.filter(|v| !v.is_empty()).map(|v| mean(&v));
-        let driver_torsion_fe_modal_hz = match hubs {
-            Hubs::DriverHeld => mean_of(
-                at.iter()
-                    .map(|m| m.torsion_mode(0).map(|b| b.frequency_hz))
-                    .collect(),
-            ),
-            Hubs::BothFree => None,
+        let excited_body_modes_fe_modal = match hubs {
+            Hubs::DriverHeld => super::compare::fe_modal_body_modes(&modal),
+            Hubs::BothFree => Vec::new(),
         };
+        let driver_torsion_fe_modal_hz =
+            super::compare::driver_torsion_hz(&excited_body_modes_fe_modal);
         let driver_torsion_lumped_hz = mean_of(torsion);
         let driver_torsion_rel = driver_torsion_fe_modal_hz
             .zip(driver_torsion_lumped_hz)
             .map(|(fe, lumped)| lumped / fe - 1.0);
-        let excited_body_modes_fe_modal = match hubs {
-            Hubs::DriverHeld => super::compare::excited_body_modes(&modal),
-            Hubs::BothFree => Vec::new(),
-        };
         Ok(MeshModeComparison {
             driver_torsion_fe_modal_hz,
             driver_torsion_lumped_hz,

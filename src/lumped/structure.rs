@@ -653,6 +653,52 @@ mod tests {
         assert!(structure.body_mode(k_m, "hub1").is_none());
     }
 
+    /// Among four coordinates (the speed drive's driver rim; the driven gear's rim and hub, a
+    /// light rim on a very stiff body; a load behind a shaft), `body_mode` picks the one in
+    /// which the driver's light rim moves: neither the lowest mode (the mesh's, or the load's)
+    /// nor the highest (the driven rim's). With the rim m_r on its body k_b and the mesh k_m
+    /// against a driven gear a hundred times heavier it is the rim alone on both springs,
+    /// ω² ≈ (k_b + k_m)/m_r, to the neighbours' share (here under 0.5 %).
+    #[test]
+    fn the_body_mode_is_the_driver_rims_among_four_coordinates() {
+        let (m_r, k_b, k_m) = (0.01, 1e10, 3e8);
+        let driver = GearBody {
+            hub_inertia: 0.05,
+            rim_inertia: m_r,
+            torsional_compliance: 1.0 / k_b,
+        };
+        let driven = GearBody {
+            hub_inertia: 1.0,
+            rim_inertia: 1e-3,
+            torsional_compliance: 1e-12,
+        };
+        let structure = Structure::drivetrain(&DrivetrainSpec {
+            drive: Drive::Speed,
+            base_radii: [1.0, 1.0],
+            gears: [driver, driven],
+            shafts: [
+                None,
+                Some(Shaft {
+                    stiffness: 1e8,
+                    end_inertia: 5.0,
+                }),
+            ],
+            bearings: None,
+            spring_damping: SpringDamping::Ratio(0.0),
+        })
+        .expect("a valid chain");
+        assert_eq!(structure.dofs, 4, "{:?}", structure.names);
+        let modes = structure.modes(k_m);
+        let body = structure.body_mode(k_m, "rim1 lag").expect("four modes");
+        let expected = ((k_b + k_m) / m_r).sqrt();
+        assert!(
+            (body.frequency / expected - 1.0).abs() < 5e-3,
+            "{} against {expected}",
+            body.frequency
+        );
+        assert!(body.frequency > modes[1].frequency && body.frequency < modes[3].frequency);
+    }
+
     fn chain(drive: Drive, inertia: f64, stiffness: f64) -> Structure {
         // Base radii 1 m: the line-of-action coordinates are the rotations themselves.
         Structure::drivetrain(&DrivetrainSpec {

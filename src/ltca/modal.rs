@@ -250,9 +250,9 @@ struct PairSystem {
     /// Rotary inertia of each gear [kg·m²].
     inertias: [f64; 2],
     /// Each gear's rigid rotation and its translations along x and y in the pair's unknowns,
-    /// each with M times it: what [`PairMode::rotation_share`] and
-    /// [`PairMode::lateral_share`] project the modes on.
-    rigid: [[(Vec<f64>, Vec<f64>); 3]; 2],
+    /// as M v and vᵀMv: what [`PairMode::rotation_share`] and [`PairMode::lateral_share`]
+    /// project the modes on.
+    rigid: [[(Vec<f64>, f64); 3]; 2],
 }
 
 fn assemble(
@@ -320,7 +320,8 @@ fn assemble(
     let rigid = rigid.map(|motions| {
         motions.map(|v| {
             let mv = symmetric_product(&mass, &v);
-            (v, mv)
+            let norm = v.iter().zip(&mv).map(|(a, b)| a * b).sum::<f64>();
+            (mv, norm)
         })
     });
     for tie in &contacts.active {
@@ -399,14 +400,18 @@ pub fn pair_modes(
         .max_by(|&a, &b| compliance[a].total_cmp(&compliance[b]))
         .unwrap_or(0);
     let mesh_mode_driven_hub_shape = modes.get(mesh_mode).map_or(f64::NAN, |m| m.shape[driven]);
-    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
-    // Γ²/(vᵀMv) of the mode `shape` on the rigid motion (v, Mv).
-    let share = |shape: &[f64], (v, mv): &(Vec<f64>, Vec<f64>)| {
-        let norm = dot(v, mv);
-        match norm > 0.0 {
-            true => dot(shape, mv).powi(2) / norm,
-            false => 0.0,
+    // Γ²/(vᵀMv), Γ = φᵀMv, of the mode `shape` on the rigid motion (Mv, vᵀMv).
+    let share = |shape: &[f64], (mv, norm): &(Vec<f64>, f64)| match *norm > 0.0 {
+        true => {
+            shape
+                .iter()
+                .zip(mv)
+                .map(|(x, y)| x * y)
+                .sum::<f64>()
+                .powi(2)
+                / norm
         }
+        false => 0.0,
     };
     let modes = modes
         .iter()
@@ -416,7 +421,7 @@ pub fn pair_modes(
             let [driver, driven] = &system.rigid;
             let rotation_share = [share(&m.shape, &driver[0]), share(&m.shape, &driven[0])];
             let lateral_of =
-                |g: &[(Vec<f64>, Vec<f64>); 3]| share(&m.shape, &g[1]) + share(&m.shape, &g[2]);
+                |g: &[(Vec<f64>, f64); 3]| share(&m.shape, &g[1]) + share(&m.shape, &g[2]);
             let lateral_share = [lateral_of(driver), lateral_of(driven)];
             let body = [
                 rotation_share[0],

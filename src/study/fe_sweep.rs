@@ -2377,17 +2377,13 @@ mod tests {
         let body_hz = 4.0 * mesh_hz / (1.0 - 0.003);
         let models = [("m", "the model", &model)];
         let torsion = [super::BodyMode::new("driver torsion", body_hz)];
-        let given = super::run(
-            fe.clone(),
-            &models,
-            1.0,
-            f64::NAN,
-            1e-3,
-            Some((36.0, &torsion[..])),
-        )
-        .unwrap();
-        let reference = super::run(clean.clone(), &models, 1.0, f64::NAN, 1e-3, None).unwrap();
-        let blind = super::run(fe.clone(), &models, 1.0, f64::NAN, 1e-3, None).unwrap();
+        // The sweep of `fe` against the model, given the body modes `body` (None: none).
+        let sweep = |fe: Vec<FeSpeed>, body: Option<&[super::BodyMode]>| {
+            super::run(fe, &models, 1.0, f64::NAN, 1e-3, body.map(|b| (36.0, b))).unwrap()
+        };
+        let given = sweep(fe.clone(), Some(&torsion));
+        let reference = sweep(clean.clone(), None);
+        let blind = sweep(fe.clone(), None);
         assert_eq!(
             given.body_mode_crossings.len(),
             1,
@@ -2437,15 +2433,7 @@ mod tests {
         // taken for the mode met, so the fits keep it, as blind.
         let mut quiet = fe.clone();
         quiet[k].mesh_harmonics_rad[3] = 1e-7;
-        let kept = super::run(
-            quiet,
-            &models,
-            1.0,
-            f64::NAN,
-            1e-3,
-            Some((36.0, &torsion[..])),
-        )
-        .unwrap();
+        let kept = sweep(quiet, Some(&torsion));
         assert_eq!(kept.body_mode_crossings.len(), 1);
         assert!(!kept.body_mode_crossings[0].excited);
         assert!(kept.fe.iter().all(|s| !s.on_body_crossing));
@@ -2463,15 +2451,7 @@ mod tests {
             share < super::BODY_LINE_ENERGY_SHARE && 5e-7 > super::BODY_LINE_RAISED * 8e-8,
             "{share}"
         );
-        let named = super::run(
-            faint,
-            &models,
-            1.0,
-            f64::NAN,
-            1e-3,
-            Some((36.0, &torsion[..])),
-        )
-        .unwrap();
+        let named = sweep(faint, Some(&torsion));
         assert_eq!(named.body_mode_crossings.len(), 1);
         assert!(!named.body_mode_crossings[0].excited);
         assert!(named.fe.iter().all(|s| !s.on_body_crossing));
@@ -2483,15 +2463,7 @@ mod tests {
             super::BodyMode::new("driver torsion", 50.0 * body_hz),
             super::BodyMode::new("driven lateral", body_hz),
         ];
-        let lateral = super::run(
-            fe.clone(),
-            &models,
-            1.0,
-            f64::NAN,
-            1e-3,
-            Some((36.0, &both[..])),
-        )
-        .unwrap();
+        let lateral = sweep(fe.clone(), Some(&both));
         assert_eq!(lateral.body_mode_crossings.len(), 1);
         assert_eq!(lateral.body_mode_crossings[0].mode, "driven lateral");
         assert_eq!(lateral.body_mode_fe_modal_hz, Some(50.0 * body_hz));

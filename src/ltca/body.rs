@@ -141,6 +141,101 @@ pub fn bore_held_stiffness(
     ))
 }
 
+/// A gear body's rim swaying on its held bore, as one coordinate: the rim's mean translation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodyTranslation {
+    /// k_y [N/m]: the force on the teeth per unit translation.
+    pub stiffness: f64,
+    /// m_y/ρ [m³]: the coordinate's mass per unit density.
+    pub mass_per_density: f64,
+}
+
+/// A gear body's rim translating on its held bore (`mesh`, its bore held as in `stiffness`,
+/// [`bore_held_stiffness`]) as one coordinate: the Guyan reduction of the body onto its rim's
+/// translation, the rim being the band one module deep under the root circle (a quarter of
+/// the body's depth where that is less: a thin rim). The band is
+/// pulled along e by a load proportional to its nodes' masses (a uniform acceleration of the
+/// band alone: its resultant has no moment about the centre), the body deflects by u = K⁻¹f
+/// (the teeth ride on the band, unloaded, as the mesh force leaves every tooth but the loaded
+/// one), the shape ψ = u/ū is scaled to the band's mean translation ū = Σ m_i u_i·e / Σ m_i,
+/// and
+/// ```text
+/// k_y = ψᵀKψ = fᵀu / ū²,    m_y/ρ = ψᵀMψ = Σ m_i |u_i|² / ū²
+/// ```
+/// (M the HRZ-lumped nodal masses of unit density, the sum over the whole body): the rim
+/// moves by F/k_y under a force F on it, and √(k_y/m_y) is the Rayleigh quotient of the
+/// static shape, an upper bound of the body's lowest lateral mode (Meirovitch, *Elements of
+/// Vibration Analysis*, 1986, § 7.5). The teeth are rigid on the rim here, as in the body's
+/// twist ([`crate::geometry::Gear::body_torsional_compliance`]): their bending under a load is
+/// the mesh stiffness's, under their own inertia a mode of their own far above the mesh mode.
+/// A body of z ≥ 3 equal teeth is isotropic in the plane; the two directions are averaged
+/// over what fine teeth break of that.
+pub fn body_translation(
+    gear: &Gear,
+    mesh: &GearMesh,
+    stiffness: &FactorizedStiffness,
+    face_width: f64,
+) -> BodyTranslation {
+    let mut mass = vec![0.0; mesh.nodes.len()];
+    for element in &mesh.elements {
+        let nodes = crate::fe::assembly::element_nodes(&mesh.nodes, element);
+        let lumped =
+            crate::fe::q8::lumped_mass(&nodes, 1.0, face_width, crate::fe::q8::MassLumping::Hrz);
+        for (&n, m) in element.iter().zip(lumped) {
+            mass[n] += m;
+        }
+    }
+    // A module deep, or a quarter of a thin rim; nodes on the root circle sit on it to
+    // round-off.
+    let depth = gear
+        .module()
+        .min(0.25 * (gear.root_radius - gear.spec.bore_radius));
+    let (low, high) = (gear.root_radius - depth, gear.root_radius * (1.0 + 1e-9));
+    let rim: Vec<usize> = (0..mesh.nodes.len())
+        .filter(|&n| (low..=high).contains(&mesh.nodes[n].coords.norm()))
+        .collect();
+    let rim_mass: f64 = rim.iter().map(|&n| mass[n]).sum();
+    let loads: Vec<Vec<f64>> = (0..2)
+        .map(|d| {
+            let mut f = vec![0.0; 2 * mass.len()];
+            for &n in &rim {
+                f[2 * n + d] = mass[n];
+            }
+            f
+        })
+        .collect();
+    let deflections = stiffness.solve_columns(&loads);
+    let (mut k, mut m) = (0.0, 0.0);
+    for (d, (f, u)) in loads.iter().zip(&deflections).enumerate() {
+        let mean = rim.iter().map(|&n| mass[n] * u[2 * n + d]).sum::<f64>() / rim_mass;
+        let work: f64 = f.iter().zip(u).map(|(f, u)| f * u).sum();
+        let kinetic: f64 = u.iter().enumerate().map(|(i, u)| mass[i / 2] * u * u).sum();
+        k += 0.5 * work / (mean * mean);
+        m += 0.5 * kinetic / (mean * mean);
+    }
+    BodyTranslation {
+        stiffness: k,
+        mass_per_density: m,
+    }
+}
+
+/// [`body_translation`] of `gear` unmodified on a mesh of `spec`, its bore held.
+pub fn body_translation_of(
+    gear: &Gear,
+    spec: &MeshSpec,
+    material: BodyMaterial,
+) -> Result<BodyTranslation, FeError> {
+    let mesh = mesh_gear(gear, &FlankModification::default(), spec);
+    check_elements(&mesh.nodes, &mesh.elements)?;
+    let (stiffness, _) = bore_held_stiffness(&mesh, material, gear.spec.face_width)?;
+    Ok(body_translation(
+        gear,
+        &mesh,
+        &stiffness,
+        gear.spec.face_width,
+    ))
+}
+
 /// A meshed, factorized gear with its condensed flank compliance.
 pub struct LtcaBody {
     pub mesh: GearMesh,

@@ -49,7 +49,8 @@ pub mod structure;
 use nalgebra::DMatrix;
 
 pub use structure::{
-    DrivetrainSpec, GearBody, Mode, Shaft, SpringDamping, Structure, Tangent, MAX_DOFS,
+    DrivetrainSpec, GearBody, Mode, RimTranslation, Shaft, SpringDamping, Structure, Tangent,
+    MAX_DOFS,
 };
 
 use crate::stiffness::{ForceLaw, MeshStiffness, PeriodicTable};

@@ -24,6 +24,17 @@
 //! under the torque, F c_b, is added to the reported transmission error. That keeps the RK4
 //! step at the mesh mode's scale.
 //!
+//! # Rim sway
+//! A gear body also lets its rim translate against the held bore (a static FE of the body
+//! reduced onto the rim's translation, [`crate::ltca::body::body_translation`]): the sway
+//! along the line of action is one
+//! coordinate per gear, `rim1 y` / `rim2 y`, mass m_y on the spring k_y to the ground, in the
+//! mesh deflection as the bearings' translations are (δ = … + y₁ − y₂), not in the
+//! transmission error (the hubs turn about fixed centres). A hub-to-hub stiffness holds the
+//! sway's 1/k_y as it holds the twist; both leave the mesh for the bodies. On bearings, a rim
+//! sways on its body in series with the bearing, the gear's mass on both springs (the statics
+//! exact). Across the line of action a frictionless spur mesh does not drive the sway.
+//!
 //! # Drives
 //! * **torque**: an input force +F at the driver side's outer end and the load −F at the driven
 //!   side's; the chain has a rigid rotation u = (1, …, 1) that neither g, K nor the balanced
@@ -39,20 +50,30 @@ use nalgebra::{DMatrix, DVector, SymmetricEigen};
 
 use super::{Bearings, Drive};
 
-/// The largest number of coordinates a structure has (5 rotations and 2 bearing translations
-/// at most).
+/// The largest number of coordinates a structure has (5 rotations and 2 translations, the
+/// bearings' or the rims' sway, at most).
 pub const MAX_DOFS: usize = 8;
 
 /// A Jacobian over a structure's state (q then v, 2n × 2n of the first entries).
 pub type Tangent = [[f64; 2 * MAX_DOFS]; 2 * MAX_DOFS];
 
 /// One gear's body: inertias [kg·m²] of hub and rim and the torsional compliance between them
-/// [rad/(N·m)] (0: a rigid body, hub and rim one inertia).
+/// [rad/(N·m)] (0: a rigid body, hub and rim one inertia), and the rim's sway on the held bore
+/// along the line of action (`None`: the body does not sway, or its sway is left in the mesh).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GearBody {
     pub hub_inertia: f64,
     pub rim_inertia: f64,
     pub torsional_compliance: f64,
+    pub translation: Option<RimTranslation>,
+}
+
+/// A gear rim's translation on its held bore as one coordinate (the body's lowest lateral
+/// mode, [`crate::ltca::body::body_translation`]): mass [kg] and stiffness [N/m].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RimTranslation {
+    pub mass: f64,
+    pub stiffness: f64,
 }
 
 impl GearBody {
@@ -62,7 +83,15 @@ impl GearBody {
             hub_inertia: 0.0,
             rim_inertia: inertia,
             torsional_compliance: 0.0,
+            translation: None,
         }
+    }
+
+    /// The compliance the body puts in series with the mesh along the line of action, base
+    /// radius `base_radius` [m]: its twist r_b² c_t and its rim's sway 1/k_y [m/N].
+    pub fn line_compliance(&self, base_radius: f64) -> f64 {
+        self.torsional_compliance * base_radius * base_radius
+            + self.translation.map_or(0.0, |t| 1.0 / t.stiffness)
     }
 
     pub fn inertia(&self) -> f64 {
@@ -289,9 +318,53 @@ impl Structure {
             }
         }
         let n_rot = nodes.len();
-        // Full (unreduced) matrices over the rotations, then the bearings.
-        let n_bearings = if spec.bearings.is_some() { 2 } else { 0 };
-        let n_x = n_rot + n_bearings;
+        // The translations along the line of action: (name, side, mass, stiffness, damping).
+        // A rim that sways on its body, on a gear that also sits on bearings, sways on both
+        // springs in series with the bearings' mass (its statics exact).
+        let mut translations = Vec::new();
+        for side in 0..2 {
+            let sway = spec.gears[side].translation;
+            let gear = side + 1;
+            match (&spec.bearings, sway) {
+                (Some(b), sway) => {
+                    let stiffness = match sway {
+                        Some(t) => 1.0 / (1.0 / b.stiffness[side] + 1.0 / t.stiffness),
+                        None => b.stiffness[side],
+                    };
+                    translations.push((
+                        format!("y{gear}"),
+                        side,
+                        b.mass[side],
+                        stiffness,
+                        b.damping[side],
+                    ));
+                }
+                (None, Some(t)) => {
+                    if !(t.mass > 0.0 && t.stiffness > 0.0) {
+                        return Err(format!(
+                            "gear {gear}: a swaying rim needs a positive mass and stiffness"
+                        ));
+                    }
+                    translations.push((
+                        format!("rim{gear} y"),
+                        side,
+                        t.mass,
+                        t.stiffness,
+                        spec.spring_damping.coefficient(t.stiffness, t.mass),
+                    ));
+                }
+                (None, None) => {}
+            }
+        }
+        if spec.bearings.is_some() && spec.gears.iter().any(|g| g.translation.is_some()) {
+            notes.push(
+                "each rim's sway on its body in series with its bearing, the gear's mass on \
+                 both springs"
+                    .to_string(),
+            );
+        }
+        // Full (unreduced) matrices over the rotations, then the translations.
+        let n_x = n_rot + translations.len();
         let mut m = DMatrix::zeros(n_x, n_x);
         let mut k = DMatrix::zeros(n_x, n_x);
         let mut c = DMatrix::zeros(n_x, n_x);
@@ -326,16 +399,13 @@ impl Structure {
         g[rims[0]] += 1.0;
         g[rims[1]] -= 1.0;
         let mut names: Vec<String> = nodes.iter().map(|n| n.0.clone()).collect();
-        if let Some(b) = &spec.bearings {
-            for i in 0..2 {
-                let j = n_rot + i;
-                m[(j, j)] = b.mass[i];
-                k[(j, j)] = b.stiffness[i];
-                c[(j, j)] = b.damping[i];
-                names.push(format!("y{}", i + 1));
-            }
-            g[n_rot] += 1.0;
-            g[n_rot + 1] -= 1.0;
+        for (i, (name, side, mass, stiffness, damping)) in translations.into_iter().enumerate() {
+            let j = n_rot + i;
+            m[(j, j)] = mass;
+            k[(j, j)] = stiffness;
+            c[(j, j)] = damping;
+            g[j] = if side == 0 { 1.0 } else { -1.0 };
+            names.push(name);
         }
         let mut load = DVector::zeros(n_x);
         load[n_rot - 1] -= 1.0;
@@ -634,6 +704,7 @@ mod tests {
             hub_inertia: 0.05,
             rim_inertia: m_r,
             torsional_compliance: 1.0 / k_b,
+            translation: None,
         };
         let structure = Structure::drivetrain(&DrivetrainSpec {
             drive: Drive::Speed,
@@ -666,11 +737,13 @@ mod tests {
             hub_inertia: 0.05,
             rim_inertia: m_r,
             torsional_compliance: 1.0 / k_b,
+            translation: None,
         };
         let driven = GearBody {
             hub_inertia: 1.0,
             rim_inertia: 1e-3,
             torsional_compliance: 1e-12,
+            translation: None,
         };
         let structure = Structure::drivetrain(&DrivetrainSpec {
             drive: Drive::Speed,
@@ -778,15 +851,26 @@ mod tests {
         shafts: [Option<Shaft>; 2],
         bearings: Option<Bearings>,
     ) -> Structure {
-        let body = |i: f64, c: f64| GearBody {
+        swaying_pair(drive, shafts, bearings, [None; 2])
+    }
+
+    /// [`elastic_pair`] with the rims swaying as `sway` gives.
+    fn swaying_pair(
+        drive: Drive,
+        shafts: [Option<Shaft>; 2],
+        bearings: Option<Bearings>,
+        sway: [Option<RimTranslation>; 2],
+    ) -> Structure {
+        let body = |i: f64, c: f64, translation| GearBody {
             hub_inertia: 0.1 * i,
             rim_inertia: 0.9 * i,
             torsional_compliance: c,
+            translation,
         };
         Structure::drivetrain(&DrivetrainSpec {
             drive,
             base_radii: RB,
-            gears: [body(3e-3, TWIST[0]), body(7e-3, TWIST[1])],
+            gears: [body(3e-3, TWIST[0], sway[0]), body(7e-3, TWIST[1], sway[1])],
             shafts,
             bearings,
             spring_damping: SpringDamping::Ratio(0.02),
@@ -808,6 +892,7 @@ mod tests {
             hub_inertia: 0.1 * i,
             rim_inertia: 0.9 * i,
             torsional_compliance: c,
+            translation: None,
         };
         let beta = 1.0e-9;
         for drive in [Drive::Torque, Drive::Speed] {
@@ -875,6 +960,82 @@ mod tests {
             // The held driver's hub is the ground, its rim a coordinate; free hubs condense.
             assert_eq!(s.dofs, if drive == Drive::Speed { 2 } else { 1 });
         }
+    }
+
+    /// Swaying rims: the static TE hub to hub is δ + the twist + F/k_y1 + F/k_y2 (the rims
+    /// give way along the line of action, y₁ = −F/k_y1, y₂ = F/k_y2), with two coordinates
+    /// more; on bearings too, each rim's sway in series with its bearing, F(1/k_b + 1/k_y) per
+    /// gear, on the bearings' two coordinates. Both drives.
+    #[test]
+    fn static_transmission_error_holds_the_rims_sway() {
+        let sway = |mass: f64, stiffness: f64| Some(RimTranslation { mass, stiffness });
+        let sways = [sway(0.5, 2e10), sway(1.5, 8e9)];
+        let bearings = Bearings {
+            mass: [2.0, 3.0],
+            stiffness: [4e8, 6e8],
+            damping: [100.0, 100.0],
+        };
+        for drive in [Drive::Torque, Drive::Speed] {
+            let s = swaying_pair(drive, [None; 2], None, sways);
+            assert_static_te(&s, 1.0 / 2e10 + 1.0 / 8e9, drive.name());
+            let rotations = if drive == Drive::Speed { 2 } else { 1 };
+            assert_eq!(s.dofs, rotations + 2, "{:?}", s.names);
+            assert_eq!(&s.names[rotations..], ["rim1 y", "rim2 y"]);
+            let s = swaying_pair(drive, [None; 2], Some(bearings.clone()), sways);
+            let series = 1.0 / 4e8 + 1.0 / 2e10 + 1.0 / 6e8 + 1.0 / 8e9;
+            assert_static_te(&s, series, drive.name());
+            assert_eq!(&s.names[rotations..], ["y1", "y2"]);
+            // One gear swaying: one coordinate.
+            let s = swaying_pair(drive, [None; 2], None, [None, sways[1]]);
+            assert_static_te(&s, 1.0 / 8e9, drive.name());
+            assert_eq!(s.dofs, rotations + 1);
+        }
+    }
+
+    /// The driven gear's rim swaying against the held driver's rigid mesh: speed drive, rigid
+    /// gears, coordinates the driven lag q and its rim's sway y, δ = q − y (base radii 1 m).
+    /// M = diag(m₂, m_y), K = k_m g gᵀ + diag(0, k_y), g = (1, −1):
+    /// m₂ m_y ω⁴ − ω²(k_m m_y + (k_m + k_y) m₂) + k_m k_y = 0; the mesh mode (most of its
+    /// strain in the mesh) is the lower root where the sway is stiffer than the mesh, and a
+    /// sway far stiffer leaves the rigid pair's √(k_m/m₂).
+    #[test]
+    fn a_swaying_rim_lowers_the_mesh_mode_as_the_two_dof_system_does() {
+        let (m2, m_y, k_m) = (2.0, 1.2, 3e8);
+        let structure = |k_y: f64| {
+            Structure::drivetrain(&DrivetrainSpec {
+                drive: Drive::Speed,
+                base_radii: [1.0, 1.0],
+                gears: [
+                    GearBody::rigid(0.5),
+                    GearBody {
+                        translation: Some(RimTranslation {
+                            mass: m_y,
+                            stiffness: k_y,
+                        }),
+                        ..GearBody::rigid(m2)
+                    },
+                ],
+                shafts: [None; 2],
+                bearings: None,
+                spring_damping: SpringDamping::Ratio(0.0),
+            })
+            .expect("a valid pair")
+        };
+        for k_y in [0.5 * k_m, 2.0 * k_m, 10.0 * k_m] {
+            let s = structure(k_y);
+            assert_eq!(s.names, ["rim2 lag", "rim2 y"]);
+            let (a, b, c) = (m2 * m_y, k_m * m_y + (k_m + k_y) * m2, k_m * k_y);
+            let root = |sign: f64| ((b + sign * (b * b - 4.0 * a * c).sqrt()) / (2.0 * a)).sqrt();
+            let modes = s.modes(k_m);
+            assert!((modes[0].frequency / root(-1.0) - 1.0).abs() < 1e-9);
+            assert!((modes[1].frequency / root(1.0) - 1.0).abs() < 1e-9);
+            // A sway stiffer than the mesh (a gear body's: 17/53's large gear 27 × its mesh)
+            // leaves the mesh most strain in the lower root; a softer one in the upper.
+            let mesh_root = if k_y > k_m { root(-1.0) } else { root(1.0) };
+            assert!((s.mesh_mode(k_m).frequency / mesh_root - 1.0).abs() < 1e-9);
+        }
+        let stiff = structure(1e6 * k_m).mesh_mode(k_m).frequency;
+        assert!((stiff / (k_m / m2).sqrt() - 1.0).abs() < 1e-5);
     }
 
     /// With shafts, motor and load, and bearings, the hubs are coordinates of their own: the

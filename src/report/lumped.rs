@@ -39,7 +39,7 @@ pub fn write_sweep(out: OutputDir, case: &Case, study: &SweepStudy) -> Result<()
     // reads it (a hub-to-hub source) takes the twist out again and integrates the same model.
     let hub_to_hub = model
         .mesh
-        .without_series_compliance(-study.setup.body_twist)
+        .without_series_compliance(-study.setup.body_compliance)
         .expect("adding a compliance keeps k positive");
     stiffness_csv::write_stiffness_csv(&out.path("stiffness.csv"), &hub_to_hub).map_err(|e| {
         ReportError::Io {

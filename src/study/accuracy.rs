@@ -266,7 +266,7 @@ fn answers(
     // holds the bodies' twist, which the twin takes out and gives the bodies; ISO 6336 and the
     // potential-energy method stop at the tooth's foundation, so the twist is put in series
     // first (a negative compliance "taken out"). A k too soft to hold the twist gets rigid gears.
-    let twist: f64 = super::compare::body_twist(case).iter().sum();
+    let twist = super::lumped::bodies_line_compliance(case, crate::case::BodyModel::Elastic)?;
     let hub_to_hub = match holds_body_twist {
         true => mesh.clone(),
         false => mesh

@@ -457,7 +457,7 @@ pub fn lumped_twin(
     );
     let structure = super::lumped::drivetrain_with(case, drive, springs, [None; 2], false)?;
     let twist: f64 = match elastic {
-        true => body_twist(case).iter().sum(),
+        true => super::lumped::bodies_line_compliance(case, BodyModel::Elastic)?,
         false => 0.0,
     };
     let (mesh, force_law) = super::lumped::to_rims(mesh, law, twist)?;
@@ -545,9 +545,8 @@ pub fn with_driver_body_mode(
             }
         }
         structure
-            .modes((lo * hi).sqrt())
-            .get(1)
-            .map_or(f64::NAN, hz)
+            .body_mode((lo * hi).sqrt(), "rim1 lag")
+            .map_or(f64::NAN, |m| hz(&m))
     };
     let mean_body = |structure: &crate::lumped::Structure| {
         modal
@@ -564,7 +563,7 @@ pub fn with_driver_body_mode(
     if !((target / own - 1.0).abs() <= BODY_MODE_MATCH_RANGE) {
         return Ok(model);
     }
-    let gears = super::lumped::gear_bodies(case, BodyModel::Elastic);
+    let gears = super::lumped::gear_bodies(case, BodyModel::Elastic)?;
     let total = gears[0].hub_inertia + gears[0].rim_inertia;
     let with_rim = |rim: f64| {
         let mut split = gears;
@@ -1740,12 +1739,13 @@ pub(crate) mod tests {
             let own = twin((Drive::Speed, true), None);
             let rb1 = case.pair.gears[0].base_radius;
             let rim = |m: &MeshModel| m.structure.mass[(0, 0)] * rb1 * rb1;
-            let row_sum = super::super::lumped::gear_bodies(&case, BodyModel::Elastic)[0];
+            let row_sum = super::super::lumped::gear_bodies(&case, BodyModel::Elastic).unwrap()[0];
             let total = row_sum.hub_inertia + row_sum.rim_inertia;
             assert!((rim(&own) / row_sum.rim_inertia - 1.0).abs() < 1e-12);
             let hz = |m: &crate::lumped::Mode| m.frequency / std::f64::consts::TAU;
             let modes_of = |rim: f64| -> Vec<(f64, f64)> {
-                let mut gears = super::super::lumped::gear_bodies(&case, BodyModel::Elastic);
+                let mut gears =
+                    super::super::lumped::gear_bodies(&case, BodyModel::Elastic).unwrap();
                 gears[0].rim_inertia = rim;
                 gears[0].hub_inertia = total - rim;
                 let s = super::super::lumped::drivetrain_of(

@@ -110,7 +110,7 @@ fn lumped_mesh_modes(
     let springs = (bodies, crate::lumped::SpringDamping::Ratio(0.0));
     let structure = super::lumped::drivetrain_with(case, drive, springs, [None; 2], false)?;
     let twist_out = match (bodies, case.lumped.stiffness.holds_body_twist()) {
-        (BodyModel::Elastic, true) => super::compare::body_twist(case).iter().sum(),
+        (BodyModel::Elastic, true) => super::lumped::bodies_line_compliance(case, bodies)?,
         _ => 0.0,
     };
     // From the model's mesh back to hub to hub (+ the twist it lost), then to these bodies.
@@ -210,7 +210,7 @@ pub fn mesh_modes(
     // The same bodies for the lumped model's tables and the modal analysis.
     let setup = super::lumped::setup_on(case, &ltca)?;
     let twist_in_model = match case.lumped.stiffness.holds_body_twist() {
-        true => super::lumped::structure_body_twist(case),
+        true => super::lumped::structure_body_compliance(case)?,
         false => 0.0,
     };
     let torque = setup.torque;

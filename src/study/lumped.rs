@@ -8,12 +8,13 @@
 //! is c = 2ζ√(k̄ m_e) with m_e the rigid pair's effective mass under the drive
 //! ([`Drive::effective_mass`]), or the case's coefficient when it gives one.
 
-use crate::case::BodyModel;
+use crate::case::{BodyModel, BodySway};
 use crate::case::{Case, Override, StiffnessSource};
+use crate::ltca::body::BodyTranslation;
 use crate::ltca::{Flank, LtcaModel, PositionResult};
 use crate::lumped::{
-    Bearings, DampingSite, Drive, DrivetrainSpec, ForceLawKind, GearBody, MeshModel, SpringDamping,
-    Structure,
+    Bearings, DampingSite, Drive, DrivetrainSpec, ForceLawKind, GearBody, MeshModel,
+    RimTranslation, SpringDamping, Structure,
 };
 use crate::stiffness::{self, potential_energy, ForceLaw, MeshStiffness};
 
@@ -127,9 +128,10 @@ pub struct LumpedSetup {
     pub natural_frequency_hz: f64,
     /// One line saying which model was used and what it leaves out.
     pub model_note: String,
-    /// The bodies' twist the structure carries, Σ r_b² c_b over elastic bodies [m/N]: the mesh
-    /// stiffness hub to hub is 1/(1/k + this).
-    pub body_twist: f64,
+    /// The bodies' twist and sway the structure carries, Σ r_b² c_b + Σ 1/k_y over elastic
+    /// bodies [m/N] ([`structure_body_compliance`]): the mesh stiffness hub to hub is
+    /// 1/(1/k + this).
+    pub body_compliance: f64,
     /// The model's checks of its own answer: its quasi-static response against the LTCA
     /// ([`quasi_static_checks`]); empty for sources other than the LTCA.
     pub self_checks: Vec<Check>,
@@ -231,7 +233,7 @@ fn setup_with(case: &Case, ltca: Option<&LtcaModel>) -> Result<LumpedSetup, Stud
     let stiffness_wall_s = started.elapsed().as_secs_f64();
     // A hub-to-hub source holds the bodies' twist; elastic bodies carry it themselves.
     let twist = match settings.stiffness.holds_body_twist() {
-        true => structure_body_twist(case),
+        true => structure_body_compliance(case)?,
         false => 0.0,
     };
     (mesh, force_law) = to_rims(mesh, force_law, twist)?;
@@ -270,7 +272,7 @@ fn setup_with(case: &Case, ltca: Option<&LtcaModel>) -> Result<LumpedSetup, Stud
         }
         None => Vec::new(),
     };
-    let model_note = structure_note(case, &model.structure, twist) + &law_note;
+    let model_note = structure_note(case, &model.structure, twist)? + &law_note;
     Ok(LumpedSetup {
         torque,
         model,
@@ -281,7 +283,7 @@ fn setup_with(case: &Case, ltca: Option<&LtcaModel>) -> Result<LumpedSetup, Stud
         natural_frequency_hz,
         model_note,
         self_checks,
-        body_twist: structure_body_twist(case),
+        body_compliance: structure_body_compliance(case)?,
     })
 }
 
@@ -530,10 +532,28 @@ pub fn law_to_rims(law: ForceLaw, twist: f64) -> Result<ForceLaw, StudyError> {
 
 /// Each gear body as the lumped model holds it (`[lumped] bodies`): elastic, hub and rim with
 /// the annulus's torsional compliance between them and the hub's share of the inertia
-/// ([`crate::geometry::Gear::body_hub_area_moment`]); or rigid. The case's inertias, when they
-/// exceed the body's own, add what turns with the gear (coupling, shaft) at the hub; when
-/// they fall short (a lightened body), both shares scale.
-pub fn gear_bodies(case: &Case, bodies: BodyModel) -> [GearBody; 2] {
+/// ([`crate::geometry::Gear::body_hub_area_moment`]), the rims swaying on their bores where
+/// `[lumped] body_sway` asks for it ([`rim_sway`], [`sway_matters`]); or rigid. The case's
+/// inertias, when they exceed the body's own, add what turns with the gear (coupling, shaft)
+/// at the hub; when they fall short (a lightened body), both shares scale.
+pub fn gear_bodies(case: &Case, bodies: BodyModel) -> Result<[GearBody; 2], StudyError> {
+    let twisting = twisting_bodies(case, bodies);
+    if bodies == BodyModel::Rigid || case.lumped.body_sway == BodySway::Off {
+        return Ok(twisting);
+    }
+    let sway = rim_sway(case)?;
+    let mut swaying = twisting;
+    for (body, sway) in swaying.iter_mut().zip(sway) {
+        body.translation = Some(sway);
+    }
+    Ok(match case.lumped.body_sway {
+        BodySway::Auto if !sway_matters(case, [twisting, swaying])? => twisting,
+        _ => swaying,
+    })
+}
+
+/// [`gear_bodies`] without the sway: the bodies' inertias and twist.
+fn twisting_bodies(case: &Case, bodies: BodyModel) -> [GearBody; 2] {
     let inertias = gear_inertias(case);
     std::array::from_fn(|i| {
         let gear = &case.pair.gears[i];
@@ -554,20 +574,102 @@ pub fn gear_bodies(case: &Case, bodies: BodyModel) -> [GearBody; 2] {
                         case.material.youngs_modulus,
                         case.material.poisson_ratio,
                     ),
+                    translation: None,
                 }
             }
         }
     })
 }
 
-/// The bodies' twist the structure carries along the line of action, Σ r_b² c_t over elastic
-/// bodies [m/N] (what a hub-to-hub stiffness loses to them).
-pub fn structure_body_twist(case: &Case) -> f64 {
-    gear_bodies(case, case.lumped.bodies)
+/// How far the rims' sway must move the pair's mesh mode, driver held or both free, for
+/// `body_sway = "auto"` to give the bodies their sway: 0.5 % (a quarter of the 2 % the lumped
+/// mesh mode is held to against the FE modal). Below it the sway stays in the mesh stiffness,
+/// massless, and the model keeps its coordinates and its RK4 step (the sway's own mode lies
+/// at 17 kHz on the seed paper's pair, 3.5 × its mesh mode).
+pub const SWAY_MODE_SHIFT: f64 = 0.005;
+
+/// Whether the rims' sway moves the mesh mode of the pair by more than [`SWAY_MODE_SHIFT`]
+/// under either drive (driver held, both free; no shafts or bearings, as the FE modal): the
+/// structure's mesh mode on the bodies `[twisting, swaying]`, the teeth's mesh stiffness
+/// estimated by ISO 6336-1's c_γα·b at the design torque (the decision needs its order only),
+/// the sway in series with it, massless, on the twisting bodies.
+pub fn sway_matters(
+    case: &Case,
+    [twisting, swaying]: [[GearBody; 2]; 2],
+) -> Result<bool, StudyError> {
+    let pair = &case.pair;
+    let torque = load_torque(case)?;
+    let teeth = stiffness::iso_6336_method_b(pair, torque, case.material.youngs_modulus)
+        .mesh_stiffness(pair, torque)
+        .mean();
+    let sway: f64 = swaying
+        .iter()
+        .filter_map(|b| b.translation.map(|t| 1.0 / t.stiffness))
+        .sum();
+    let undamped = SpringDamping::Ratio(0.0);
+    for drive in [Drive::Speed, Drive::Torque] {
+        let mode = |gears: [GearBody; 2], k: f64| -> Result<f64, StudyError> {
+            let structure = drivetrain_of(case, drive, (gears, undamped), [None; 2], false)?;
+            Ok(structure.mesh_mode(k).frequency)
+        };
+        let without = mode(twisting, 1.0 / (1.0 / teeth + sway))?;
+        let with = mode(swaying, teeth)?;
+        if (with / without - 1.0).abs() > SWAY_MODE_SHIFT {
+            return Ok(true);
+        }
+    }
+    Ok(false)
+}
+
+/// Each gear rim's sway on its held bore ([`crate::ltca::body::body_translation_of`] on the
+/// case's coarse element size all round, both gears side by side): mass and stiffness. Its
+/// frequency √(k_y/m_y) lies 2.4–3.1 % above the pair FE modal's lateral mode across the line
+/// of action (paper pair, 24/40, 17/53: the Rayleigh quotient of a static shape with rigid
+/// teeth) and within 0.4 % of the same on half the element size (the large gears; a thin
+/// pinion rim within 5 % at 110 kHz, far above any mesh mode). Each body's is solved once per
+/// process (0.1 to 0.25 s on the paper's and 17/53's gears), as every structure asks for it.
+pub fn rim_sway(case: &Case) -> Result<[RimTranslation; 2], StudyError> {
+    type Memo = std::sync::Mutex<std::collections::HashMap<String, BodyTranslation>>;
+    static MEMO: std::sync::OnceLock<Memo> = std::sync::OnceLock::new();
+    let memo = MEMO.get_or_init(Default::default);
+    let material = case.ltca_material();
+    let spec = case.mesh_spec(Vec::new());
+    let one = |i: usize| -> Result<RimTranslation, StudyError> {
+        let gear = &case.pair.gears[i];
+        let key = format!("{:?} {:?} {}", gear.spec, material, spec.coarse_size);
+        let known = memo.lock().expect("the memo's lock").get(&key).copied();
+        let translation = match known {
+            Some(t) => t,
+            None => {
+                let t = crate::ltca::body::body_translation_of(gear, &spec, material)
+                    .map_err(|e| StudyError::Input(format!("gear {}'s body sway: {e}", i + 1)))?;
+                memo.lock().expect("the memo's lock").insert(key, t);
+                t
+            }
+        };
+        Ok(RimTranslation {
+            mass: translation.mass_per_density * case.material.density,
+            stiffness: translation.stiffness,
+        })
+    };
+    let (first, second) = rayon::join(|| one(0), || one(1));
+    Ok([first?, second?])
+}
+
+/// The compliance the case's `bodies` put in series with the mesh along the line of action,
+/// Σ r_b² c_t + Σ 1/k_y over their twist and sway [m/N] (what a hub-to-hub stiffness loses to
+/// them, [`GearBody::line_compliance`]).
+pub fn bodies_line_compliance(case: &Case, bodies: BodyModel) -> Result<f64, StudyError> {
+    Ok(gear_bodies(case, bodies)?
         .iter()
         .zip(&case.pair.gears)
-        .map(|(body, gear)| body.torsional_compliance * gear.base_radius.powi(2))
-        .sum()
+        .map(|(body, gear)| body.line_compliance(gear.base_radius))
+        .sum())
+}
+
+/// [`bodies_line_compliance`] of the case's own `[lumped] bodies`.
+pub fn structure_body_compliance(case: &Case) -> Result<f64, StudyError> {
+    bodies_line_compliance(case, case.lumped.bodies)
 }
 
 /// The case's drivetrain under `drive`: its bodies, shafts and (with `bearings`, when the case
@@ -595,7 +697,7 @@ pub fn drivetrain_with(
     shafts: [Option<crate::lumped::Shaft>; 2],
     bearings: bool,
 ) -> Result<Structure, StudyError> {
-    let gears = gear_bodies(case, bodies);
+    let gears = gear_bodies(case, bodies)?;
     drivetrain_of(case, drive, (gears, spring_damping), shafts, bearings)
 }
 
@@ -638,7 +740,7 @@ pub fn drivetrain_of(
 }
 
 /// One line saying what the structure is and what it leaves out.
-fn structure_note(case: &Case, structure: &Structure, twist: f64) -> String {
+fn structure_note(case: &Case, structure: &Structure, twist: f64) -> Result<String, StudyError> {
     let drive = case.lumped.drive.name();
     let mut note = format!(
         "{}-DOF lumped model ({drive} drive; coordinates {}): ",
@@ -651,10 +753,23 @@ fn structure_note(case: &Case, structure: &Structure, twist: f64) -> String {
         }
         BodyModel::Rigid => "rigid gear bodies",
     };
+    let swaying = gear_bodies(case, case.lumped.bodies)?
+        .iter()
+        .any(|b| b.translation.is_some());
+    if swaying {
+        note += ", each rim swaying on its held bore along the line of action (a static FE of the body reduced onto the rim's translation, one coordinate per gear)";
+    }
     if twist > 0.0 {
+        let what = if swaying { "twist and sway" } else { "twist" };
         note += &format!(
-            ", the hub-to-hub stiffness with that twist ({twist:.3e} m/N) taken out of the mesh"
+            ", the hub-to-hub stiffness with that {what} ({twist:.3e} m/N) taken out of the mesh"
         );
+    }
+    if case.lumped.bodies == BodyModel::Elastic && !swaying {
+        note += match case.lumped.body_sway {
+            BodySway::Off => "; the rims' sway on their bores left in the mesh stiffness, massless (lumped.body_sway = \"off\")",
+            _ => "; the rims' sway on their bores left in the mesh stiffness, massless (it moves the mesh mode by less than 0.5 %)",
+        };
     }
     if case.lumped.bearings {
         note += "; each gear's translation on its bearings along the line of action (across it left out: a frictionless spur mesh force does not excite it)";
@@ -663,7 +778,7 @@ fn structure_note(case: &Case, structure: &Structure, twist: f64) -> String {
         note += "; ";
         note += n;
     }
-    note
+    Ok(note)
 }
 
 /// The case's lumped model (`[lumped]`: drive, bodies, shafts, bearings, damping) on the mesh

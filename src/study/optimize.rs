@@ -728,7 +728,7 @@ fn judge(
     let (rim_mesh, law) = super::lumped::to_rims(
         mesh_stiffness.clone(),
         law,
-        super::lumped::structure_body_twist(case),
+        super::lumped::structure_body_compliance(case)?,
     )?;
     let (mut lumped, _) = super::lumped::model_on(case, rim_mesh, torque)?;
     lumped.force_law = law;

@@ -1041,9 +1041,17 @@ fn the_rims_sway_where_it_moves_the_mesh_mode() {
     assert_eq!(sways(&load(&off), BodyModel::Elastic), [false; 2]);
     let on = load(&[("lumped.body_sway", "on")]);
     assert_eq!(sways(&on, BodyModel::Elastic), [true; 2]);
-    // The sway is the body's: equal gears, equal sways, below the teeth's own modes.
-    let [a, b] = geardyn::study::lumped::rim_sway(&on).unwrap();
-    assert_eq!(a, b);
+    // The sway is the rim's with its teeth and part of the web: most of the gear's mass
+    // (measured 0.70), at the body's lateral mode (17.1 kHz in the FE modal, the static shape
+    // 3 % above it).
+    let [a, _] = geardyn::study::lumped::rim_sway(&on).unwrap();
+    let gear = &on.pair.gears[0];
+    let mass = on.material.density * gear.spec.face_width * gear.area_moments().0;
+    assert!(
+        (0.5..0.9).contains(&(a.mass / mass)),
+        "{} of {mass} kg",
+        a.mass
+    );
     let hz = (a.stiffness / a.mass).sqrt() / (2.0 * PI);
-    assert!((15e3..20e3).contains(&hz), "{hz:.0} Hz");
+    assert!((17.1e3..18.1e3).contains(&hz), "{hz:.0} Hz");
 }

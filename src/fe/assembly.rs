@@ -31,6 +31,9 @@ pub enum FeError {
     /// A run's state that could not be carried to the next window's mesh.
     #[error("{0}")]
     Remeshing(String),
+    /// A body whose mesh cannot give what is asked of it (e.g. no rim under its teeth).
+    #[error("{0}")]
+    Body(String),
 }
 
 /// The element's node coordinates.

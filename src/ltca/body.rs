@@ -175,7 +175,7 @@ pub fn body_translation(
     mesh: &GearMesh,
     stiffness: &FactorizedStiffness,
     face_width: f64,
-) -> BodyTranslation {
+) -> Result<BodyTranslation, FeError> {
     let mut mass = vec![0.0; mesh.nodes.len()];
     for element in &mesh.elements {
         let nodes = crate::fe::assembly::element_nodes(&mesh.nodes, element);
@@ -195,6 +195,14 @@ pub fn body_translation(
         .filter(|&n| (low..=high).contains(&mesh.nodes[n].coords.norm()))
         .collect();
     let rim_mass: f64 = rim.iter().map(|&n| mass[n]).sum();
+    if !(rim_mass > 0.0) {
+        return Err(FeError::Body(format!(
+            "no mesh nodes in the rim band {:.3}–{:.3} mm under the root circle: check the \
+             bore and root radii",
+            low * 1e3,
+            high * 1e3
+        )));
+    }
     let loads: Vec<Vec<f64>> = (0..2)
         .map(|d| {
             let mut f = vec![0.0; 2 * mass.len()];
@@ -213,10 +221,15 @@ pub fn body_translation(
         k += 0.5 * work / (mean * mean);
         m += 0.5 * kinetic / (mean * mean);
     }
-    BodyTranslation {
+    if !(k > 0.0 && k.is_finite() && m > 0.0 && m.is_finite()) {
+        return Err(FeError::Body(format!(
+            "the body's sway came out as k = {k:e} N/m, m/ρ = {m:e} m³: check the mesh"
+        )));
+    }
+    Ok(BodyTranslation {
         stiffness: k,
         mass_per_density: m,
-    }
+    })
 }
 
 /// [`body_translation`] of `gear` unmodified on a mesh of `spec`, its bore held.
@@ -228,12 +241,7 @@ pub fn body_translation_of(
     let mesh = mesh_gear(gear, &FlankModification::default(), spec);
     check_elements(&mesh.nodes, &mesh.elements)?;
     let (stiffness, _) = bore_held_stiffness(&mesh, material, gear.spec.face_width)?;
-    Ok(body_translation(
-        gear,
-        &mesh,
-        &stiffness,
-        gear.spec.face_width,
-    ))
+    body_translation(gear, &mesh, &stiffness, gear.spec.face_width)
 }
 
 /// A meshed, factorized gear with its condensed flank compliance.

@@ -68,8 +68,9 @@ pub struct GearBody {
     pub translation: Option<RimTranslation>,
 }
 
-/// A gear rim's translation on its held bore as one coordinate (the body's lowest lateral
-/// mode, [`crate::ltca::body::body_translation`]): mass [kg] and stiffness [N/m].
+/// A gear rim's translation on its held bore as one coordinate (a static FE of the body reduced
+/// onto it, [`crate::ltca::body::body_translation`]; its frequency a Rayleigh upper bound of
+/// the body's lateral mode): mass [kg] and stiffness [N/m].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RimTranslation {
     pub mass: f64,
@@ -327,6 +328,11 @@ impl Structure {
             let gear = side + 1;
             match (&spec.bearings, sway) {
                 (Some(b), sway) => {
+                    if sway.is_some_and(|t| !(t.mass > 0.0 && t.stiffness > 0.0)) {
+                        return Err(format!(
+                            "gear {gear}: a swaying rim needs a positive mass and stiffness"
+                        ));
+                    }
                     let stiffness = match sway {
                         Some(t) => 1.0 / (1.0 / b.stiffness[side] + 1.0 / t.stiffness),
                         None => b.stiffness[side],

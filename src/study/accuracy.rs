@@ -263,9 +263,10 @@ fn answers(
     let pair = &case.pair;
     let rb = [pair.gears[0].base_radius, pair.gears[1].base_radius];
     // The FE's lumped twin: speed drive, elastic bodies. A hub-to-hub stiffness (LTCA, FE)
-    // holds the bodies' twist, which the twin takes out and gives the bodies; ISO 6336 and the
-    // potential-energy method stop at the tooth's foundation, so the twist is put in series
-    // first (a negative compliance "taken out"). A k too soft to hold the twist gets rigid gears.
+    // holds the bodies' twist (and sway), which the twin takes out and gives the bodies; ISO
+    // 6336 and the potential-energy method stop at the tooth's foundation, so that compliance
+    // is put in series first (a negative compliance "taken out"). A k too soft to hold it gets
+    // rigid gears.
     let twist = super::lumped::bodies_line_compliance(case, crate::case::BodyModel::Elastic)?;
     let hub_to_hub = match holds_body_twist {
         true => mesh.clone(),

@@ -152,7 +152,8 @@ pub struct Frequencies {
     pub lumped_ltca_tangent_hz: f64,
     pub lumped_fe_hz: f64,
     /// The bodies' twist between bore and root circle along the line of action, both gears
-    /// [m/N] ([`body_twist`]).
+    /// [m/N] ([`body_twist`]; the twist alone: where the case's bodies sway, the twins take
+    /// their sway out of the hub-to-hub k too, [`super::lumped::bodies_line_compliance`]).
     pub body_twist_m_per_n: f64,
     /// Elastic bodies (hub and rim, [`crate::lumped::structure`]) under this boundary
     /// condition, the twist taken out of the hub-to-hub k: the structure's mesh mode with the
@@ -424,7 +425,8 @@ pub fn body_twist(case: &Case) -> [f64; 2] {
 /// The lumped twin of the explicit FE on `mesh` (hub to hub, as the FE's DTE and the LTCA give
 /// it): the pair under `drive` with elastic bodies and nothing else (the FE's boundary
 /// conditions: no shafts, no bearings; [`super::lumped::drivetrain_with`]), the bodies' twist
-/// taken out of `mesh`, mesh force T/r_b2, the FE's mesh dashpot `damping.mesh_n_s_per_m` where
+/// (and their rims' sway, where `[lumped] body_sway` gives it them) taken out of `mesh`, mesh
+/// force T/r_b2, the FE's mesh dashpot `damping.mesh_n_s_per_m` where
 /// the FE has it (on the hub-to-hub TE rate while a flank touches,
 /// [`DampingSite::HubTransmissionError`];
 /// with elastic bodies it damps the mesh mode 1.29 × as much as the same c on the mesh

@@ -43,7 +43,8 @@
 //! mesh drives in the FE modal analysis ([`body_mode_crossings`], [`BodyMode`]) and, where the
 //! mode holds a part of the motion, left out of the one-DOF fits of the mesh resonance
 //! ([`FeSpeed::on_body_crossing`]); the twins carry the driver's torsion
-//! ([`super::compare::with_driver_body_mode`]), no lumped model the lateral modes.
+//! ([`super::compare::with_driver_body_mode`]), and the rims' sway where the case's bodies sway
+//! (`[lumped] body_sway`; not matched to the FE modal's lateral modes).
 //!
 //! The FE is itself a discretization: its resonance moves as its flanks are refined (the
 //! explicit mesh's k̄ falls by 0.8 % from 1.0 to 0.7 mm flanks, validation/accuracy-cost).
@@ -498,8 +499,9 @@ pub struct ModelSweep {
     pub mesh_damping_n_s_per_m: f64,
     pub mesh_mode_dashpot_share_per_kg: f64,
     pub mesh_mode_damping_ratio: f64,
-    /// The model's first mode above its mesh mode at the mean linearized stiffness [Hz] (under
-    /// the FE's speed drive: the driver's rim against its held hub; NaN with one DOF).
+    /// The model's driver torsion at the mean linearized stiffness [Hz] (under the FE's speed
+    /// drive: the driver's rim against its held hub, [`crate::lumped::Structure::body_mode`];
+    /// NaN without that coordinate).
     pub body_mode_hz: f64,
 }
 
@@ -974,7 +976,8 @@ impl CaseModel {
             .map(|rpm| lumped_at(&model, *rpm, rb2))
             .collect();
         let nan3 = (f64::NAN, f64::NAN, f64::NAN);
-        let (resonance_rpm, _, peak_rad) = fit_dense(&dense, own_body_mode(&model)).unwrap_or(nan3);
+        let (resonance_rpm, _, peak_rad) =
+            fit_dense(&dense, &own_body_mode(&model)).unwrap_or(nan3);
         Self {
             model,
             resonance_rpm,
@@ -1436,26 +1439,51 @@ fn mesh_level(fe: Vec<FeSpeed>, common_rpm: &[f64], case: &CaseModel, rb2: f64) 
     }
 }
 
-/// A model's own first mode above its mesh mode: the driver's teeth as its mesh period counts
-/// them (2π over the period) and the mode at the mean linearized stiffness [Hz]; `None` with
-/// one DOF.
-fn own_body_mode(model: &MeshModel) -> Option<(f64, f64)> {
+/// A model's own body modes: the driver's teeth as its mesh period counts them (2π over the
+/// period) and every mode but the mesh mode at the mean linearized stiffness [Hz] (the
+/// driver's torsion, the rims' sway where the bodies sway); none with one DOF.
+fn own_body_mode(model: &MeshModel) -> (f64, Vec<f64>) {
     let teeth = std::f64::consts::TAU / model.mesh.period();
-    super::lumped::mode_frequencies_hz(model)
-        .get(1)
-        .map(|hz| (teeth, *hz))
+    let linear = model.linearized();
+    let mut modes = linear.structure.modes(linear.mesh.mean());
+    let mesh = (0..modes.len()).max_by(|&a, &b| {
+        modes[a]
+            .mesh_energy_share
+            .total_cmp(&modes[b].mesh_energy_share)
+    });
+    if let Some(mesh) = mesh {
+        modes.remove(mesh);
+    }
+    let body = modes
+        .iter()
+        .map(|m| m.frequency / std::f64::consts::TAU)
+        .collect();
+    (teeth, body)
 }
 
-/// Whether a mesh harmonic meets the model's own body mode `own` ([`own_body_mode`]) at `rpm`
-/// ([`on_body_crossing`]).
-fn on_own_crossing(own: Option<(f64, f64)>, rpm: f64) -> bool {
-    own.is_some_and(|(teeth, hz)| on_body_crossing(rpm, teeth, hz).is_some())
+/// The driver's torsion of `model` (its rim against its held hub, the speed drive's `rim1 lag`)
+/// at the mean linearized stiffness [Hz]; NaN without it.
+fn driver_torsion_hz(model: &MeshModel) -> f64 {
+    let linear = model.linearized();
+    linear
+        .structure
+        .body_mode(linear.mesh.mean(), "rim1 lag")
+        .map_or(f64::NAN, |m| m.frequency / std::f64::consts::TAU)
+}
+
+/// Whether a mesh harmonic meets one of the model's own body modes `own` ([`own_body_mode`])
+/// at `rpm` ([`on_body_crossing`]).
+fn on_own_crossing(own: &(f64, Vec<f64>), rpm: f64) -> bool {
+    let (teeth, modes) = own;
+    modes
+        .iter()
+        .any(|hz| on_body_crossing(rpm, *teeth, *hz).is_some())
 }
 
 /// [`resonance_fit`] over a model's `dense` responses that settled, off its own body-mode
 /// crossings (`own`, [`own_body_mode`]; as the FE's fit is off the FE modal's) where three
 /// points are left: the one-DOF fit is of the mesh resonance.
-fn fit_dense(dense: &[LumpedSpeed], own: Option<(f64, f64)>) -> Option<(f64, f64, f64)> {
+fn fit_dense(dense: &[LumpedSpeed], own: &(f64, Vec<f64>)) -> Option<(f64, f64, f64)> {
     let settled = || dense.iter().filter(|s| !s.diverged);
     let off_crossings: Vec<(f64, f64)> = settled()
         .filter(|s| !on_own_crossing(own, s.speed_rpm))
@@ -1516,7 +1544,7 @@ fn model_sweep(
         Some(band.map_or((*r, *r), |(l, h)| (l.min(*r), h.max(*r))))
     });
     let own = own_body_mode(model);
-    let (rpm, zeta, peak) = fit_dense(&dense, own)?;
+    let (rpm, zeta, peak) = fit_dense(&dense, &own)?;
     // Every response it reached, the continued branches included: a jump's upper branch may
     // be met only from one side.
     let responses: Vec<(f64, f64)> = dense
@@ -1524,7 +1552,7 @@ fn model_sweep(
         .filter(|s| !s.diverged)
         .map(|s| (s.speed_rpm, s.mesh_amplitude_rad))
         .chain(curve_up.iter().chain(&curve_down).map(|p| (p.0, p.1)))
-        .filter(|p| fits(p) && !on_own_crossing(own, p.0))
+        .filter(|p| fits(p) && !on_own_crossing(&own, p.0))
         .collect();
     // The spacing counts the speeds it was sought at: the responses' and where it diverged.
     let sought: Vec<f64> = responses
@@ -1533,7 +1561,7 @@ fn model_sweep(
         .chain(
             dense
                 .iter()
-                .filter(|s| s.diverged && !on_own_crossing(own, s.speed_rpm))
+                .filter(|s| s.diverged && !on_own_crossing(&own, s.speed_rpm))
                 .map(|s| s.speed_rpm),
         )
         .collect();
@@ -1572,7 +1600,7 @@ fn model_sweep(
         .iter()
         .zip(&held.probes)
         .zip(&dte_rms_rel_err_at_fe_resonance)
-        .filter(|((s, p), _)| !s.on_body_crossing && !on_own_crossing(own, p.speed_rpm))
+        .filter(|((s, p), _)| !s.on_body_crossing && !on_own_crossing(&own, p.speed_rpm))
         .map(|(_, e)| *e)
         .collect();
     Some(ModelSweep {
@@ -1581,7 +1609,7 @@ fn model_sweep(
         mesh_damping_n_s_per_m: model.damping,
         mesh_mode_dashpot_share_per_kg: super::compare::dashpot_share(model),
         mesh_mode_damping_ratio: model.mesh_mode_damping_ratio(),
-        body_mode_hz: own.map_or(f64::NAN, |(_, hz)| hz),
+        body_mode_hz: driver_torsion_hz(model),
         diverged_at_fe_rpm: at_fe_speeds
             .iter()
             .filter(|s| s.diverged)
@@ -1678,7 +1706,7 @@ fn held_at_fe_resonance(
             .zip(fe)
             .filter(|(_, s)| fits(&(s.speed_rpm, s.mesh_amplitude_rad)))
             .filter(|(_, s)| taken.iter().any(|t| same_speed(t.0, s.speed_rpm)))
-            .filter(|(p, _)| !on_own_crossing(own, p.speed_rpm))
+            .filter(|(p, _)| !on_own_crossing(&own, p.speed_rpm))
             .map(|(p, _)| (p.speed_rpm, p.mesh_amplitude_rad))
             .collect();
         let Some((resonance, _, _)) = resonance_fit(&points) else {
@@ -2339,11 +2367,11 @@ mod tests {
             let body_hz = crate::study::lumped::mode_frequencies_hz(&twin)[1];
             let on = body_hz * 60.0 / (4.0 * z1);
             let own = super::own_body_mode(&twin);
-            assert!(super::on_own_crossing(own, on), "z1 {z1}");
-            assert!(super::on_own_crossing(own, on * 1.012), "z1 {z1}");
-            assert!(!super::on_own_crossing(own, on * 1.03), "z1 {z1}");
+            assert!(super::on_own_crossing(&own, on), "z1 {z1}");
+            assert!(super::on_own_crossing(&own, on * 1.012), "z1 {z1}");
+            assert!(!super::on_own_crossing(&own, on * 1.03), "z1 {z1}");
             let (one_dof, _) = one_dof(1e-6, None, 0.05);
-            assert!(!super::on_own_crossing(super::own_body_mode(&one_dof), on));
+            assert!(!super::on_own_crossing(&super::own_body_mode(&one_dof), on));
         }
     }
 

@@ -4,7 +4,8 @@
 //! (elastic, hub and rim, or rigid), shafts, motor and load, bearings, the drive and damping.
 //!
 //! Inertias default to ρ b ∫r² dA of the gear bodies (the FE's bodies, bore to tip), masses to
-//! ρ b A; a hub-to-hub stiffness loses the elastic bodies' twist ([`to_rims`]); the mesh damping
+//! ρ b A; a hub-to-hub stiffness loses the elastic bodies' twist and their rims' sway
+//! ([`to_rims`], [`bodies_line_compliance`]); the mesh damping
 //! is c = 2ζ√(k̄ m_e) with m_e the rigid pair's effective mass under the drive
 //! ([`Drive::effective_mass`]), or the case's coefficient when it gives one.
 
@@ -496,8 +497,9 @@ pub fn quasi_static_checks(
     checks
 }
 
-/// `mesh` and `law`, hub to hub, with the bodies' twist `twist` [m/N] taken out of series:
-/// k′ = 1/(1/k − c_b), and δ′ = δ − c_b W for the law: the mesh between the rims.
+/// `mesh` and `law`, hub to hub, with the bodies' compliance `twist` [m/N] (their twist and
+/// their rims' sway, [`bodies_line_compliance`]) taken out of series: k′ = 1/(1/k − c_b), and
+/// δ′ = δ − c_b W for the law: the mesh between the rims.
 pub fn to_rims(
     mesh: MeshStiffness,
     law: Option<ForceLaw>,
@@ -508,8 +510,9 @@ pub fn to_rims(
     }
     let refused = |what: &str| {
         StudyError::Input(format!(
-            "the gear bodies' twist ({twist:.3e} m/N) is not below the {what}: check \
-             bore_radius_mm and the stiffness source, or set lumped.bodies = \"rigid\""
+            "the gear bodies' twist and sway ({twist:.3e} m/N) is not below the {what}: check \
+             bore_radius_mm and the stiffness source, or set lumped.body_sway = \"off\" or \
+             lumped.bodies = \"rigid\""
         ))
     };
     let mesh = mesh
@@ -523,9 +526,9 @@ pub fn to_rims(
 pub fn law_to_rims(law: ForceLaw, twist: f64) -> Result<ForceLaw, StudyError> {
     law.without_series_compliance(twist).ok_or_else(|| {
         StudyError::Input(format!(
-            "the gear bodies' twist ({twist:.3e} m/N) is not below the mesh's tangent \
+            "the gear bodies' twist and sway ({twist:.3e} m/N) is not below the mesh's tangent \
              compliance at every load of the force law: check bore_radius_mm and the stiffness \
-             source, or set lumped.bodies = \"rigid\""
+             source, or set lumped.body_sway = \"off\" or lumped.bodies = \"rigid\""
         ))
     })
 }
@@ -585,23 +588,30 @@ fn twisting_bodies(case: &Case, bodies: BodyModel) -> [GearBody; 2] {
 /// `body_sway = "auto"` to give the bodies their sway: 0.5 % (a quarter of the 2 % the lumped
 /// mesh mode is held to against the FE modal). Below it the sway stays in the mesh stiffness,
 /// massless, and the model keeps its coordinates and its RK4 step (the sway's own mode lies
-/// at 17 kHz on the seed paper's pair, 3.5 × its mesh mode).
+/// at 17.6 kHz on the seed paper's pair, 3.6 × the lumped both-free mesh mode).
 pub const SWAY_MODE_SHIFT: f64 = 0.005;
 
 /// Whether the rims' sway moves the mesh mode of the pair by more than [`SWAY_MODE_SHIFT`]
 /// under either drive (driver held, both free; no shafts or bearings, as the FE modal): the
 /// structure's mesh mode on the bodies `[twisting, swaying]`, the teeth's mesh stiffness
-/// estimated by ISO 6336-1's c_γα·b at the design torque (the decision needs its order only),
-/// the sway in series with it, massless, on the twisting bodies.
+/// estimated by ISO 6336-1's c_γα·b at the design torque (the decision needs its order only;
+/// the estimate's load factor makes it, and so the decision near the threshold, depend on the
+/// torque below 100 N/mm of face width, and with no load the sway is kept), the sway in series
+/// with it, massless, on the twisting bodies.
 pub fn sway_matters(
     case: &Case,
     [twisting, swaying]: [[GearBody; 2]; 2],
 ) -> Result<bool, StudyError> {
     let pair = &case.pair;
-    let torque = load_torque(case)?;
+    // The estimate at the design torque's size (a reversed torque loads the same teeth).
+    let torque = load_torque(case)?.abs();
     let teeth = stiffness::iso_6336_method_b(pair, torque, case.material.youngs_modulus)
         .mesh_stiffness(pair, torque)
         .mean();
+    if !(teeth > 0.0 && teeth.is_finite()) {
+        // No estimate (no load): keep the sway rather than guess it away.
+        return Ok(true);
+    }
     let sway: f64 = swaying
         .iter()
         .filter_map(|b| b.translation.map(|t| 1.0 / t.stiffness))
@@ -625,8 +635,8 @@ pub fn sway_matters(
 /// case's coarse element size all round, both gears side by side): mass and stiffness. Its
 /// frequency √(k_y/m_y) lies 2.4–3.1 % above the pair FE modal's lateral mode across the line
 /// of action (paper pair, 24/40, 17/53: the Rayleigh quotient of a static shape with rigid
-/// teeth) and within 0.4 % of the same on half the element size (the large gears; a thin
-/// pinion rim within 5 % at 110 kHz, far above any mesh mode). Each body's is solved once per
+/// teeth) and within 0.2 % of the same on half the element size (a thin pinion rim within
+/// 5 % at 110 kHz, far above any mesh mode). Each body's is solved once per
 /// process (0.1 to 0.25 s on the paper's and 17/53's gears), as every structure asks for it.
 pub fn rim_sway(case: &Case) -> Result<[RimTranslation; 2], StudyError> {
     type Memo = std::sync::Mutex<std::collections::HashMap<String, BodyTranslation>>;
@@ -636,7 +646,7 @@ pub fn rim_sway(case: &Case) -> Result<[RimTranslation; 2], StudyError> {
     let spec = case.mesh_spec(Vec::new());
     let one = |i: usize| -> Result<RimTranslation, StudyError> {
         let gear = &case.pair.gears[i];
-        let key = format!("{:?} {:?} {}", gear.spec, material, spec.coarse_size);
+        let key = format!("{gear:?} {material:?} {spec:?}");
         let known = memo.lock().expect("the memo's lock").get(&key).copied();
         let translation = match known {
             Some(t) => t,

@@ -544,15 +544,27 @@ pub fn gear_bodies(case: &Case, bodies: BodyModel) -> Result<[GearBody; 2], Stud
     if bodies == BodyModel::Rigid || case.lumped.body_sway == BodySway::Off {
         return Ok(twisting);
     }
-    let sway = rim_sway(case)?;
-    let mut swaying = twisting;
-    for (body, sway) in swaying.iter_mut().zip(sway) {
-        body.translation = Some(sway);
-    }
+    let swaying = swaying_bodies(case, twisting)?;
     Ok(match case.lumped.body_sway {
         BodySway::Auto if !sway_matters(case, [twisting, swaying])? => twisting,
         _ => swaying,
     })
+}
+
+/// `twisting`, the case's elastic bodies, with their rims' sway ([`rim_sway`]).
+fn swaying_bodies(case: &Case, twisting: [GearBody; 2]) -> Result<[GearBody; 2], StudyError> {
+    let mut swaying = twisting;
+    for (body, sway) in swaying.iter_mut().zip(rim_sway(case)?) {
+        body.translation = Some(sway);
+    }
+    Ok(swaying)
+}
+
+/// How far the rims' sway moves the case's mesh mode ([`sway_shift`]) with elastic bodies,
+/// whatever `[lumped] body_sway` says: what `"auto"` decides on, for the model's note.
+pub fn case_sway_shift(case: &Case) -> Result<f64, StudyError> {
+    let twisting = twisting_bodies(case, BodyModel::Elastic);
+    sway_shift(case, [twisting, swaying_bodies(case, twisting)?])
 }
 
 /// [`gear_bodies`] without the sway: the bodies' inertias and twist.
@@ -598,10 +610,14 @@ pub const SWAY_MODE_SHIFT: f64 = 0.005;
 /// the estimate's load factor makes it, and so the decision near the threshold, depend on the
 /// torque below 100 N/mm of face width, and with no load the sway is kept), the sway in series
 /// with it, massless, on the twisting bodies.
-pub fn sway_matters(
-    case: &Case,
-    [twisting, swaying]: [[GearBody; 2]; 2],
-) -> Result<bool, StudyError> {
+pub fn sway_matters(case: &Case, bodies: [[GearBody; 2]; 2]) -> Result<bool, StudyError> {
+    // NaN (no estimate, no load): keep the sway rather than guess it away.
+    Ok(!(sway_shift(case, bodies)? <= SWAY_MODE_SHIFT))
+}
+
+/// The largest |f_with/f_without − 1| of [`sway_matters`]'s mesh modes over the two drives;
+/// NaN where the teeth's stiffness has no estimate (no load).
+pub fn sway_shift(case: &Case, [twisting, swaying]: [[GearBody; 2]; 2]) -> Result<f64, StudyError> {
     let pair = &case.pair;
     // The estimate at the design torque's size (a reversed torque loads the same teeth).
     let torque = load_torque(case)?.abs();
@@ -609,14 +625,14 @@ pub fn sway_matters(
         .mesh_stiffness(pair, torque)
         .mean();
     if !(teeth > 0.0 && teeth.is_finite()) {
-        // No estimate (no load): keep the sway rather than guess it away.
-        return Ok(true);
+        return Ok(f64::NAN);
     }
     let sway: f64 = swaying
         .iter()
         .filter_map(|b| b.translation.map(|t| 1.0 / t.stiffness))
         .sum();
     let undamped = SpringDamping::Ratio(0.0);
+    let mut largest: f64 = 0.0;
     for drive in [Drive::Speed, Drive::Torque] {
         let mode = |gears: [GearBody; 2], k: f64| -> Result<f64, StudyError> {
             let structure = drivetrain_of(case, drive, (gears, undamped), [None; 2], false)?;
@@ -624,11 +640,9 @@ pub fn sway_matters(
         };
         let without = mode(twisting, 1.0 / (1.0 / teeth + sway))?;
         let with = mode(swaying, teeth)?;
-        if (with / without - 1.0).abs() > SWAY_MODE_SHIFT {
-            return Ok(true);
-        }
+        largest = largest.max((with / without - 1.0).abs());
     }
-    Ok(false)
+    Ok(largest)
 }
 
 /// Each gear rim's sway on its held bore ([`crate::ltca::body::body_translation_of`] on the
@@ -776,9 +790,13 @@ fn structure_note(case: &Case, structure: &Structure, twist: f64) -> Result<Stri
         );
     }
     if case.lumped.bodies == BodyModel::Elastic && !swaying {
-        note += match case.lumped.body_sway {
-            BodySway::Off => "; the rims' sway on their bores left in the mesh stiffness, massless (lumped.body_sway = \"off\")",
-            _ => "; the rims' sway on their bores left in the mesh stiffness, massless (it moves the mesh mode by less than 0.5 %)",
+        note += &match case.lumped.body_sway {
+            BodySway::Off => "; the rims' sway on their bores left in the mesh stiffness, massless (lumped.body_sway = \"off\")".to_string(),
+            _ => format!(
+                "; the rims' sway on their bores left in the mesh stiffness, massless (it moves the mesh mode by {:.2} %, under {} %; lumped.body_sway = \"on\" keeps it)",
+                100.0 * case_sway_shift(case)?,
+                100.0 * SWAY_MODE_SHIFT
+            ),
         };
     }
     if case.lumped.bearings {

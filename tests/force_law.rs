@@ -39,7 +39,7 @@ fn the_load_dependent_law_holds_the_ltca_from_25_to_300_percent_torque() {
         let case = samples::matrix_pair("24-40").unwrap().case().unwrap();
         with(case, &[Override::set("lumped.body_sway", sway)])
     };
-    for case in [samples::paper36_case(), unequal("off"), unequal("on")] {
+    for case in [samples::paper36_case(), unequal("auto"), unequal("on")] {
         let setup = setup(&case).unwrap();
         // The rims sway where asked (their compliance out of the law, the statics the same).
         let sways = setup
@@ -204,8 +204,9 @@ fn the_back_flanks_carry_their_own_law_with_backlash() {
 /// 24/40 and its inverse 40/24, the shifted 17/53 and 19/57 with backlash, each in contact at
 /// f_mesh = 0.25 f_n and near the resonance at 0.945 f_n (on the paper pair about 2 000 and
 /// 7 500 rpm), where every pair leaves its drive flanks for part of each period. They agree to
-/// 1e-7 of the Jacobian's largest entry (measured at most 6e-10 on the one-coordinate models,
-/// 2.9e-8 on 17/53, whose rims sway: three coordinates, the pinion's sway near 117 kHz; the
+/// 1e-8 of the Jacobian's largest entry on the one-coordinate models (measured at most 6e-10)
+/// and 1e-7 on more (2.9e-8 on 17/53, whose rims sway: three coordinates, the pinion's sway
+/// near 117 kHz, the differences' velocity perturbation h·ω at that ω; the
 /// differences' truncation is h² of a perturbation 1e-5 of the deflection; across a switch
 /// they average the two sides' slopes over the perturbation, which the law's continuity keeps
 /// small; a wrong term of the variational equation shows at order 1), and so do the largest
@@ -248,7 +249,12 @@ fn the_variational_jacobian_is_the_period_maps() {
             let (end_d, jac_d) = period_map_differences(&model, speed, steps, start.start);
             assert_eq!(end_v, end_d, "{name} {rpm} rpm: the same integration");
             let error = (&jac_v - &jac_d).amax() / jac_d.amax();
-            assert!(error < 1e-7, "{name} {rpm} rpm: {error:e}");
+            let tolerance = if model.structure.dofs == 1 {
+                1e-8
+            } else {
+                1e-7
+            };
+            assert!(error < tolerance, "{name} {rpm} rpm: {error:e}");
             let largest = |j: &nalgebra::DMatrix<f64>| {
                 largest_modulus(&j.complex_eigenvalues().iter().copied().collect::<Vec<_>>())
             };

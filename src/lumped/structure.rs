@@ -346,7 +346,8 @@ impl Structure {
                     ));
                 }
                 (None, Some(t)) => {
-                    if !(t.mass > 0.0 && t.stiffness > 0.0) {
+                    let finite = t.mass.is_finite() && t.stiffness.is_finite();
+                    if !(t.mass > 0.0 && t.stiffness > 0.0 && finite) {
                         return Err(format!(
                             "gear {gear}: a swaying rim needs a positive mass and stiffness"
                         ));

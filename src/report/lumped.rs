@@ -579,7 +579,7 @@ pub fn write_mesh_modes(
         .collect();
     if !lateral.is_empty() {
         markdown.push_str(&format!(
-            "Lateral body modes the mesh drives (a rim swaying on its body against the held bore, along the line of action; not in the lumped model, whose bearings and bodies are rigid laterally): {}.\n",
+            "Lateral body modes the mesh drives (a rim swaying on its body against the held bore, along the line of action; in the lumped model only as its rims' sway where `lumped.body_sway` gives it, see its note): {}.\n",
             lateral.join(", ")
         ));
     }

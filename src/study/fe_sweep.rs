@@ -1343,8 +1343,9 @@ fn body_mode_note(
             100.0 * (model_hz / mode.hz - 1.0)
         ),
         ("driver torsion", false) => " (the case's model has no such mode)".into(),
-        // The twins hold the bodies' twist only; the bearings are rigid in the FE.
-        (_, _) => " (not in the lumped models)".into(),
+        // The bearings are rigid in the FE; a lumped rim sway, where the case's bodies carry
+        // one (`[lumped] body_sway`), is not matched to the FE modal's.
+        (_, _) => " (not matched in the lumped models)".into(),
     };
     let listed_modes = modes
         .iter()
@@ -2372,6 +2373,36 @@ mod tests {
             assert!(!super::on_own_crossing(&own, on * 1.03), "z1 {z1}");
             let (one_dof, _) = one_dof(1e-6, None, 0.05);
             assert!(!super::on_own_crossing(&super::own_body_mode(&one_dof), on));
+        }
+        // With the rims swaying: every mode but the mesh mode is the model's own (the driver's
+        // torsion and both sways), each met where its 4th harmonic meets it.
+        let case = crate::case::Case::load_with(
+            None,
+            &[crate::case::Override::set("lumped.body_sway", "on")],
+        )
+        .unwrap();
+        let z1 = case.pair.gears[0].teeth() as f64;
+        let mesh = MeshStiffness::constant("k", std::f64::consts::TAU / z1, 4.0e8);
+        let twin = crate::study::compare::lumped_twin(
+            &case,
+            mesh,
+            (None, None),
+            (Drive::Speed, true),
+            143.6,
+            damping,
+            None,
+        )
+        .unwrap();
+        assert_eq!(twin.structure.dofs, 4, "{:?}", twin.structure.names);
+        let own = super::own_body_mode(&twin);
+        let mesh_hz = twin.natural_frequency() / std::f64::consts::TAU;
+        assert_eq!(own.1.len(), 3);
+        for hz in &own.1 {
+            assert!(
+                (hz / mesh_hz - 1.0).abs() > 0.1,
+                "{hz} vs the mesh mode {mesh_hz}"
+            );
+            assert!(super::on_own_crossing(&own, hz * 60.0 / (4.0 * z1)));
         }
     }
 

@@ -640,7 +640,11 @@ pub fn sway_shift(case: &Case, [twisting, swaying]: [[GearBody; 2]; 2]) -> Resul
         };
         let without = mode(twisting, 1.0 / (1.0 / teeth + sway))?;
         let with = mode(swaying, teeth)?;
-        largest = largest.max((with / without - 1.0).abs());
+        let shift = (with / without - 1.0).abs();
+        // A NaN shift is not "no shift".
+        if !(shift <= largest) {
+            largest = shift;
+        }
     }
     Ok(largest)
 }

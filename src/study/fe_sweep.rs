@@ -2352,11 +2352,12 @@ mod tests {
             mesh_n_s_per_m: 2000.0,
             stiffness_beta_s: 1e-9,
         };
-        for case in crate::study::compare::tests::paper_and_unequal_pairs() {
+        // The twin on a constant k and its driver's teeth.
+        let twin_of = |case: &crate::case::Case| {
             let z1 = case.pair.gears[0].teeth() as f64;
             let mesh = MeshStiffness::constant("k", std::f64::consts::TAU / z1, 4.0e8);
             let twin = crate::study::compare::lumped_twin(
-                &case,
+                case,
                 mesh,
                 (None, None),
                 (Drive::Speed, true),
@@ -2365,6 +2366,10 @@ mod tests {
                 None,
             )
             .unwrap();
+            (twin, z1)
+        };
+        for case in crate::study::compare::tests::paper_and_unequal_pairs() {
+            let (twin, z1) = twin_of(&case);
             let body_hz = crate::study::lumped::mode_frequencies_hz(&twin)[1];
             let on = body_hz * 60.0 / (4.0 * z1);
             let own = super::own_body_mode(&twin);
@@ -2381,18 +2386,7 @@ mod tests {
             &[crate::case::Override::set("lumped.body_sway", "on")],
         )
         .unwrap();
-        let z1 = case.pair.gears[0].teeth() as f64;
-        let mesh = MeshStiffness::constant("k", std::f64::consts::TAU / z1, 4.0e8);
-        let twin = crate::study::compare::lumped_twin(
-            &case,
-            mesh,
-            (None, None),
-            (Drive::Speed, true),
-            143.6,
-            damping,
-            None,
-        )
-        .unwrap();
+        let (twin, z1) = twin_of(&case);
         assert_eq!(twin.structure.dofs, 4, "{:?}", twin.structure.names);
         let own = super::own_body_mode(&twin);
         let mesh_hz = twin.natural_frequency() / std::f64::consts::TAU;

@@ -1691,7 +1691,8 @@ fn held_at_fe_resonance(
     };
     let first = at(start);
     // The FE's fit points ([`amplitude_points`]: off the body mode's crossings where three
-    // are left), the model's at the same places, less those on the model's own crossings.
+    // are left), the model's at the same places, less those on the model's own crossings
+    // where three are left.
     let taken = amplitude_points(fe);
     let own = own_body_mode(model);
     let (mut c, mut probes) = (start, first.clone());
@@ -1702,14 +1703,23 @@ fn held_at_fe_resonance(
             diverged_rpm.extend(probes.iter().filter(|p| p.diverged).map(|p| p.speed_rpm));
             break;
         }
-        let points: Vec<(f64, f64)> = probes
+        let candidates: Vec<(f64, f64)> = probes
             .iter()
             .zip(fe)
             .filter(|(_, s)| fits(&(s.speed_rpm, s.mesh_amplitude_rad)))
             .filter(|(_, s)| taken.iter().any(|t| same_speed(t.0, s.speed_rpm)))
-            .filter(|(p, _)| !on_own_crossing(&own, p.speed_rpm))
             .map(|(p, _)| (p.speed_rpm, p.mesh_amplitude_rad))
             .collect();
+        // Off the model's own crossings where three are left, as [`fit_dense`].
+        let off_crossings: Vec<(f64, f64)> = candidates
+            .iter()
+            .copied()
+            .filter(|p| !on_own_crossing(&own, p.0))
+            .collect();
+        let points = match off_crossings.len() >= 3 {
+            true => off_crossings,
+            false => candidates,
+        };
         let Some((resonance, _, _)) = resonance_fit(&points) else {
             break;
         };

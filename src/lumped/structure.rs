@@ -326,13 +326,16 @@ impl Structure {
         for side in 0..2 {
             let sway = spec.gears[side].translation;
             let gear = side + 1;
+            let valid = |t: RimTranslation| {
+                t.mass > 0.0 && t.stiffness > 0.0 && t.mass.is_finite() && t.stiffness.is_finite()
+            };
+            if sway.is_some_and(|t| !valid(t)) {
+                return Err(format!(
+                    "gear {gear}: a swaying rim needs a positive, finite mass and stiffness"
+                ));
+            }
             match (&spec.bearings, sway) {
                 (Some(b), sway) => {
-                    if sway.is_some_and(|t| !(t.mass > 0.0 && t.stiffness > 0.0)) {
-                        return Err(format!(
-                            "gear {gear}: a swaying rim needs a positive mass and stiffness"
-                        ));
-                    }
                     let stiffness = match sway {
                         Some(t) => 1.0 / (1.0 / b.stiffness[side] + 1.0 / t.stiffness),
                         None => b.stiffness[side],
@@ -346,12 +349,6 @@ impl Structure {
                     ));
                 }
                 (None, Some(t)) => {
-                    let finite = t.mass.is_finite() && t.stiffness.is_finite();
-                    if !(t.mass > 0.0 && t.stiffness > 0.0 && finite) {
-                        return Err(format!(
-                            "gear {gear}: a swaying rim needs a positive mass and stiffness"
-                        ));
-                    }
                     translations.push((
                         format!("rim{gear} y"),
                         side,

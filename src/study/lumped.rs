@@ -232,9 +232,10 @@ fn setup_with(case: &Case, ltca: Option<&LtcaModel>) -> Result<LumpedSetup, Stud
         source => (mesh_stiffness(case, source, torque)?, None, None, None),
     };
     let stiffness_wall_s = started.elapsed().as_secs_f64();
-    // A hub-to-hub source holds the bodies' twist; elastic bodies carry it themselves.
+    // A hub-to-hub source holds the bodies' twist and sway; elastic bodies carry them.
+    let body_compliance = structure_body_compliance(case)?;
     let twist = match settings.stiffness.holds_body_twist() {
-        true => structure_body_compliance(case)?,
+        true => body_compliance,
         false => 0.0,
     };
     (mesh, force_law) = to_rims(mesh, force_law, twist)?;
@@ -284,7 +285,7 @@ fn setup_with(case: &Case, ltca: Option<&LtcaModel>) -> Result<LumpedSetup, Stud
         natural_frequency_hz,
         model_note,
         self_checks,
-        body_compliance: structure_body_compliance(case)?,
+        body_compliance,
     })
 }
 

@@ -60,7 +60,8 @@ pub struct MeshModeComparison {
     pub driver_torsion_rel: Option<f64>,
     /// The FE modal's driver torsion and the other body modes the mesh drives, each kind's
     /// mean over the positions ([`super::compare::fe_modal_body_modes`]; the lumped models
-    /// have the torsions only).
+    /// have the torsions, and the rims' sway where `[lumped] body_sway` gives it, not matched
+    /// to the modal's lateral modes).
     pub excited_body_modes_fe_modal: Vec<super::fe_sweep::BodyMode>,
 }
 
@@ -210,7 +211,7 @@ pub fn mesh_modes(
     // The same bodies for the lumped model's tables and the modal analysis.
     let setup = super::lumped::setup_on(case, &ltca)?;
     let twist_in_model = match case.lumped.stiffness.holds_body_twist() {
-        true => super::lumped::structure_body_compliance(case)?,
+        true => setup.body_compliance,
         false => 0.0,
     };
     let torque = setup.torque;

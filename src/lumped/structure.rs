@@ -658,10 +658,18 @@ impl Structure {
 
     /// The mode with the largest share of its strain energy in the mesh: the mesh mode.
     pub fn mesh_mode(&self, mesh_stiffness: f64) -> Mode {
-        self.modes(mesh_stiffness)
-            .into_iter()
-            .max_by(|a, b| a.mesh_energy_share.total_cmp(&b.mesh_energy_share))
-            .expect("at least one mode")
+        let mut modes = self.modes(mesh_stiffness);
+        let mesh = Self::mesh_mode_index(&modes).expect("at least one mode");
+        modes.swap_remove(mesh)
+    }
+
+    /// Which of `modes` is the mesh mode: the largest share of its strain energy in the mesh.
+    pub fn mesh_mode_index(modes: &[Mode]) -> Option<usize> {
+        (0..modes.len()).max_by(|&a, &b| {
+            modes[a]
+                .mesh_energy_share
+                .total_cmp(&modes[b].mesh_energy_share)
+        })
     }
 
     /// The mode other than the mesh mode with the largest share of its kinetic energy in the
@@ -669,24 +677,61 @@ impl Structure {
     /// body's torsion, its rim against the held hub. `None` without that coordinate or a
     /// second mode.
     pub fn body_mode(&self, mesh_stiffness: f64, name: &str) -> Option<Mode> {
+        let mut modes = self.modes(mesh_stiffness);
+        let body = self.body_mode_index(&modes, name)?;
+        Some(modes.swap_remove(body))
+    }
+
+    /// Which of `modes` (of this structure) is [`Self::body_mode`]'s.
+    pub fn body_mode_index(&self, modes: &[Mode], name: &str) -> Option<usize> {
         let i = self.names.iter().position(|n| n == name)?;
-        let modes = self.modes(mesh_stiffness);
-        let mesh = modes
-            .iter()
-            .enumerate()
-            .max_by(|a, b| a.1.mesh_energy_share.total_cmp(&b.1.mesh_energy_share))?
-            .0;
+        let mesh = Self::mesh_mode_index(modes)?;
         let share = |m: &Mode| {
             let phi = DVector::from_column_slice(&m.shape);
             let m_phi = &self.mass * &phi;
             phi[i] * m_phi[i] / phi.dot(&m_phi)
         };
-        modes
-            .into_iter()
-            .enumerate()
-            .filter(|(j, _)| *j != mesh)
-            .map(|(_, m)| m)
-            .max_by(|a, b| share(a).total_cmp(&share(b)))
+        (0..modes.len())
+            .filter(|j| *j != mesh)
+            .max_by(|&a, &b| share(&modes[a]).total_cmp(&share(&modes[b])))
+    }
+
+    /// Each mode's share of the structure's static compliance under its load l:
+    /// (φᵀl)²/(ω² φᵀMφ) over the sum of the modes' (0 for a mode at rest). The modal expansion
+    /// of the static response, lᵀK⁻¹l = Σ (φᵀl)²/(ω² φᵀMφ), as the FE modal analysis's
+    /// [`crate::ltca::modal::PairMode::mesh_share`] splits its driven hub's: the one measure
+    /// of "how much of the mesh's compliance this mode carries" both models have.
+    pub fn load_compliance_shares(&self, modes: &[Mode]) -> Vec<f64> {
+        let compliance: Vec<f64> = modes
+            .iter()
+            .map(|m| {
+                let phi = DVector::from_column_slice(&m.shape);
+                let generalized = phi.dot(&(&self.mass * &phi));
+                match m.frequency > 0.0 && generalized > 0.0 {
+                    true => {
+                        phi.dot(&self.load_direction).powi(2) / (m.frequency.powi(2) * generalized)
+                    }
+                    false => 0.0,
+                }
+            })
+            .collect();
+        let total: f64 = compliance.iter().sum();
+        compliance
+            .iter()
+            .map(|c| if total > 0.0 { c / total } else { 0.0 })
+            .collect()
+    }
+
+    /// The mode's share of the effective mass of the coordinate `name` moved alone,
+    /// (φᵀMe)²/(φᵀMφ · eᵀMe) (modal effective mass; Clough & Penzien §13-3): with `rim1 lag`
+    /// under the speed drive, the share of the driver rim's rotation against its held hub, as
+    /// the FE modal's [`crate::ltca::modal::PairMode::rotation_share`] of the driver. `None`
+    /// without that coordinate.
+    pub fn coordinate_mass_share(&self, mode: &Mode, name: &str) -> Option<f64> {
+        let i = self.names.iter().position(|n| n == name)?;
+        let phi = DVector::from_column_slice(&mode.shape);
+        let m_phi = &self.mass * &phi;
+        Some(m_phi[i].powi(2) / (phi.dot(&m_phi) * self.mass[(i, i)]))
     }
 }
 
@@ -774,6 +819,51 @@ mod tests {
             body.frequency
         );
         assert!(body.frequency > modes[1].frequency && body.frequency < modes[3].frequency);
+    }
+
+    /// The modal expansions the shares rest on, on a four-coordinate chain with shafts and
+    /// swaying rims under both drives: the modes' load compliances (φᵀl)²/(ω² φᵀMφ) sum to the
+    /// static compliance lᵀ(K + k ggᵀ)⁻¹l (the shares are those over it), and the modal
+    /// effective masses of a coordinate, (φᵀMe)²/(φᵀMφ), sum to eᵀMe (Clough & Penzien §13-3),
+    /// so its shares sum to 1.
+    #[test]
+    fn mode_shares_are_the_modal_expansions_of_compliance_and_mass() {
+        let shaft = Some(Shaft {
+            stiffness: 2.0e5,
+            end_inertia: 0.02,
+        });
+        let sway = Some(RimTranslation {
+            mass: 0.8,
+            stiffness: 4e9,
+        });
+        let k_m = 3e8;
+        for drive in [Drive::Speed, Drive::Torque] {
+            let s = swaying_pair(drive, [shaft, shaft], None, [sway, sway]);
+            let modes = s.modes(k_m);
+            let total = &s.stiffness + &s.mesh_direction * s.mesh_direction.transpose() * k_m;
+            let compliance = s
+                .load_direction
+                .dot(&total.lu().solve(&s.load_direction).unwrap());
+            let shares = s.load_compliance_shares(&modes);
+            for (mode, share) in modes.iter().zip(&shares) {
+                let phi = DVector::from_column_slice(&mode.shape);
+                let own = phi.dot(&s.load_direction).powi(2)
+                    / (mode.frequency.powi(2) * phi.dot(&(&s.mass * &phi)));
+                assert!(
+                    (share * compliance - own).abs() <= 1e-9 * compliance,
+                    "{drive:?}"
+                );
+            }
+            assert!((shares.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+            for name in s.names.clone() {
+                let sum: f64 = modes
+                    .iter()
+                    .map(|m| s.coordinate_mass_share(m, &name).unwrap())
+                    .sum();
+                assert!((sum - 1.0).abs() < 1e-9, "{drive:?} {name}: {sum}");
+            }
+            assert_eq!(s.coordinate_mass_share(&modes[0], "no such"), None);
+        }
     }
 
     fn chain(drive: Drive, inertia: f64, stiffness: f64) -> Structure {

@@ -534,7 +534,8 @@ pub fn write_mesh_modes(
     )?;
     let mut markdown = format!(
         "Mesh mode, lumped model against the FE modal analysis ({} positions, mesh {} / {} mm, {:.1} N·m)\n\n\
-         Both frozen at the same positions, each column the mean of the per-position mesh modes; \
+         Both frozen at the same positions, each column the mean of the per-position mesh modes \
+         (the lumped model's mode of the rank its mesh mode has at the mean stiffness, the FE modal's mode paired with it by shape); \
          the last column is the lumped mode at the mean tangent stiffness (what the sweep's resonance follows).\n\n\
          | boundary | lumped drive | FE modal mean [Hz] | lumped, case's bodies [Hz] | rel | rigid gears [Hz] | rel | within 2 % | worst position | lumped at mean k [Hz] |\n|---|---|---|---|---|---|---|---|---|---|\n",
         result.positions,
@@ -557,13 +558,24 @@ pub fn write_mesh_modes(
             c.lumped_at_mean_stiffness_hz
         ));
     }
+    for c in both {
+        if c.positions_paired_off_largest_share > 0 {
+            markdown.push_str(&format!(
+                "\n{:?}: at {} of {} positions the FE mode paired by shape with the lumped mesh mode is not the FE modal's own mesh mode (its largest compliance share; their mean {:.1} Hz): a body mode near the mesh mode shares its compliance, and the two are compared mode for mode (modal.csv has every mode's shares).\n",
+                c.hubs,
+                c.positions_paired_off_largest_share,
+                result.positions,
+                c.fe_modal_largest_share_mean_hz
+            ));
+        }
+    }
     let held = &result.driver_held;
     markdown.push_str(&match (
         held.driver_torsion_fe_modal_hz,
         held.driver_torsion_lumped_hz,
     ) {
         (Some(fe), Some(lumped)) => format!(
-            "\nDriver body's torsion, driver held (its rim against the held hub; the FE modal's mode with the largest share of the driver's rigid rotation): FE modal {fe:.0} Hz, lumped {lumped:.0} Hz ({:+.2} %).\n",
+            "\nDriver body's torsion, driver held (its rim against the held hub; the FE modal's mode paired with the lumped model's by shape): FE modal {fe:.0} Hz, lumped {lumped:.0} Hz ({:+.2} %).\n",
             100.0 * (lumped / fe - 1.0)
         ),
         (Some(fe), None) => format!(

@@ -10,6 +10,11 @@
 //!   the lumped speed drive;
 //! * **both free** against the lumped torque drive.
 //!
+//! Both follow one mode: the lumped model's of the rank its mesh mode has at the mean
+//! stiffness, the FE modal's paired with it by shape at each position ([`pair_by_shape`]), so a
+//! body mode that shares the mesh's compliance (a large driver's torsion below the mesh mode)
+//! is not compared with the other model's mesh mode.
+//!
 //! The lumped model is the one `sweep` and `run` integrate ([`super::lumped::setup`]: its
 //! stiffness source and force law, linearized about the design load), on the FE's boundary
 //! conditions (no shafts, no bearings), with the case's bodies and, for comparison, with rigid
@@ -42,9 +47,15 @@ pub struct MeshModeComparison {
     /// primary resonance follows (how it differs from the per-position mean:
     /// [`lumped_mesh_modes`]).
     pub lumped_at_mean_stiffness_hz: f64,
-    /// FE modal mesh mode per position (driver rotation [deg], Hz) and its mean [Hz].
+    /// FE modal mesh mode per position (driver rotation [deg], Hz) and its mean [Hz]: at each
+    /// position the FE mode paired by shape with the lumped mesh mode ([`pair_by_shape`]).
     pub fe_modal_hz: Vec<(f64, f64)>,
     pub fe_modal_mean_hz: f64,
+    /// The mean of the FE modal's own mesh mode (the largest compliance share at each position,
+    /// [`PairModes::mesh_mode`]) [Hz], and at how many positions the paired mode is another:
+    /// where a body mode near the mesh mode shares its compliance.
+    pub fe_modal_largest_share_mean_hz: f64,
+    pub positions_paired_off_largest_share: usize,
     /// lumped / FE modal − 1, of the means.
     pub lumped_rel: f64,
     /// The largest |lumped / FE modal − 1| of one position, signed.
@@ -53,8 +64,9 @@ pub struct MeshModeComparison {
     /// Whether |lumped_rel| ≤ [`MESH_MODE_TOLERANCE`].
     pub pass: bool,
     /// Driver held, elastic bodies: the driver body's torsion (its rim against the held hub),
-    /// the FE modal's ([`PairModes::torsion_mode`]) and the case's lumped model's, each the
-    /// mean over the positions [Hz], and lumped / FE modal − 1; `None` where either has none.
+    /// the case's lumped model's and the FE modal's mode paired with it by shape (where the
+    /// lumped model has none, the FE's own, [`PairModes::torsion_mode`]), each the mean over
+    /// the positions [Hz], and lumped / FE modal − 1; `None` where either has none.
     pub driver_torsion_fe_modal_hz: Option<f64>,
     pub driver_torsion_lumped_hz: Option<f64>,
     pub driver_torsion_rel: Option<f64>,
@@ -91,7 +103,9 @@ pub struct MeshModes {
 /// `twist_in_model` the case's model took out of it, then the bodies' own taken out. Returns
 /// those, the mode at the mean stiffness, and, with the driver held (speed drive) and elastic
 /// bodies, the driver body's torsion at each position (its rim against the held hub,
-/// [`crate::lumped::Structure::body_mode`] on `rim1 lag`, the speed drive's coordinate).
+/// [`crate::lumped::Structure::body_mode_index`] on `rim1 lag`, the speed drive's coordinate),
+/// with every mode's [`ModeSignature`] for [`pair_by_shape`]. The mesh mode and the torsion
+/// are the structure's modes of the rank they have at the mean stiffness, at every position.
 ///
 /// The FE modal analysis gives one frequency per frozen position, so the compared quantity is
 /// the same mean of the same per-position frequencies. The mode at the mean stiffness (the one
@@ -116,7 +130,6 @@ fn lumped_mesh_modes(
     };
     // From the model's mesh back to hub to hub (+ the twist it lost), then to these bodies.
     let k_of = |k_mesh: f64| 1.0 / (1.0 / k_mesh + twist_in_model - twist_out);
-    let hz = |k_mesh: f64| structure.mesh_mode(k_of(k_mesh)).frequency / std::f64::consts::TAU;
     let pair = &case.pair;
     let roll_pitch = pair.roll_angle_at(1, pair.contact_points.pitch);
     let stiffness: Vec<f64> = rotations
@@ -126,23 +139,51 @@ fn lumped_mesh_modes(
             linear.mesh.stiffness.at(theta)
         })
         .collect();
-    let per_position = stiffness.iter().map(|k| hz(*k)).collect();
-    // The driver held with elastic bodies: the driver's rim against its held hub.
+    // Which of the structure's modes (by rank, ascending) are its mesh mode and, driver held
+    // with elastic bodies, the driver body's torsion (its rim against the held hub): the ones
+    // at the mean stiffness, followed by rank through the positions (modes that share the
+    // mesh veer and keep their order; the largest share alone can jump between them).
+    let at_mean = structure.modes(k_of(linear.mesh.mean()));
+    let mesh = crate::lumped::Structure::mesh_mode_index(&at_mean).expect("a structure has a mode");
     let torsion = match (drive, bodies) {
-        (Drive::Speed, BodyModel::Elastic) => stiffness
-            .iter()
-            .map(|k| {
-                structure
-                    .body_mode(k_of(*k), "rim1 lag")
-                    .map(|m| m.frequency / std::f64::consts::TAU)
-            })
-            .collect::<Option<Vec<f64>>>(),
+        (Drive::Speed, BodyModel::Elastic) => structure.body_mode_index(&at_mean, "rim1 lag"),
         _ => None,
     };
+    let hz = |m: &crate::lumped::Mode| m.frequency / std::f64::consts::TAU;
+    // Every mode's signature at each position, for pairing with the FE modal's by shape.
+    let positions: Vec<LumpedPosition> = stiffness
+        .iter()
+        .map(|k| {
+            let modes = structure.modes(k_of(*k));
+            let shares = structure.load_compliance_shares(&modes);
+            let signatures = modes
+                .iter()
+                .zip(shares)
+                .map(|(m, compliance_share)| ModeSignature {
+                    frequency_hz: hz(m),
+                    compliance_share,
+                    driver_rotation_share: match drive {
+                        Drive::Speed => structure.coordinate_mass_share(m, "rim1 lag"),
+                        Drive::Torque => None,
+                    },
+                })
+                .collect();
+            LumpedPosition {
+                modes: signatures,
+                mesh,
+                torsion,
+            }
+        })
+        .collect();
     Ok(LumpedModes {
-        mesh_hz: per_position,
-        mesh_hz_at_mean_stiffness: hz(linear.mesh.mean()),
-        driver_torsion_hz: torsion,
+        mesh_hz: positions
+            .iter()
+            .map(|p| p.modes[mesh].frequency_hz)
+            .collect(),
+        mesh_hz_at_mean_stiffness: hz(&at_mean[mesh]),
+        driver_torsion_hz: torsion
+            .map(|t| positions.iter().map(|p| p.modes[t].frequency_hz).collect()),
+        positions,
     })
 }
 
@@ -153,6 +194,121 @@ struct LumpedModes {
     mesh_hz_at_mean_stiffness: f64,
     /// The driver body's torsion at each position (driver held, elastic bodies).
     driver_torsion_hz: Option<Vec<f64>>,
+    /// Every mode at each position.
+    positions: Vec<LumpedPosition>,
+}
+
+/// The lumped model's modes at one position, ascending, and which are its mesh mode and its
+/// driver body's torsion.
+struct LumpedPosition {
+    modes: Vec<ModeSignature>,
+    mesh: usize,
+    torsion: Option<usize>,
+}
+
+/// What a mode of either model is paired by: its frequency, its share of the static compliance
+/// under the load on the driven side ([`crate::lumped::Structure::load_compliance_shares`],
+/// [`crate::ltca::modal::PairMode::mesh_share`]) and, driver held, its share of the driver
+/// rim's rotation against the held hub (the modal effective mass;
+/// [`crate::lumped::Structure::coordinate_mass_share`] on `rim1 lag`,
+/// [`crate::ltca::modal::PairMode::rotation_share`]), `None` where the model has no such
+/// coordinate.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ModeSignature {
+    pub frequency_hz: f64,
+    pub compliance_share: f64,
+    pub driver_rotation_share: Option<f64>,
+}
+
+/// Modes further apart in frequency than this factor are not one mode of two models (the
+/// lumped rigid-gear model, the crudest compared, is within 13 % of the FE modal's mesh mode on
+/// every pair measured): a lumped body mode above the FE modal's modes computed (a 17-tooth
+/// pinion's torsion at 95 kHz against ten modes up to 24 kHz) stays unpaired rather than taking
+/// the FE mode with the most of its shares.
+pub const PAIR_FREQUENCY_RATIO: f64 = 1.5;
+
+impl ModeSignature {
+    /// How alike two modes are: the overlap √(s_a s_b) of their compliance shares plus that of
+    /// their driver rotation shares where both have one (the Bhattacharyya coefficient of
+    /// each share against its complement would also count what neither mode has; the
+    /// products count only what both have). In [0, 2]; 0 for modes more than
+    /// [`PAIR_FREQUENCY_RATIO`] apart in frequency.
+    fn overlap(&self, other: &ModeSignature) -> f64 {
+        let ratio = self.frequency_hz / other.frequency_hz;
+        if !(1.0 / PAIR_FREQUENCY_RATIO..=PAIR_FREQUENCY_RATIO).contains(&ratio) {
+            return 0.0;
+        }
+        let rotation = match (self.driver_rotation_share, other.driver_rotation_share) {
+            (Some(a), Some(b)) => (a * b).max(0.0).sqrt(),
+            _ => 0.0,
+        };
+        (self.compliance_share * other.compliance_share)
+            .max(0.0)
+            .sqrt()
+            + rotation
+    }
+}
+
+/// Pairs the lumped model's modes with the FE modal's by shape: each list ascending in
+/// frequency, the pairing keeps their order (a monotone alignment, the largest total
+/// [`ModeSignature::overlap`], by dynamic programming over both lists) and may leave modes of
+/// either unpaired (the FE has tooth and lateral modes the lumped model lacks; a pair with no
+/// overlap stays unpaired). Returns each lumped mode's FE partner.
+///
+/// Why the order: where a body mode lies near the mesh mode, the two share the mesh's
+/// compliance and veer rather than cross as the stiffness changes over a base pitch, so the
+/// lower stays the lower; the mode with the largest share alone jumps between them from one
+/// position to the next, in either model on its own (a 53-tooth driver held: its torsion
+/// 4.1 kHz below the mesh mode, the shares 0.40 / 0.55). Pairing by order and shape compares
+/// the same mode of both.
+pub fn pair_by_shape(lumped: &[ModeSignature], fe: &[ModeSignature]) -> Vec<Option<usize>> {
+    let (n, m) = (lumped.len(), fe.len());
+    // best[i][j]: the largest overlap of the first i lumped modes with the first j FE modes.
+    let mut best = vec![vec![0.0f64; m + 1]; n + 1];
+    for i in 1..=n {
+        for j in 1..=m {
+            let paired = best[i - 1][j - 1] + lumped[i - 1].overlap(&fe[j - 1]);
+            best[i][j] = paired.max(best[i - 1][j]).max(best[i][j - 1]);
+        }
+    }
+    let mut partner = vec![None; n];
+    let (mut i, mut j) = (n, m);
+    while i > 0 && j > 0 {
+        if best[i][j] == best[i - 1][j] {
+            i -= 1;
+        } else if best[i][j] == best[i][j - 1] {
+            j -= 1;
+        } else {
+            partner[i - 1] = Some(j - 1);
+            i -= 1;
+            j -= 1;
+        }
+    }
+    partner
+}
+
+/// The FE modal's modes at one position as [`ModeSignature`]s (its elastic modes, ascending),
+/// each with its index in `modal.modes`; the driver's rotation share with the driver held.
+fn fe_signatures(modal: &PairModes) -> Vec<(usize, ModeSignature)> {
+    modal
+        .modes
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| m.kind != "rigid")
+        .map(|(i, m)| {
+            (
+                i,
+                ModeSignature {
+                    frequency_hz: m.frequency_hz,
+                    compliance_share: m.mesh_share,
+                    driver_rotation_share: match modal.hubs {
+                        Hubs::DriverHeld => Some(m.rotation_share[0]),
+                        Hubs::BothFree => None,
+                    },
+                },
+            )
+        })
+        .collect()
 }
 
 /// The FE modal analysis of `ltca`'s pair at `positions` positions over a base pitch under
@@ -221,21 +377,12 @@ pub fn mesh_modes(
     let compare = |hubs: Hubs, drive: Drive| -> Result<_, StudyError> {
         let at: Vec<&PairModes> = modal.iter().filter(|m| m.hubs == hubs).collect();
         let rotations: Vec<f64> = at.iter().map(|m| m.driver_rotation).collect();
-        let fe_modal_hz: Vec<(f64, f64)> = at
-            .iter()
-            .map(|m| {
-                (
-                    m.driver_rotation.to_degrees(),
-                    m.modes[m.mesh_mode].frequency_hz,
-                )
-            })
-            .collect();
         let mean = |hz: &[f64]| hz.iter().sum::<f64>() / hz.len() as f64;
-        let fe_modal_mean_hz = mean(&fe_modal_hz.iter().map(|p| p.1).collect::<Vec<_>>());
         let LumpedModes {
             mesh_hz: per_position,
             mesh_hz_at_mean_stiffness: lumped_at_mean_stiffness_hz,
             driver_torsion_hz: torsion,
+            positions: lumped_positions,
         } = lumped_mesh_modes(
             case,
             &setup.model,
@@ -243,6 +390,39 @@ pub fn mesh_modes(
             twist_in_model,
             &rotations,
         )?;
+        // The FE modal's mode paired by shape with the lumped mesh mode (and driver torsion)
+        // at each position; the FE's own mesh mode (the largest compliance share) where the
+        // lumped mode has no partner.
+        let paired: Vec<(usize, Option<usize>)> = at
+            .iter()
+            .zip(&lumped_positions)
+            .map(|(fe, lumped)| {
+                let signatures = fe_signatures(fe);
+                let only: Vec<ModeSignature> = signatures.iter().map(|s| s.1).collect();
+                let partner = pair_by_shape(&lumped.modes, &only);
+                let index = |lumped_mode: usize| partner[lumped_mode].map(|k| signatures[k].0);
+                (
+                    index(lumped.mesh).unwrap_or(fe.mesh_mode),
+                    lumped.torsion.and_then(index),
+                )
+            })
+            .collect();
+        let fe_modal_hz: Vec<(f64, f64)> = at
+            .iter()
+            .zip(&paired)
+            .map(|(m, (mesh, _))| (m.driver_rotation.to_degrees(), m.modes[*mesh].frequency_hz))
+            .collect();
+        let fe_modal_mean_hz = mean(&fe_modal_hz.iter().map(|p| p.1).collect::<Vec<_>>());
+        let fe_modal_largest_share_mean_hz = mean(
+            &at.iter()
+                .map(|m| m.modes[m.mesh_mode].frequency_hz)
+                .collect::<Vec<_>>(),
+        );
+        let positions_paired_off_largest_share = at
+            .iter()
+            .zip(&paired)
+            .filter(|(m, (mesh, _))| *mesh != m.mesh_mode)
+            .count();
         let rigid_per_position = lumped_mesh_modes(
             case,
             &setup.model,
@@ -272,8 +452,16 @@ pub fn mesh_modes(
             Hubs::DriverHeld => super::compare::fe_modal_body_modes(&modal),
             Hubs::BothFree => Vec::new(),
         };
-        let driver_torsion_fe_modal_hz =
-            super::compare::driver_torsion_hz(&excited_body_modes_fe_modal);
+        // The FE partner of the lumped driver torsion where every position has one, else
+        // the FE modal's own (its mode above the mesh mode most like the driver's rotation).
+        let driver_torsion_fe_modal_hz = paired
+            .iter()
+            .zip(&at)
+            .map(|((_, torsion), m)| torsion.map(|t| m.modes[t].frequency_hz))
+            .collect::<Option<Vec<f64>>>()
+            .filter(|v| !v.is_empty())
+            .map(|v| mean(&v))
+            .or_else(|| super::compare::driver_torsion_hz(&excited_body_modes_fe_modal));
         let driver_torsion_lumped_hz = mean_of(torsion);
         let driver_torsion_rel = driver_torsion_fe_modal_hz
             .zip(driver_torsion_lumped_hz)
@@ -291,6 +479,8 @@ pub fn mesh_modes(
             lumped_hz_per_position,
             fe_modal_hz,
             fe_modal_mean_hz,
+            fe_modal_largest_share_mean_hz,
+            positions_paired_off_largest_share,
             lumped_rel,
             lumped_rel_worst_position,
             lumped_rigid_rel: lumped_rigid_hz / fe_modal_mean_hz - 1.0,
@@ -318,6 +508,79 @@ mod tests {
     use super::*;
     use crate::case::Override;
     use crate::stiffness::{MeshStiffness, PeriodicTable};
+
+    fn mode(frequency_hz: f64, compliance_share: f64, rotation: Option<f64>) -> ModeSignature {
+        ModeSignature {
+            frequency_hz,
+            compliance_share,
+            driver_rotation_share: rotation,
+        }
+    }
+
+    /// Pairing by shape on synthetic modes whose answer is known.
+    #[test]
+    fn modes_pair_by_order_and_shape() {
+        // A veering pair (a driver body's torsion just below the mesh mode, both sharing the
+        // mesh's compliance): the lumped model's mesh mode (the upper, 0.7) is the FE's upper
+        // although the FE's largest share is its lower mode (0.55); a lateral and a tooth
+        // mode above stay unpaired.
+        let lumped = [mode(4100.0, 0.3, Some(0.6)), mode(6000.0, 0.7, Some(0.2))];
+        let fe = [
+            mode(4158.0, 0.55, Some(0.4)),
+            mode(5900.0, 0.40, Some(0.35)),
+            mode(9900.0, 0.03, Some(0.0)),
+            mode(16000.0, 0.02, Some(0.0)),
+        ];
+        assert_eq!(pair_by_shape(&lumped, &fe), vec![Some(0), Some(1)]);
+        // Paired by the largest overlap without the order, the mesh mode would take the FE's
+        // lower mode: the order is what decides it here.
+        let overlap = |l: usize, f: usize| lumped[l].overlap(&fe[f]);
+        assert!(overlap(1, 0) + overlap(0, 1) > overlap(0, 0) + overlap(1, 1));
+        // A mode the lumped model lacks below both (a lateral mode with a small share), the
+        // torsion above the mesh mode and a tooth mode between them: skipped.
+        let lumped = [
+            mode(5000.0, 0.98, Some(0.04)),
+            mode(20000.0, 0.02, Some(0.85)),
+        ];
+        let fe = [
+            mode(4800.0, 0.05, Some(0.0)),
+            mode(4960.0, 0.90, Some(0.05)),
+            mode(15000.0, 0.03, Some(0.0)),
+            mode(21000.0, 0.01, Some(0.80)),
+        ];
+        assert_eq!(pair_by_shape(&lumped, &fe), vec![Some(1), Some(3)]);
+        // The torsion far above the FE modes computed (a small pinion's, 95 kHz): unpaired,
+        // although the FE's highest mode has the most of its rotation.
+        let lumped = [
+            mode(5000.0, 0.98, Some(0.04)),
+            mode(95000.0, 0.02, Some(0.85)),
+        ];
+        assert_eq!(pair_by_shape(&lumped, &fe), vec![Some(1), None]);
+        // One lumped mode (rigid gears; no rotation share): the FE's largest share.
+        let fe_free: Vec<ModeSignature> = fe
+            .iter()
+            .map(|m| ModeSignature {
+                driver_rotation_share: None,
+                ..*m
+            })
+            .collect();
+        assert_eq!(
+            pair_by_shape(&[mode(5000.0, 1.0, None)], &fe_free),
+            vec![Some(1)]
+        );
+        // More lumped modes than FE modes, and a lumped mode with nothing in common: unpaired,
+        // no panic.
+        let lumped = [
+            mode(1.0, 0.0, None),
+            mode(5000.0, 1.0, None),
+            mode(9000.0, 0.0, None),
+        ];
+        assert_eq!(
+            pair_by_shape(&lumped, &[mode(5100.0, 1.0, None)]),
+            vec![None, Some(0), None]
+        );
+        assert_eq!(pair_by_shape(&lumped, &[]), vec![None; 3]);
+    }
 
     /// A synthetic two-level k(θ) (1 over 60 % of the period, 1.6 over the rest) on rigid gears
     /// with the torque drive: each frozen position's mode is √(k_j/m_e)/2π with k_j the level at

@@ -176,6 +176,46 @@ pub fn body_translation(
     stiffness: &FactorizedStiffness,
     face_width: f64,
 ) -> Result<BodyTranslation, FeError> {
+    let sway = sway_shapes(gear, mesh, stiffness, face_width)?;
+    let (mut k, mut m) = (0.0, 0.0);
+    for (f, u) in sway.loads.iter().zip(&sway.shapes) {
+        let work: f64 = f.iter().zip(u).map(|(f, u)| f * u).sum();
+        let kinetic: f64 = u
+            .iter()
+            .enumerate()
+            .map(|(i, u)| sway.nodal_mass[i / 2] * u * u)
+            .sum();
+        k += 0.5 * work;
+        m += 0.5 * kinetic;
+    }
+    if !(k > 0.0 && k.is_finite() && m > 0.0 && m.is_finite()) {
+        return Err(FeError::Body(format!(
+            "the body's sway came out as k = {k:e} N/m, m/ρ = {m:e} m³: check the mesh"
+        )));
+    }
+    Ok(BodyTranslation {
+        stiffness: k,
+        mass_per_density: m,
+    })
+}
+
+/// The static shapes [`body_translation`] reduces a body onto: along x and y, each scaled to
+/// a unit mean translation of the rim band (ψ = u/ū), with the band loads f/ū that make them
+/// and the HRZ nodal masses of unit density.
+pub struct SwayShapes {
+    /// ψ along x and y over the mesh's DOFs (2 per node, the bore's zero).
+    pub shapes: [Vec<f64>; 2],
+    pub loads: [Vec<f64>; 2],
+    pub nodal_mass: Vec<f64>,
+}
+
+/// [`SwayShapes`] of `mesh` (its bore held as in `stiffness`).
+pub fn sway_shapes(
+    gear: &Gear,
+    mesh: &GearMesh,
+    stiffness: &FactorizedStiffness,
+    face_width: f64,
+) -> Result<SwayShapes, FeError> {
     let mut mass = vec![0.0; mesh.nodes.len()];
     for element in &mesh.elements {
         let nodes = crate::fe::assembly::element_nodes(&mesh.nodes, element);
@@ -213,22 +253,24 @@ pub fn body_translation(
         })
         .collect();
     let deflections = stiffness.solve_columns(&loads);
-    let (mut k, mut m) = (0.0, 0.0);
-    for (d, (f, u)) in loads.iter().zip(&deflections).enumerate() {
-        let mean = rim.iter().map(|&n| mass[n] * u[2 * n + d]).sum::<f64>() / rim_mass;
-        let work: f64 = f.iter().zip(u).map(|(f, u)| f * u).sum();
-        let kinetic: f64 = u.iter().enumerate().map(|(i, u)| mass[i / 2] * u * u).sum();
-        k += 0.5 * work / (mean * mean);
-        m += 0.5 * kinetic / (mean * mean);
-    }
-    if !(k > 0.0 && k.is_finite() && m > 0.0 && m.is_finite()) {
-        return Err(FeError::Body(format!(
-            "the body's sway came out as k = {k:e} N/m, m/ρ = {m:e} m³: check the mesh"
-        )));
-    }
-    Ok(BodyTranslation {
-        stiffness: k,
-        mass_per_density: m,
+    let scaled: Vec<(Vec<f64>, Vec<f64>)> = loads
+        .into_iter()
+        .zip(deflections)
+        .enumerate()
+        .map(|(d, (f, u))| {
+            let mean = rim.iter().map(|&n| mass[n] * u[2 * n + d]).sum::<f64>() / rim_mass;
+            (
+                f.iter().map(|x| x / mean).collect(),
+                u.iter().map(|x| x / mean).collect(),
+            )
+        })
+        .collect();
+    let [(fx, ux), (fy, uy)]: [(Vec<f64>, Vec<f64>); 2] =
+        scaled.try_into().expect("two directions");
+    Ok(SwayShapes {
+        shapes: [ux, uy],
+        loads: [fx, fy],
+        nodal_mass: mass,
     })
 }
 

@@ -1740,8 +1740,18 @@ pub(crate) mod tests {
             };
             let own = twin((Drive::Speed, true), None);
             let rb1 = case.pair.gears[0].base_radius;
-            let rim = |m: &MeshModel| m.structure.mass[(0, 0)] * rb1 * rb1;
-            let row_sum = super::super::lumped::gear_bodies(&case, BodyModel::Elastic).unwrap()[0];
+            // The rim's own inertia: the mass matrix's entry less the mesh's own mass there.
+            let bodies = super::super::lumped::gear_bodies(&case, BodyModel::Elastic).unwrap();
+            let mesh_mass = super::super::lumped::mesh_moving_mass(
+                &case,
+                bodies.map(|b| b.translation.is_some()),
+            )
+            .unwrap();
+            let rim = |m: &MeshModel| {
+                let g = m.structure.mesh_direction[0];
+                (m.structure.mass[(0, 0)] - mesh_mass * g * g) * rb1 * rb1
+            };
+            let row_sum = bodies[0];
             let total = row_sum.hub_inertia + row_sum.rim_inertia;
             assert!((rim(&own) / row_sum.rim_inertia - 1.0).abs() < 1e-12);
             let hz = |m: &crate::lumped::Mode| m.frequency / std::f64::consts::TAU;

@@ -57,7 +57,7 @@ fn an_unstable_explicit_step_is_stopped_and_explained() {
 /// band of the region — elsewhere in it the up-sweep reaches a large bounded response, up to
 /// 250 × the static force — so the grid is fine, 50 rpm. The speed moved from 16 700 rpm,
 /// 100 rpm steps, when the model took the mesh's own mass, m_d = 10.2 g on m_e = 0.57 kg: the
-/// same 1-DOF dynamics 0.86 % slower, √(m_e/(m_e + m_d)).)
+/// same 1-DOF dynamics 0.88 % slower, √(m_e/(m_e + m_d)).)
 #[test]
 fn an_unbounded_lumped_response_is_stopped_and_explained() {
     let dir = tempfile::tempdir().unwrap();

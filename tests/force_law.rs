@@ -205,9 +205,10 @@ fn the_back_flanks_carry_their_own_law_with_backlash() {
 /// f_mesh = 0.25 f_n and near the resonance at 0.945 f_n (on the paper pair about 2 000 and
 /// 7 500 rpm), where every pair leaves its drive flanks for part of each period. They agree to
 /// 1e-8 of the Jacobian's largest entry on the one-coordinate models (measured at most 6e-10)
-/// and 1e-7 on more (2.9e-8 on 17/53, whose rims sway: three coordinates, the pinion's sway
-/// near 117 kHz, the differences' velocity perturbation h·ω at that ω; the
-/// differences' truncation is h² of a perturbation 1e-5 of the deflection; across a switch
+/// and 5e-7 on more (1.5e-7 on 17/53, whose rims sway: three coordinates, the pinion's sway
+/// near 117 kHz, the differences' velocity perturbation h·ω at that ω; 2.9e-8 before the mesh's
+/// own mass coupled the sway into the mesh; the differences' truncation: a third of their
+/// perturbation, 3e-6 of the deflection instead of 1e-5, gives 1.6e-8, as h² would); across a switch
 /// they average the two sides' slopes over the perturbation, which the law's continuity keeps
 /// small; a wrong term of the variational equation shows at order 1), and so do the largest
 /// multipliers (1e-8). And the force's slope is the one the law's force has.
@@ -252,7 +253,7 @@ fn the_variational_jacobian_is_the_period_maps() {
             let tolerance = if model.structure.dofs == 1 {
                 1e-8
             } else {
-                1e-7
+                5e-7
             };
             assert!(error < tolerance, "{name} {rpm} rpm: {error:e}");
             let largest = |j: &nalgebra::DMatrix<f64>| {

@@ -253,18 +253,20 @@ pub fn sway_shapes(
         })
         .collect();
     let deflections = stiffness.solve_columns(&loads);
-    let scaled: Vec<(Vec<f64>, Vec<f64>)> = loads
-        .into_iter()
-        .zip(deflections)
-        .enumerate()
-        .map(|(d, (f, u))| {
-            let mean = rim.iter().map(|&n| mass[n] * u[2 * n + d]).sum::<f64>() / rim_mass;
-            (
-                f.iter().map(|x| x / mean).collect(),
-                u.iter().map(|x| x / mean).collect(),
-            )
-        })
-        .collect();
+    let mut scaled = Vec::with_capacity(2);
+    for (d, (f, u)) in loads.into_iter().zip(deflections).enumerate() {
+        let mean = rim.iter().map(|&n| mass[n] * u[2 * n + d]).sum::<f64>() / rim_mass;
+        if !(mean.is_finite() && mean != 0.0) {
+            return Err(FeError::Body(format!(
+                "the body's rim band did not move under its load (mean translation {mean:e} m): \
+                 check the mesh"
+            )));
+        }
+        scaled.push((
+            f.iter().map(|x| x / mean).collect::<Vec<f64>>(),
+            u.iter().map(|x| x / mean).collect::<Vec<f64>>(),
+        ));
+    }
     let [(fx, ux), (fy, uy)]: [(Vec<f64>, Vec<f64>); 2] =
         scaled.try_into().expect("two directions");
     Ok(SwayShapes {

@@ -492,9 +492,10 @@ pub struct MeshMovingMass {
     /// m_d = 2T_d/δ̇² [kg]: the kinetic energy of the pair's deformation beyond the gears' rigid
     /// motions per unit rate of the rigid motions' approach along the line of action.
     pub mass: f64,
-    /// The largest spread of the rigid motions' approach over the active ties, relative to
-    /// its mean (rigid motions of involute flanks approach uniformly along the line of
-    /// action: a check of the projection, round-off size).
+    /// The largest spread of the gears' rotations' approach over the active ties, relative to
+    /// its mean (rigid rotations of involute flanks approach uniformly along the line of
+    /// action: a check of the projection and the ties, round-off size; the sway shapes' part,
+    /// the teeth riding on the rim band, is not uniform to round-off and is not in it).
     pub approach_spread: f64,
     /// The held driver hub's reaction over the load's torque on the driver: zero when the
     /// load does no work on the pair's rolling (a check of the rolling's sense, round-off
@@ -574,31 +575,38 @@ pub fn mesh_moving_mass(
     let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
     let gram = nalgebra::DMatrix::from_fn(k, k, |i, j| dot(&motions[i], &mass_motions[j]));
     let projections = nalgebra::DVector::from_fn(k, |i, _| dot(&mass_motions[i], &shape));
-    let coefficients = gram
-        .clone()
-        .lu()
-        .solve(&projections)
-        .expect("a gear's rotation and sway shapes are independent motions");
+    let coefficients = gram.clone().lu().solve(&projections).ok_or_else(|| {
+        LtcaError::Fe(crate::fe::FeError::Body(
+            "the gears' rotations and sway shapes are not independent motions".into(),
+        ))
+    })?;
     let kinetic = dot(&shape, &mass_shape);
     let deformation = kinetic - coefficients.dot(&projections);
-    let mut rigid = vec![0.0; n];
-    for (motion, c) in motions.iter().zip(coefficients.iter()) {
-        for (x, v) in rigid.iter_mut().zip(motion) {
-            *x += c * v;
+    // The approach of the motions projected out, on every active tie: all of them (δ), and
+    // the rotations alone (the check).
+    let approach_of = |count: usize| -> Vec<f64> {
+        let mut displacement = vec![0.0; n];
+        for (motion, c) in motions.iter().zip(coefficients.iter()).take(count) {
+            for (x, v) in displacement.iter_mut().zip(motion) {
+                *x += c * v;
+            }
         }
-    }
-    let approaches: Vec<f64> = system
-        .tie_gradients
-        .iter()
-        .map(|b| b.iter().map(|&(i, bi)| bi * rigid[i]).sum::<f64>())
-        .collect();
+        system
+            .tie_gradients
+            .iter()
+            .map(|b| b.iter().map(|&(i, bi)| bi * displacement[i]).sum::<f64>())
+            .collect()
+    };
+    let (approaches, rotations) = (approach_of(k), approach_of(2));
     if approaches.is_empty() {
         return Err(LtcaError::NoContact { position: index });
     }
-    let approach = approaches.iter().sum::<f64>() / approaches.len() as f64;
-    let approach_spread = approaches
+    let mean = |a: &[f64]| a.iter().sum::<f64>() / a.len() as f64;
+    let approach = mean(&approaches);
+    let rotation_mean = mean(&rotations);
+    let approach_spread = rotations
         .iter()
-        .map(|a| (a / approach - 1.0).abs())
+        .map(|a| (a / rotation_mean - 1.0).abs())
         .fold(0.0, f64::max);
     Ok(MeshMovingMass {
         mass: deformation / (approach * approach),

@@ -910,9 +910,9 @@ mod tests {
     /// exactly; on four coordinates under both drives every mode falls or stays (Rayleigh: M
     /// grows by a positive semidefinite m_d ggᵀ), the mesh mode measurably; and added after the
     /// torque drive's removal of the rigid rotation it gives the frequencies of the whole
-    /// chain with m_d added before it (motor, gears and load of inertia m on three springs k,
-    /// base radii 1 m, the mesh between the gears: g = (0, 1, −1, 0); the generalized
-    /// eigenproblem of the four unreduced coordinates, one root at zero), to 1e-9.
+    /// chain with m_d added before it (motor, gears and load on shafts, the driver's rim
+    /// swaying, so that g is not the TE's direction; the generalized eigenproblem of the five
+    /// unreduced coordinates, one root at zero), to 1e-9.
     #[test]
     fn the_meshs_own_mass_lowers_the_modes_and_reduces_exactly() {
         let (m, m_d, k): (f64, f64, f64) = (0.57, 0.0097, 4.0e8);
@@ -931,18 +931,44 @@ mod tests {
             let (f0, f1) = (bare.mesh_mode(k).frequency, massive.mesh_mode(k).frequency);
             assert!(f1 < f0 * (1.0 - 1e-4), "{drive:?}: {f1} / {f0}");
         }
-        // The whole chain, unreduced, the mesh's mass added first.
-        let (m, k_chain, m_d) = (2.5, 4.0e6, 0.6);
-        let reduced = chain(Drive::Torque, m, k_chain).with_mesh_mass(m_d);
-        let g = DVector::from_vec(vec![0.0, 1.0, -1.0, 0.0]);
-        let mass = DMatrix::from_diagonal_element(4, 4, m) + &g * g.transpose() * m_d;
-        let mut stiffness = DMatrix::zeros(4, 4);
-        for i in 0..3 {
+        // The whole chain, unreduced, the mesh's mass added first: motor, gear 1, gear 2, load
+        // (inertia m, base radii 1 m) on two shafts k, the mesh k between the gears, gear 1's
+        // rim swaying (m_y on k_y), so g = (0, 1, −1, 0, 1) differs from the TE's direction.
+        let (m, k_chain, m_d, m_y, k_y) = (2.5, 4.0e6, 0.6, 1.5, 9.0e6);
+        let swaying = Structure::drivetrain(&DrivetrainSpec {
+            drive: Drive::Torque,
+            base_radii: [1.0, 1.0],
+            gears: [
+                GearBody {
+                    translation: Some(RimTranslation {
+                        mass: m_y,
+                        stiffness: k_y,
+                    }),
+                    ..GearBody::rigid(m)
+                },
+                GearBody::rigid(m),
+            ],
+            shafts: [Some(Shaft {
+                stiffness: k_chain,
+                end_inertia: m,
+            }); 2],
+            bearings: None,
+            spring_damping: SpringDamping::Ratio(0.0),
+        })
+        .expect("a valid chain");
+        assert_eq!(swaying.dofs, 4, "{:?}", swaying.names);
+        let reduced = swaying.with_mesh_mass(m_d);
+        let g = DVector::from_vec(vec![0.0, 1.0, -1.0, 0.0, 1.0]);
+        let mass = DMatrix::from_diagonal(&DVector::from_vec(vec![m, m, m, m, m_y]))
+            + &g * g.transpose() * m_d;
+        let mut stiffness = &g * g.transpose() * k_chain;
+        for (i, j) in [(0, 1), (2, 3)] {
             stiffness[(i, i)] += k_chain;
-            stiffness[(i + 1, i + 1)] += k_chain;
-            stiffness[(i, i + 1)] -= k_chain;
-            stiffness[(i + 1, i)] -= k_chain;
+            stiffness[(j, j)] += k_chain;
+            stiffness[(i, j)] -= k_chain;
+            stiffness[(j, i)] -= k_chain;
         }
+        stiffness[(4, 4)] += k_y;
         let l_inv = mass.cholesky().unwrap().l().try_inverse().unwrap();
         let a = &l_inv * stiffness * l_inv.transpose();
         let mut whole: Vec<f64> = SymmetricEigen::new((&a + a.transpose()) * 0.5)

@@ -504,7 +504,7 @@ pub struct MeshMovingMass {
 }
 
 /// The mass the mesh itself moves: a lumped model whose gears are rigid bodies (rotations, and
-/// the rims' translations where `translating` says) joined by a massless mesh spring leaves
+/// the rims' sway where it has it) joined by a massless mesh spring leaves
 /// out the kinetic energy of the teeth's bending and the rims' local deformation, which in the
 /// FE modal's mesh mode carry 0.2–0.5 % (driver held) and 0.6–1.9 % (both free) of its kinetic
 /// energy on the paper pair and 24/40 and 4–12 % both free on a 17-tooth pinion with a thin rim
@@ -568,14 +568,17 @@ pub fn mesh_moving_mass(
         }
     }
     let k = motions.len();
-    let mass_motions: Vec<Vec<f64>> = motions
-        .iter()
-        .map(|v| symmetric_product(&system.mass, v))
+    // M v: the rotations' the assembly has, the sway shapes' here.
+    let mass_motions: Vec<Vec<f64>> = (0..k)
+        .map(|i| match i {
+            0 | 1 => system.rigid[i][0].0.clone(),
+            _ => symmetric_product(&system.mass, &motions[i]),
+        })
         .collect();
-    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let dot = crate::fe::modal::lane_dot;
     let gram = nalgebra::DMatrix::from_fn(k, k, |i, j| dot(&motions[i], &mass_motions[j]));
     let projections = nalgebra::DVector::from_fn(k, |i, _| dot(&mass_motions[i], &shape));
-    let coefficients = gram.clone().lu().solve(&projections).ok_or_else(|| {
+    let coefficients = gram.lu().solve(&projections).ok_or_else(|| {
         LtcaError::Fe(crate::fe::FeError::Body(
             "the gears' rotations and sway shapes are not independent motions".into(),
         ))

@@ -151,12 +151,12 @@ fn lumped_mesh_modes(
     };
     let hz = |m: &crate::lumped::Mode| m.frequency / std::f64::consts::TAU;
     // Every mode's signature at each position, for pairing with the FE modal's by shape.
-    let positions: Vec<LumpedPosition> = stiffness
+    let positions: Vec<Vec<ModeSignature>> = stiffness
         .iter()
         .map(|k| {
             let modes = structure.modes(k_of(*k));
             let shares = structure.load_compliance_shares(&modes);
-            let signatures = modes
+            modes
                 .iter()
                 .zip(shares)
                 .map(|(m, compliance_share)| ModeSignature {
@@ -167,23 +167,16 @@ fn lumped_mesh_modes(
                         Drive::Torque => None,
                     },
                 })
-                .collect();
-            LumpedPosition {
-                modes: signatures,
-                mesh,
-                torsion,
-            }
+                .collect()
         })
         .collect();
     Ok(LumpedModes {
-        mesh_hz: positions
-            .iter()
-            .map(|p| p.modes[mesh].frequency_hz)
-            .collect(),
+        mesh_hz: positions.iter().map(|p| p[mesh].frequency_hz).collect(),
         mesh_hz_at_mean_stiffness: hz(&at_mean[mesh]),
-        driver_torsion_hz: torsion
-            .map(|t| positions.iter().map(|p| p.modes[t].frequency_hz).collect()),
+        driver_torsion_hz: torsion.map(|t| positions.iter().map(|p| p[t].frequency_hz).collect()),
         positions,
+        mesh,
+        torsion,
     })
 }
 
@@ -194,14 +187,10 @@ struct LumpedModes {
     mesh_hz_at_mean_stiffness: f64,
     /// The driver body's torsion at each position (driver held, elastic bodies).
     driver_torsion_hz: Option<Vec<f64>>,
-    /// Every mode at each position.
-    positions: Vec<LumpedPosition>,
-}
-
-/// The lumped model's modes at one position, ascending, and which are its mesh mode and its
-/// driver body's torsion.
-struct LumpedPosition {
-    modes: Vec<ModeSignature>,
+    /// Every mode at each position, ascending.
+    positions: Vec<Vec<ModeSignature>>,
+    /// Which of them (the same rank at every position) are the mesh mode and the driver
+    /// body's torsion.
     mesh: usize,
     torsion: Option<usize>,
 }
@@ -383,6 +372,8 @@ pub fn mesh_modes(
             mesh_hz_at_mean_stiffness: lumped_at_mean_stiffness_hz,
             driver_torsion_hz: torsion,
             positions: lumped_positions,
+            mesh: lumped_mesh,
+            torsion: lumped_torsion,
         } = lumped_mesh_modes(
             case,
             &setup.model,
@@ -399,11 +390,11 @@ pub fn mesh_modes(
             .map(|(fe, lumped)| {
                 let signatures = fe_signatures(fe);
                 let only: Vec<ModeSignature> = signatures.iter().map(|s| s.1).collect();
-                let partner = pair_by_shape(&lumped.modes, &only);
+                let partner = pair_by_shape(lumped, &only);
                 let index = |lumped_mode: usize| partner[lumped_mode].map(|k| signatures[k].0);
                 (
-                    index(lumped.mesh).unwrap_or(fe.mesh_mode),
-                    lumped.torsion.and_then(index),
+                    index(lumped_mesh).unwrap_or(fe.mesh_mode),
+                    lumped_torsion.and_then(index),
                 )
             })
             .collect();
